@@ -1,0 +1,167 @@
+//! Ray queries on an obvhs compressed wide BVH (Ylitie et al. 2017), built
+//! with PLOC (Meister & Bittner 2018): closest hit and any hit, single rays
+//! and rayon-parallel batches.
+
+use glam::{Vec3, Vec3A};
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::ray::RayHit;
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+
+use crate::ray::{Hit, Ray, intersect_triangle};
+use crate::scene::{Scene, WorldTriangle};
+
+/// A BVH over every triangle of a scene in world space.
+///
+/// It holds its own copy of the world-space triangles, so it answers queries
+/// without the scene; after [`Scene::set_object_transform`] build it again with
+/// [`Bvh::build`] (a full PLOC rebuild is cheap at the sizes the papers use).
+#[derive(Debug, Clone)]
+pub struct Bvh {
+    cwbvh: Option<CwBvh>,
+    /// Corner positions in BVH leaf order, for coherent memory access.
+    ordered: Vec<[Vec3; 3]>,
+    /// The shading attributes, by scene-wide triangle id.
+    triangles: Vec<WorldTriangle>,
+}
+
+fn to_obvhs(ray: &Ray) -> obvhs::ray::Ray {
+    obvhs::ray::Ray::new(
+        Vec3A::from(ray.origin),
+        Vec3A::from(ray.direction),
+        ray.t_min,
+        ray.t_max,
+    )
+}
+
+impl Bvh {
+    /// Builds the BVH of the scene's current pose.
+    pub fn build(scene: &Scene) -> Self {
+        Self::from_triangles(scene.world_triangles())
+    }
+
+    /// Builds the BVH over world-space triangles (scene-wide ids are their indices).
+    pub fn from_triangles(triangles: Vec<WorldTriangle>) -> Self {
+        if triangles.is_empty() {
+            return Self {
+                cwbvh: None,
+                ordered: Vec::new(),
+                triangles,
+            };
+        }
+        let tris: Vec<Triangle> = triangles
+            .iter()
+            .map(|t| Triangle {
+                v0: t.positions[0].into(),
+                v1: t.positions[1].into(),
+                v2: t.positions[2].into(),
+            })
+            .collect();
+        let cwbvh = build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        let ordered = cwbvh
+            .primitive_indices
+            .iter()
+            .map(|&i| triangles[i as usize].positions)
+            .collect();
+        Self {
+            cwbvh: Some(cwbvh),
+            ordered,
+            triangles,
+        }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Whether the BVH holds no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// The world-space triangles by scene-wide id.
+    pub fn triangles(&self) -> &[WorldTriangle] {
+        &self.triangles
+    }
+
+    /// Checks the BVH's invariants (every primitive reachable once, child
+    /// bounds inside parents); panics with obvhs' message if one fails.
+    pub fn validate(&self) {
+        if let Some(bvh) = &self.cwbvh {
+            let tris: Vec<Triangle> = self
+                .triangles
+                .iter()
+                .map(|t| Triangle {
+                    v0: t.positions[0].into(),
+                    v1: t.positions[1].into(),
+                    v2: t.positions[2].into(),
+                })
+                .collect();
+            bvh.validate(&tris, false);
+        }
+    }
+
+    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`.
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        let bvh = self.cwbvh.as_ref()?;
+        let mut hit = RayHit::none();
+        let mut best = None;
+        bvh.ray_traverse(to_obvhs(ray), &mut hit, |r, id| {
+            let query = Ray::segment(ray.origin, ray.direction, r.tmin, r.tmax);
+            match intersect_triangle(&query, self.ordered[id]) {
+                Some(h) => {
+                    best = Some((id, h));
+                    h.t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        let (slot, h) = best?;
+        let id = bvh.primitive_indices[slot];
+        let tri = &self.triangles[id as usize];
+        let w = 1.0 - h.u - h.v;
+        let [p0, p1, p2] = tri.positions;
+        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let shading = w * tri.normals[0] + h.u * tri.normals[1] + h.v * tri.normals[2];
+        Some(Hit {
+            triangle: id,
+            surface: tri.surface,
+            material: tri.material,
+            t: h.t,
+            u: h.u,
+            v: h.v,
+            position: ray.at(h.t),
+            geometric_normal,
+            shading_normal: shading.try_normalize().unwrap_or(geometric_normal),
+            uv: w * tri.uvs[0] + h.u * tri.uvs[1] + h.v * tri.uvs[2],
+        })
+    }
+
+    /// Whether anything lies on the ray with `t` in `[ray.t_min, ray.t_max]` (shadow rays).
+    pub fn any_hit(&self, ray: &Ray) -> bool {
+        let Some(bvh) = &self.cwbvh else {
+            return false;
+        };
+        !bvh.ray_traverse_miss(to_obvhs(ray), |r, id| {
+            let query = Ray::segment(ray.origin, ray.direction, r.tmin, r.tmax);
+            intersect_triangle(&query, self.ordered[id]).map_or(f32::INFINITY, |h| h.t)
+        })
+    }
+
+    /// Closest hits of many rays, in parallel.
+    pub fn closest_hits(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        rays.par_iter().map(|r| self.closest_hit(r)).collect()
+    }
+
+    /// Any-hit results of many rays, in parallel.
+    pub fn any_hits(&self, rays: &[Ray]) -> Vec<bool> {
+        rays.par_iter().map(|r| self.any_hit(r)).collect()
+    }
+}

@@ -1,0 +1,51 @@
+//! # lustre-geometry
+//!
+//! The scene model every Lustre technique stands on: triangle meshes with
+//! per-vertex normals and UVs, plain-data materials, objects with rigid
+//! transforms, surfaces in the papers' sense, lights with emission and
+//! direct-lighting sampling, a pinhole camera with a mirror transform,
+//! OBJ/MTL loading, BVH ray queries (obvhs), sampling, mesh utilities, the
+//! built-in scenes and the Mitsuba 3 export.
+//!
+//! Conventions (DESIGN.md): right-handed, +Y up, metres; radiometric units
+//! W, W/m², W/(m² sr); colour is linear Rec.709 RGB in `f32`.
+//!
+//! ```
+//! use lustre_geometry::{builtin, Bvh, Camera, Ray};
+//! use glam::Vec2;
+//!
+//! let scene = builtin("cornell").unwrap();
+//! let bvh = Bvh::build(&scene);
+//! let ray = scene.camera().primary_ray(Vec2::ZERO);
+//! let hit = bvh.closest_hit(&ray).expect("the camera looks into the box");
+//! let surface = &scene.surfaces()[hit.surface as usize];
+//! println!("hit {} at {}", scene.meshes()[surface.mesh as usize].name, hit.position);
+//! ```
+
+mod aabb;
+pub mod builtin;
+mod bvh;
+mod camera;
+mod error;
+pub mod light;
+pub mod material;
+mod mesh;
+mod plane;
+mod ray;
+pub mod sampling;
+mod scene;
+
+pub use aabb::Aabb;
+pub use builtin::builtin;
+pub use bvh::Bvh;
+pub use camera::Camera;
+pub use error::{GeometryError, Location, Result};
+pub use light::Light;
+pub use material::{Material, MaterialId, MaterialModel};
+pub use mesh::{Mesh, MeshId, triangle_area};
+pub use plane::Plane;
+pub use ray::{Hit, Ray, TriangleHit, intersect_triangle};
+pub use scene::{Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle};
+
+/// Linear Rec.709 RGB.
+pub type Rgb = glam::Vec3;

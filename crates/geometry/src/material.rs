@@ -1,0 +1,174 @@
+//! Material descriptions: plain data naming a reflectance model and its parameters.
+//!
+//! The geometry crate does not evaluate BRDFs; `lustre-brdf` turns a
+//! [`MaterialModel`] into an evaluator. Descriptions come from MTL files (see
+//! [`crate::obj`] for the standard fields and the documented `lustre_*` keys)
+//! or from the built-in scenes.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use crate::Rgb;
+
+/// Index of a material in [`crate::Scene::materials`].
+pub type MaterialId = u32;
+
+/// The Fresnel term of a rough conductor.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ConductorFresnel {
+    /// Fresnel of a conductor with complex index of refraction `eta + i k` (per RGB channel).
+    Complex {
+        /// Real part of the index of refraction.
+        eta: Rgb,
+        /// Imaginary part (extinction coefficient).
+        k: Rgb,
+    },
+    /// F = 1 for every angle: a perfect mirror's Fresnel (Mitsuba's `material = "none"`).
+    None,
+}
+
+/// Microfacet slope distribution of a rough surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MicrofacetDistribution {
+    /// Beckmann's distribution (Cook-Torrance 1982), the one Mitsuba calls `beckmann`.
+    Beckmann,
+    /// The isotropic Gaussian of Torrance-Sparrow / Cook-Torrance's variant.
+    Gaussian,
+    /// Trowbridge-Reitz / GGX.
+    Ggx,
+}
+
+/// The reflectance model of a material and its parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MaterialModel {
+    /// Lambertian reflector with the given reflectance (MTL `Kd`).
+    Diffuse {
+        /// Hemispherical reflectance in [0, 1].
+        reflectance: Rgb,
+    },
+    /// Microfacet conductor (Cook-Torrance with a slope distribution).
+    RoughConductor {
+        /// Distribution of microfacet slopes.
+        distribution: MicrofacetDistribution,
+        /// Roughness alpha (RMS slope for Beckmann); isotropic.
+        alpha: f32,
+        /// The Fresnel term.
+        fresnel: ConductorFresnel,
+        /// Scale applied to the whole lobe (MTL `Ks` when given, else white).
+        specular: Rgb,
+    },
+    /// Perfect mirror with a reflectance (MTL `illum 3` with `Ks`).
+    Mirror {
+        /// Reflectance of the mirror.
+        reflectance: Rgb,
+    },
+    /// Smooth dielectric interface (MTL `Ni` with `d < 1` or `illum 7`).
+    Dielectric {
+        /// Index of refraction of the inside relative to the outside.
+        ior: f32,
+        /// Transmittance filter (MTL `Tf`), white when absent.
+        transmittance: Rgb,
+    },
+    /// Phong lobe plus a diffuse term (MTL `Kd`, `Ks`, `Ns`).
+    Phong {
+        /// Diffuse reflectance.
+        diffuse: Rgb,
+        /// Specular reflectance.
+        specular: Rgb,
+        /// Phong exponent.
+        exponent: f32,
+    },
+    /// Ward's (1992) anisotropic Gaussian model.
+    Ward {
+        /// Diffuse reflectance.
+        diffuse: Rgb,
+        /// Specular reflectance.
+        specular: Rgb,
+        /// Standard deviation of the surface slope along the tangent.
+        alpha_x: f32,
+        /// Standard deviation of the surface slope along the bitangent.
+        alpha_y: f32,
+    },
+    /// `weight * second + (1 - weight) * first`, Mitsuba's `blendbsdf`.
+    Blend {
+        /// The weight of `second`, in [0, 1].
+        weight: f32,
+        /// The model weighted by `1 - weight`.
+        first: Box<MaterialModel>,
+        /// The model weighted by `weight`.
+        second: Box<MaterialModel>,
+    },
+    /// Any other model `lustre-brdf` knows, by name, with named parameters
+    /// (MTL `lustre_model NAME` and `lustre_param NAME v1 [v2 v3]`).
+    Named {
+        /// The model's name, e.g. `oren-nayar`.
+        model: String,
+        /// Its parameters: one value or an RGB triple each.
+        params: BTreeMap<String, Vec<f32>>,
+    },
+}
+
+impl MaterialModel {
+    /// A short name of the model, as used in messages and `lustre info`.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Diffuse { .. } => "diffuse".into(),
+            Self::RoughConductor { .. } => "rough-conductor".into(),
+            Self::Mirror { .. } => "mirror".into(),
+            Self::Dielectric { .. } => "dielectric".into(),
+            Self::Phong { .. } => "phong".into(),
+            Self::Ward { .. } => "ward".into(),
+            Self::Blend { first, second, .. } => {
+                format!("blend({}, {})", first.name(), second.name())
+            }
+            Self::Named { model, .. } => model.clone(),
+        }
+    }
+}
+
+/// A material: a reflectance model, an optional emission and texture maps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// The material's name (from MTL `newmtl` or the built-in scene).
+    pub name: String,
+    /// The reflectance model.
+    pub model: MaterialModel,
+    /// Emitted radiance in W/(m^2 sr) (MTL `Ke`); zero for non-emitters.
+    pub emission: Rgb,
+    /// Diffuse texture (MTL `map_Kd`), resolved relative to the MTL file.
+    pub diffuse_texture: Option<PathBuf>,
+    /// Specular texture (MTL `map_Ks`), resolved relative to the MTL file.
+    pub specular_texture: Option<PathBuf>,
+    /// Opacity (MTL `d`), 1 for opaque.
+    pub opacity: f32,
+}
+
+impl Material {
+    /// A Lambertian material with the given reflectance.
+    pub fn diffuse(name: impl Into<String>, reflectance: Rgb) -> Self {
+        Self::new(name, MaterialModel::Diffuse { reflectance })
+    }
+
+    /// A non-emissive, untextured, opaque material with the given model.
+    pub fn new(name: impl Into<String>, model: MaterialModel) -> Self {
+        Self {
+            name: name.into(),
+            model,
+            emission: Rgb::ZERO,
+            diffuse_texture: None,
+            specular_texture: None,
+            opacity: 1.0,
+        }
+    }
+
+    /// This material with an emitted radiance.
+    pub fn with_emission(mut self, emission: Rgb) -> Self {
+        self.emission = emission;
+        self
+    }
+
+    /// Whether the material emits light.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
