@@ -28,9 +28,12 @@ pub struct Bvh {
 }
 
 fn to_obvhs(ray: &Ray) -> obvhs::ray::Ray {
+    // obvhs picks the traversal octant from the direction's comparison with
+    // zero but inverts -0.0 to -∞, so a -0.0 component makes it miss: adding
+    // +0.0 turns -0.0 into +0.0 and leaves every other value alone.
     obvhs::ray::Ray::new(
         Vec3A::from(ray.origin),
-        Vec3A::from(ray.direction),
+        Vec3A::from(ray.direction + Vec3::ZERO),
         ray.t_min,
         ray.t_max,
     )
