@@ -1,1 +1,105 @@
-fn main() {}
+//! BVH closest-hit throughput: coherent primary rays and incoherent random
+//! rays, on `cornell` and on a generated scene of 516,096 triangles.
+
+// criterion's macros generate undocumented public items.
+#![allow(missing_docs)]
+
+use std::f32::consts::PI;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::{Vec2, Vec3};
+use lustre_geometry::sampling::sample_uniform_sphere;
+use lustre_geometry::{Bvh, Camera, Ray, WorldTriangle, builtin};
+
+/// Rays per batch in every benchmark.
+const RAYS: u32 = 256 * 256;
+
+/// A deterministic stream of numbers in [0, 1) (SplitMix64) for ray generation.
+struct Stream(u64);
+impl Stream {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// One ray per pixel of a 256×256 image.
+fn primary_rays(camera: &Camera) -> Vec<Ray> {
+    (0..RAYS)
+        .map(|i| camera.primary_ray(Camera::pixel_ndc(i % 256, i / 256, 256, 256, Vec2::splat(0.5))))
+        .collect()
+}
+
+/// Rays from random points inside `lo..hi` in uniformly random directions.
+fn random_rays(lo: Vec3, hi: Vec3, seed: u64) -> Vec<Ray> {
+    let mut s = Stream(seed);
+    (0..RAYS)
+        .map(|_| {
+            let o = lo + (hi - lo) * Vec3::new(s.next(), s.next(), s.next());
+            Ray::new(o, sample_uniform_sphere(Vec2::new(s.next(), s.next())))
+        })
+        .collect()
+}
+
+/// 64 UV spheres of 64×64 segments (8,064 triangles each) on a 4×4×4 grid.
+fn sphere_grid() -> Vec<WorldTriangle> {
+    let (rings, segments) = (64, 64);
+    let mut out = Vec::new();
+    for cell in 0..64 {
+        let centre = Vec3::new((cell % 4) as f32, ((cell / 4) % 4) as f32, (cell / 16) as f32) * 2.5;
+        let point = |ring: u32, seg: u32| {
+            let theta = PI * ring as f32 / rings as f32;
+            let phi = 2.0 * PI * seg as f32 / segments as f32;
+            Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+        };
+        for ring in 0..rings {
+            for seg in 0..segments {
+                let [a, b, c, d] = [point(ring, seg), point(ring + 1, seg), point(ring + 1, seg + 1), point(ring, seg + 1)];
+                let quads: &[[Vec3; 3]] = if ring == 0 {
+                    &[[a, b, c]]
+                } else if ring == rings - 1 {
+                    &[[a, b, d]]
+                } else {
+                    &[[a, b, c], [a, c, d]]
+                };
+                for tri in quads {
+                    out.push(WorldTriangle {
+                        positions: tri.map(|p| centre + p),
+                        normals: *tri,
+                        uvs: [Vec2::ZERO; 3],
+                        surface: cell,
+                        material: 0,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+fn bench(c: &mut Criterion) {
+    let cornell = builtin("cornell").unwrap();
+    let cornell_bvh = Bvh::build(&cornell);
+    let spheres = sphere_grid();
+    assert!(spheres.len() >= 500_000, "{} triangles", spheres.len());
+    let spheres_bvh = Bvh::from_triangles(spheres);
+    let spheres_camera = Camera::look_at(Vec3::new(3.75, 3.75, 16.0), Vec3::splat(3.75), Vec3::Y, 45.0);
+    let cases = [
+        ("cornell", &cornell_bvh, primary_rays(cornell.camera()), random_rays(Vec3::splat(-0.95), Vec3::splat(0.95), 1)),
+        ("spheres-516k", &spheres_bvh, primary_rays(&spheres_camera), random_rays(Vec3::splat(-1.0), Vec3::splat(8.5), 2)),
+    ];
+    let mut group = c.benchmark_group("bvh-closest-hit");
+    group.throughput(Throughput::Elements(RAYS as u64));
+    group.sample_size(10);
+    for (name, bvh, coherent, incoherent) in &cases {
+        group.bench_function(format!("{name}/coherent"), |b| b.iter(|| bvh.closest_hits(coherent)));
+        group.bench_function(format!("{name}/incoherent"), |b| b.iter(|| bvh.closest_hits(incoherent)));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -8,7 +8,7 @@ fn camera() -> Camera {
     Camera::look_at(Vec3::new(0.3, 0.2, 3.9), Vec3::new(0.0, -0.1, 0.0), Vec3::Y, 39.3077).with_aspect(1.5)
 }
 
-fn project(cam: &Camera, p: Vec3) -> glam::Vec3 {
+fn project(cam: &Camera, p: Vec3) -> Vec3 {
     let clip = cam.view_projection() * p.extend(1.0);
     clip.xyz() / clip.w
 }

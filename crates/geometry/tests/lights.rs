@@ -163,7 +163,7 @@ fn emission_samples_carry_the_power_and_the_intensity_distribution() {
             for (b, h) in hist.iter().enumerate() {
                 let (t0, t1) = (b as f32 / bands as f32 * PI, (b + 1) as f32 / bands as f32 * PI);
                 // ∫ cos θ sin θ dθ dφ / π over the band (upper hemisphere only).
-                let share = if t1 <= 0.5 * PI { (t1.sin().powi(2) - t0.sin().powi(2)) } else { 0.0 };
+                let share = if t1 <= 0.5 * PI { t1.sin().powi(2) - t0.sin().powi(2) } else { 0.0 };
                 let expected = light.power() * share;
                 assert!((*h - expected).abs().max_element() <= 0.01 * light.power().max_element(), "band {b}: {h} vs {expected}");
             }
