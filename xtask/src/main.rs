@@ -1,1 +1,51 @@
-fn main() {}
+//! `cargo xtask`: Lustre's project tasks, one module per subcommand
+//! (DESIGN.md, "Layout": golden, bless, reference, bench, ci).
+
+mod bench;
+mod ci;
+mod reference;
+
+pub use reference::workspace_root;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Lustre's project tasks.
+#[derive(Debug, Parser)]
+#[command(name = "cargo xtask", version, about)]
+struct Cli {
+    /// The task to run.
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The subcommands; each lives in its own module.
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render path-traced references of the built-in scenes with Mitsuba 3.
+    Reference(reference::Args),
+    /// Run the criterion benches and write BENCHMARKS.md from their medians.
+    Bench {
+        /// Only the bench targets whose name contains this.
+        filter: Option<String>,
+    },
+    /// The README's test command: format check, clippy with warnings denied, all tests.
+    Ci,
+}
+
+fn main() -> ExitCode {
+    let result = match Cli::parse().command {
+        Command::Reference(args) => reference::run(args),
+        Command::Bench { filter } => bench::run(filter.as_deref()),
+        Command::Ci => ci::run(),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            // The whole context chain on one line, without a backtrace.
+            eprintln!("error: {error:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -29,7 +29,15 @@ impl Stream {
 /// One ray per pixel of a 256×256 image.
 fn primary_rays(camera: &Camera) -> Vec<Ray> {
     (0..RAYS)
-        .map(|i| camera.primary_ray(Camera::pixel_ndc(i % 256, i / 256, 256, 256, Vec2::splat(0.5))))
+        .map(|i| {
+            camera.primary_ray(Camera::pixel_ndc(
+                i % 256,
+                i / 256,
+                256,
+                256,
+                Vec2::splat(0.5),
+            ))
+        })
         .collect()
 }
 
@@ -49,15 +57,28 @@ fn sphere_grid() -> Vec<WorldTriangle> {
     let (rings, segments) = (64, 64);
     let mut out = Vec::new();
     for cell in 0..64 {
-        let centre = Vec3::new((cell % 4) as f32, ((cell / 4) % 4) as f32, (cell / 16) as f32) * 2.5;
+        let centre = Vec3::new(
+            (cell % 4) as f32,
+            ((cell / 4) % 4) as f32,
+            (cell / 16) as f32,
+        ) * 2.5;
         let point = |ring: u32, seg: u32| {
             let theta = PI * ring as f32 / rings as f32;
             let phi = 2.0 * PI * seg as f32 / segments as f32;
-            Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+            Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            )
         };
         for ring in 0..rings {
             for seg in 0..segments {
-                let [a, b, c, d] = [point(ring, seg), point(ring + 1, seg), point(ring + 1, seg + 1), point(ring, seg + 1)];
+                let [a, b, c, d] = [
+                    point(ring, seg),
+                    point(ring + 1, seg),
+                    point(ring + 1, seg + 1),
+                    point(ring, seg + 1),
+                ];
                 let quads: &[[Vec3; 3]] = if ring == 0 {
                     &[[a, b, c]]
                 } else if ring == rings - 1 {
@@ -86,17 +107,36 @@ fn bench(c: &mut Criterion) {
     let spheres = sphere_grid();
     assert!(spheres.len() >= 500_000, "{} triangles", spheres.len());
     let spheres_bvh = Bvh::from_triangles(spheres);
-    let spheres_camera = Camera::look_at(Vec3::new(3.75, 3.75, 16.0), Vec3::splat(3.75), Vec3::Y, 45.0);
+    let spheres_camera = Camera::look_at(
+        Vec3::new(3.75, 3.75, 16.0),
+        Vec3::splat(3.75),
+        Vec3::Y,
+        45.0,
+    );
     let cases = [
-        ("cornell", &cornell_bvh, primary_rays(cornell.camera()), random_rays(Vec3::splat(-0.95), Vec3::splat(0.95), 1)),
-        ("spheres-516k", &spheres_bvh, primary_rays(&spheres_camera), random_rays(Vec3::splat(-1.0), Vec3::splat(8.5), 2)),
+        (
+            "cornell",
+            &cornell_bvh,
+            primary_rays(cornell.camera()),
+            random_rays(Vec3::splat(-0.95), Vec3::splat(0.95), 1),
+        ),
+        (
+            "spheres-516k",
+            &spheres_bvh,
+            primary_rays(&spheres_camera),
+            random_rays(Vec3::splat(-1.0), Vec3::splat(8.5), 2),
+        ),
     ];
     let mut group = c.benchmark_group("bvh-closest-hit");
     group.throughput(Throughput::Elements(RAYS as u64));
     group.sample_size(10);
     for (name, bvh, coherent, incoherent) in &cases {
-        group.bench_function(format!("{name}/coherent"), |b| b.iter(|| bvh.closest_hits(coherent)));
-        group.bench_function(format!("{name}/incoherent"), |b| b.iter(|| bvh.closest_hits(incoherent)));
+        group.bench_function(format!("{name}/coherent"), |b| {
+            b.iter(|| bvh.closest_hits(coherent))
+        });
+        group.bench_function(format!("{name}/incoherent"), |b| {
+            b.iter(|| bvh.closest_hits(incoherent))
+        });
     }
     group.finish();
 }

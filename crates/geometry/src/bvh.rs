@@ -3,11 +3,11 @@
 //! and rayon-parallel batches.
 
 use glam::{Vec3, Vec3A};
+use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::RayHit;
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
 use crate::ray::{Hit, Ray, intersect_triangle};

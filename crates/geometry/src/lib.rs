@@ -30,9 +30,9 @@ mod error;
 pub mod light;
 pub mod material;
 mod mesh;
-pub mod obj;
 pub mod meshing;
 pub mod mitsuba;
+pub mod obj;
 mod plane;
 mod ray;
 pub mod sampling;
@@ -49,7 +49,9 @@ pub use mesh::{Mesh, MeshId, triangle_area};
 pub use obj::{LoadedScene, ObjOptions, load_obj, load_obj_with};
 pub use plane::Plane;
 pub use ray::{Hit, Ray, TriangleHit, intersect_triangle};
-pub use scene::{Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle};
+pub use scene::{
+    Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,
+};
 
 /// Linear Rec.709 RGB.
 pub type Rgb = glam::Vec3;

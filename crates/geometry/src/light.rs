@@ -266,7 +266,11 @@ impl Light {
             return bad("power must be finite, non-negative and not zero");
         }
         match self {
-            Self::Spot(s) if !(0.0 <= s.beam_width && s.beam_width <= s.cutoff_angle && s.cutoff_angle <= PI) => {
+            Self::Spot(s)
+                if !(0.0 <= s.beam_width
+                    && s.beam_width <= s.cutoff_angle
+                    && s.cutoff_angle <= PI) =>
+            {
                 bad("spot angles must satisfy 0 <= beam_width <= cutoff_angle <= pi")
             }
             Self::Area(a) if !(a.shape.area() > 0.0) => bad("area light has zero area"),

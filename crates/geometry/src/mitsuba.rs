@@ -20,9 +20,20 @@
 //! | [`Camera`] | `perspective` sensor with `fov_axis="y"`, a `lookat` `to_world`, `hdrfilm` and an `independent` sampler |
 //!
 //! Mitsuba has no Phong, Ward, Gaussian-distribution or named models, no
-//! cosine point light and no explicit (mesh-less) area light; they are
-//! [`GeometryError::Unsupported`] unless [`ExportOptions::approximate`] asks
-//! for an approximation, which is then listed in [`ExportReport::warnings`].
+//! cosine point light and no explicit (mesh-less) area light, and texture
+//! maps are not exported yet; they are [`GeometryError::Unsupported`] unless
+//! [`ExportOptions::approximate`] asks for an approximation (Phong and Ward
+//! become their diffuse term, Gaussian becomes Beckmann of the same alpha, a
+//! named model a diffuse reflector, a cosine point light a tiny square area
+//! light of the same far field, a mesh-less area light an emitting shape
+//! with a `null` BSDF, textures are dropped), each listed in
+//! [`ExportReport::warnings`].
+//!
+//! UVs are written as stored (OBJ's convention, v up); Mitsuba's PLY loader
+//! does not flip them. Mitsuba's BSDFs are one-sided, as in its own
+//! `cornell_box()`; [`ExportOptions::two_sided`] wraps them in `twosided`.
+//! `cornell` exported with `max_depth` 8 and a Gaussian filter renders the
+//! same image as `mi.cornell_box()` (`tests/tests/mitsuba_equivalence.rs`).
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -191,7 +202,11 @@ impl Xml {
         while text.contains("--") {
             text = text.replace("--", "- -");
         }
-        let _ = writeln!(self.out, "{}<!-- {text} -->", "    ".repeat(self.open.len()));
+        let _ = writeln!(
+            self.out,
+            "{}<!-- {text} -->",
+            "    ".repeat(self.open.len())
+        );
     }
 
     /// A `<TYPE name="NAME" value="VALUE"/>` property.
@@ -239,7 +254,8 @@ fn build(
         });
     }
     let mut x = Xml::default();
-    x.out.push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
+    x.out
+        .push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
     x.comment(&format!(
         "Lustre export of scene \"{}\" (lustre_geometry::mitsuba)",
         scene.name
@@ -251,14 +267,23 @@ fn build(
     sensor_xml(&mut x, scene, options, warnings);
     for (i, material) in scene.materials().iter().enumerate() {
         x.comment(&format!("material \"{}\"", material.name));
-        material_bsdf(&mut x, material, &material_id(i, &material.name), options, warnings)?;
+        material_bsdf(
+            &mut x,
+            material,
+            &material_id(i, &material.name),
+            options,
+            warnings,
+        )?;
     }
     for (m, mesh) in scene.meshes().iter().enumerate() {
         let material = &scene.materials()[mesh.material as usize];
         let id = format!("mesh-{m}-{}", sanitize(&mesh.name));
         x.open("shape", &[("type", "ply"), ("id", &id)]);
         x.property("string", "filename", mesh_file(m, &mesh.name));
-        x.leaf("ref", &[("id", &material_id(mesh.material as usize, &material.name))]);
+        x.leaf(
+            "ref",
+            &[("id", &material_id(mesh.material as usize, &material.name))],
+        );
         if material.is_emissive() {
             x.open("emitter", &[("type", "area")]);
             x.rgb("radiance", material.emission);
@@ -334,13 +359,20 @@ fn light_xml(
         Light::Point(p) => {
             x.open("emitter", &[("type", "point"), ("id", &id)]);
             let [px, py, pz] = p.position.to_array().map(|c| c.to_string());
-            x.leaf("point", &[("name", "position"), ("x", &px), ("y", &py), ("z", &pz)]);
+            x.leaf(
+                "point",
+                &[("name", "position"), ("x", &px), ("y", &py), ("z", &pz)],
+            );
             x.rgb("intensity", p.intensity);
             x.close();
         }
         Light::Spot(s) => {
             x.open("emitter", &[("type", "spot"), ("id", &id)]);
-            x.lookat(s.position, s.position + s.direction, tangents(s.direction).0);
+            x.lookat(
+                s.position,
+                s.position + s.direction,
+                tangents(s.direction).0,
+            );
             x.rgb("intensity", s.intensity);
             x.property("float", "cutoff_angle", s.cutoff_angle.to_degrees());
             x.property("float", "beam_width", s.beam_width.to_degrees());

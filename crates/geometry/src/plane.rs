@@ -47,8 +47,7 @@ impl Plane {
     /// of triangles: a pass that renders through it must swap its front face.
     pub fn reflection_matrix(&self) -> Mat4 {
         let n = self.normal;
-        let linear = Mat3::IDENTITY
-            - 2.0 * Mat3::from_cols(n * n.x, n * n.y, n * n.z);
+        let linear = Mat3::IDENTITY - 2.0 * Mat3::from_cols(n * n.x, n * n.y, n * n.z);
         let translation = 2.0 * self.offset * n;
         Mat4::from_cols(
             linear.x_axis.extend(0.0),

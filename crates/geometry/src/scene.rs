@@ -109,12 +109,16 @@ impl Scene {
         let mut mesh_object = vec![u32::MAX; meshes.len()];
         for (o, object) in objects.iter().enumerate() {
             for &m in &object.meshes {
-                let slot = mesh_object
-                    .get_mut(m as usize)
-                    .ok_or_else(|| GeometryError::InvalidMesh {
-                        mesh: format!("#{m}"),
-                        message: format!("object `{}` names a mesh that does not exist", object.name),
-                    })?;
+                let slot =
+                    mesh_object
+                        .get_mut(m as usize)
+                        .ok_or_else(|| GeometryError::InvalidMesh {
+                            mesh: format!("#{m}"),
+                            message: format!(
+                                "object `{}` names a mesh that does not exist",
+                                object.name
+                            ),
+                        })?;
                 if *slot != u32::MAX {
                     return Err(GeometryError::InvalidMesh {
                         mesh: meshes[m as usize].name.clone(),
@@ -332,7 +336,9 @@ impl Scene {
                 let area = group
                     .triangles
                     .iter()
-                    .map(|&t| triangle_area(mesh.indices[t as usize].map(|i| positions[i as usize])))
+                    .map(|&t| {
+                        triangle_area(mesh.indices[t as usize].map(|i| positions[i as usize]))
+                    })
                     .sum();
                 for &t in &group.triangles {
                     self.triangle_surface[(self.triangle_offsets[m] + t) as usize] = id;
@@ -385,7 +391,12 @@ struct SurfaceGroup {
 /// Splits a mesh into surfaces: flat-shaded triangles joined across shared
 /// edges when coplanar become planar polygons; smooth-shaded ones form one
 /// curved surface.
-fn group_surfaces(mesh: &Mesh, positions: &[Vec3], normals: &[Vec3], tolerance: f32) -> Vec<SurfaceGroup> {
+fn group_surfaces(
+    mesh: &Mesh,
+    positions: &[Vec3],
+    normals: &[Vec3],
+    tolerance: f32,
+) -> Vec<SurfaceGroup> {
     let n = mesh.indices.len();
     let geometric: Vec<Vec3> = mesh
         .indices
@@ -419,7 +430,10 @@ fn group_surfaces(mesh: &Mesh, positions: &[Vec3], normals: &[Vec3], tolerance: 
         }
         let tri = mesh.indices[t];
         for e in 0..3 {
-            let (a, b) = (key(positions[tri[e] as usize]), key(positions[tri[(e + 1) % 3] as usize]));
+            let (a, b) = (
+                key(positions[tri[e] as usize]),
+                key(positions[tri[(e + 1) % 3] as usize]),
+            );
             let edge = if a < b { (a, b) } else { (b, a) };
             match edges.get(&edge) {
                 Some(&other) => {
@@ -448,7 +462,10 @@ fn group_surfaces(mesh: &Mesh, positions: &[Vec3], normals: &[Vec3], tolerance: 
                 let p = positions[mesh.indices[root as usize][0] as usize];
                 groups.push(SurfaceGroup {
                     triangles: Vec::new(),
-                    kind: SurfaceKind::Planar(Plane::from_point_normal(p, geometric[root as usize])),
+                    kind: SurfaceKind::Planar(Plane::from_point_normal(
+                        p,
+                        geometric[root as usize],
+                    )),
                 });
                 groups.len() - 1
             })
@@ -480,9 +497,17 @@ fn rectangle_of(triangles: &[[Vec3; 3]]) -> Option<AreaShape> {
         }
         let opposite = origin + eu + ev;
         let tol = 1e-5 * (eu.length() + ev.length());
-        let on_corner = |p: Vec3| [origin, origin + eu, origin + ev, opposite].iter().any(|q| q.distance(p) <= tol);
+        let on_corner = |p: Vec3| {
+            [origin, origin + eu, origin + ev, opposite]
+                .iter()
+                .any(|q| q.distance(p) <= tol)
+        };
         let same_side = (t1[1] - t1[0]).cross(t1[2] - t1[0]).dot(cross) > 0.0;
-        if t1.iter().all(|&p| on_corner(p)) && t1.iter().any(|p| p.distance(opposite) <= tol) && same_side && (cross.length() - area).abs() <= 1e-4 * area {
+        if t1.iter().all(|&p| on_corner(p))
+            && t1.iter().any(|p| p.distance(opposite) <= tol)
+            && same_side
+            && (cross.length() - area).abs() <= 1e-4 * area
+        {
             return Some(AreaShape::Rectangle {
                 origin,
                 edge_u: eu,

@@ -49,7 +49,9 @@ fn direction() -> impl Strategy<Value = Vec3> {
 fn triangle() -> impl Strategy<Value = [Vec3; 3]> {
     (vec3(), vec3(), vec3())
         .prop_map(|(a, b, c)| [a, b, c])
-        .prop_filter("not degenerate", |[a, b, c]| (*b - *a).cross(*c - *a).length() > 1e-2)
+        .prop_filter("not degenerate", |[a, b, c]| {
+            (*b - *a).cross(*c - *a).length() > 1e-2
+        })
 }
 
 fn world(triangles: &[[Vec3; 3]]) -> Vec<WorldTriangle> {
@@ -57,7 +59,9 @@ fn world(triangles: &[[Vec3; 3]]) -> Vec<WorldTriangle> {
         .iter()
         .enumerate()
         .map(|(i, &positions)| {
-            let n = (positions[1] - positions[0]).cross(positions[2] - positions[0]).normalize();
+            let n = (positions[1] - positions[0])
+                .cross(positions[2] - positions[0])
+                .normalize();
             WorldTriangle {
                 positions,
                 normals: [n; 3],
@@ -159,12 +163,29 @@ fn batches_equal_single_queries() {
 fn hit_record_interpolates_normals_and_uvs() {
     // One triangle with distinct corner normals and UVs; the hit at known barycentrics.
     let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
-    let normals = [Vec3::Z, Vec3::new(1.0, 0.0, 1.0).normalize(), Vec3::new(0.0, 1.0, 1.0).normalize()];
-    let uvs = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)];
-    let bvh = Bvh::from_triangles(vec![WorldTriangle { positions, normals, uvs, surface: 7, material: 3 }]);
+    let normals = [
+        Vec3::Z,
+        Vec3::new(1.0, 0.0, 1.0).normalize(),
+        Vec3::new(0.0, 1.0, 1.0).normalize(),
+    ];
+    let uvs = [
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(0.0, 1.0),
+    ];
+    let bvh = Bvh::from_triangles(vec![WorldTriangle {
+        positions,
+        normals,
+        uvs,
+        surface: 7,
+        material: 3,
+    }]);
     let (u, v) = (0.25f32, 0.5f32);
     let target = (1.0 - u - v) * positions[0] + u * positions[1] + v * positions[2];
-    let ray = Ray::new(target + Vec3::new(0.1, -0.2, 2.0), (-Vec3::new(0.1, -0.2, 2.0)).normalize());
+    let ray = Ray::new(
+        target + Vec3::new(0.1, -0.2, 2.0),
+        (-Vec3::new(0.1, -0.2, 2.0)).normalize(),
+    );
     let h = bvh.closest_hit(&ray).unwrap();
     assert!((h.u - u).abs() < 1e-5 && (h.v - v).abs() < 1e-5, "{h:?}");
     assert!((h.position - target).length() < 1e-5);
@@ -177,11 +198,21 @@ fn hit_record_interpolates_normals_and_uvs() {
 
 #[test]
 fn t_interval_is_respected() {
-    let tri = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+    let tri = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
     let bvh = Bvh::from_triangles(world(&[tri]));
     let d = -Vec3::Z;
-    assert!(bvh.closest_hit(&Ray::segment(Vec3::Z, d, 0.0, 0.999)).is_none());
-    assert!(bvh.closest_hit(&Ray::segment(Vec3::Z, d, 1.001, 2.0)).is_none());
+    assert!(
+        bvh.closest_hit(&Ray::segment(Vec3::Z, d, 0.0, 0.999))
+            .is_none()
+    );
+    assert!(
+        bvh.closest_hit(&Ray::segment(Vec3::Z, d, 1.001, 2.0))
+            .is_none()
+    );
     assert!(bvh.any_hit(&Ray::segment(Vec3::Z, d, 0.5, 1.5)));
     assert!(!bvh.any_hit(&Ray::segment(Vec3::Z, d, 0.0, 0.5)));
     let empty = Bvh::from_triangles(Vec::new());
@@ -192,16 +223,31 @@ fn t_interval_is_respected() {
 #[test]
 fn rebuild_after_moving_an_object_sees_the_new_pose() {
     let material = Material::diffuse("white", Vec3::splat(0.5));
-    let quad = |name: &str, z: f32, emissive: u32| Mesh::flat(
-        name,
-        &[Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(1.0, 1.0, z), Vec3::new(-1.0, 1.0, z)],
-        &[[0, 1, 2], [2, 3, 0]],
-        emissive,
-    );
+    let quad = |name: &str, z: f32, emissive: u32| {
+        Mesh::flat(
+            name,
+            &[
+                Vec3::new(-1.0, -1.0, z),
+                Vec3::new(1.0, -1.0, z),
+                Vec3::new(1.0, 1.0, z),
+                Vec3::new(-1.0, 1.0, z),
+            ],
+            &[[0, 1, 2], [2, 3, 0]],
+            emissive,
+        )
+    };
     let meshes = vec![quad("mover", 0.0, 0), quad("light", -5.0, 1)];
     let objects = vec![
-        Object { name: "mover".into(), meshes: vec![0], transform: glam::Affine3A::IDENTITY },
-        Object { name: "light".into(), meshes: vec![1], transform: glam::Affine3A::IDENTITY },
+        Object {
+            name: "mover".into(),
+            meshes: vec![0],
+            transform: glam::Affine3A::IDENTITY,
+        },
+        Object {
+            name: "light".into(),
+            meshes: vec![1],
+            transform: glam::Affine3A::IDENTITY,
+        },
     ];
     let cam = lustre_geometry::Camera::look_at(Vec3::Z * 3.0, Vec3::ZERO, Vec3::Y, 40.0);
     let mut scene = Scene::new(
@@ -216,11 +262,24 @@ fn rebuild_after_moving_an_object_sees_the_new_pose() {
     let ray = Ray::new(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z);
     assert!((Bvh::build(&scene).closest_hit(&ray).unwrap().t - 3.0).abs() < 1e-5);
     let id = scene.object_by_name("mover").unwrap();
-    scene.set_object_transform(id, glam::Affine3A::from_translation(Vec3::new(0.0, 0.0, 1.0))).unwrap();
+    scene
+        .set_object_transform(
+            id,
+            glam::Affine3A::from_translation(Vec3::new(0.0, 0.0, 1.0)),
+        )
+        .unwrap();
     let hit = Bvh::build(&scene).closest_hit(&ray).unwrap();
     assert!((hit.t - 2.0).abs() < 1e-5, "{hit:?}");
-    scene.set_object_transform(id, glam::Affine3A::from_translation(Vec3::new(5.0, 0.0, 0.0))).unwrap();
+    scene
+        .set_object_transform(
+            id,
+            glam::Affine3A::from_translation(Vec3::new(5.0, 0.0, 0.0)),
+        )
+        .unwrap();
     let hit = Bvh::build(&scene).closest_hit(&ray).unwrap();
-    assert!((hit.t - 8.0).abs() < 1e-4, "the ray now reaches the light quad: {hit:?}");
+    assert!(
+        (hit.t - 8.0).abs() < 1e-4,
+        "the ray now reaches the light quad: {hit:?}"
+    );
     let _ = DVec3::ZERO;
 }

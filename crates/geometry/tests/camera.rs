@@ -5,7 +5,13 @@ use lustre_geometry::{Camera, Plane};
 use proptest::prelude::*;
 
 fn camera() -> Camera {
-    Camera::look_at(Vec3::new(0.3, 0.2, 3.9), Vec3::new(0.0, -0.1, 0.0), Vec3::Y, 39.3077).with_aspect(1.5)
+    Camera::look_at(
+        Vec3::new(0.3, 0.2, 3.9),
+        Vec3::new(0.0, -0.1, 0.0),
+        Vec3::Y,
+        39.3077,
+    )
+    .with_aspect(1.5)
 }
 
 fn project(cam: &Camera, p: Vec3) -> Vec3 {

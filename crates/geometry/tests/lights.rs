@@ -51,7 +51,11 @@ fn integrate_intensity(light: &Light) -> Vec3 {
         let theta = (i as f32 + 0.5) / nt as f32 * PI;
         for j in 0..np {
             let phi = (j as f32 + 0.5) / np as f32 * 2.0 * PI;
-            let w = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            let w = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
             sum += intensity(light, w) * theta.sin() * (PI / nt as f32) * (2.0 * PI / np as f32);
         }
     }
@@ -60,7 +64,10 @@ fn integrate_intensity(light: &Light) -> Vec3 {
 
 fn point_lights() -> Vec<Light> {
     vec![
-        Light::Point(PointLight { position: Vec3::ONE, intensity: Vec3::new(1.0, 2.0, 3.0) }),
+        Light::Point(PointLight {
+            position: Vec3::ONE,
+            intensity: Vec3::new(1.0, 2.0, 3.0),
+        }),
         Light::OrientedPoint(OrientedPointLight {
             position: Vec3::ZERO,
             normal: Vec3::new(0.3, -1.0, 0.2).normalize(),
@@ -100,8 +107,16 @@ fn triangle_light() -> Light {
         mesh: None,
         shape: AreaShape::triangles(vec![
             // Wound to face down (-Y).
-            [Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.5)],
-            [Vec3::new(-0.5, 1.0, 0.0), Vec3::new(-0.2, 1.0, 0.0), Vec3::new(-0.5, 1.0, 0.2)],
+            [
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.5, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.5),
+            ],
+            [
+                Vec3::new(-0.5, 1.0, 0.0),
+                Vec3::new(-0.2, 1.0, 0.0),
+                Vec3::new(-0.5, 1.0, 0.2),
+            ],
         ]),
         radiance: Vec3::splat(5.0),
     })
@@ -115,7 +130,11 @@ fn close(a: Vec3, b: Vec3, rel: f32) -> bool {
 fn point_light_power_equals_integrated_intensity() {
     for light in point_lights() {
         let numeric = integrate_intensity(&light);
-        assert!(close(light.power(), numeric, 1e-3), "{light:?}: {} vs {numeric}", light.power());
+        assert!(
+            close(light.power(), numeric, 1e-3),
+            "{light:?}: {} vs {numeric}",
+            light.power()
+        );
     }
 }
 
@@ -123,7 +142,11 @@ fn point_light_power_equals_integrated_intensity() {
 fn area_light_power_is_pi_l_a() {
     let l = rect_light();
     let area = 0.46 * 0.38;
-    assert!(close(l.power(), PI * area * Vec3::new(18.387, 13.9873, 6.75357), 1e-5));
+    assert!(close(
+        l.power(),
+        PI * area * Vec3::new(18.387, 13.9873, 6.75357),
+        1e-5
+    ));
     let t = triangle_light();
     let area = 0.5 * 0.5 * 0.5 + 0.5 * 0.3 * 0.2;
     assert!(close(t.power(), Vec3::splat(PI * 5.0 * area), 1e-5));
@@ -138,7 +161,10 @@ fn area_light_power_is_pi_l_a() {
 #[test]
 fn emission_samples_carry_the_power_and_the_intensity_distribution() {
     let n = 200_000;
-    for light in point_lights().into_iter().chain([rect_light(), triangle_light()]) {
+    for light in point_lights()
+        .into_iter()
+        .chain([rect_light(), triangle_light()])
+    {
         let mut rng = SplitMix(7);
         let bands = 12;
         let mut hist = vec![Vec3::ZERO; bands];
@@ -157,19 +183,36 @@ fn emission_samples_carry_the_power_and_the_intensity_distribution() {
             let band = ((theta / PI * bands as f32) as usize).min(bands - 1);
             hist[band] += s.weight / n as f32;
         }
-        assert!(close(mean, light.power(), 0.01), "{light:?}: mean weight {mean} vs power {}", light.power());
+        assert!(
+            close(mean, light.power(), 0.01),
+            "{light:?}: mean weight {mean} vs power {}",
+            light.power()
+        );
         if matches!(light, Light::Area(_)) {
             // Area lights: cosine distribution about the normal.
             for (b, h) in hist.iter().enumerate() {
-                let (t0, t1) = (b as f32 / bands as f32 * PI, (b + 1) as f32 / bands as f32 * PI);
+                let (t0, t1) = (
+                    b as f32 / bands as f32 * PI,
+                    (b + 1) as f32 / bands as f32 * PI,
+                );
                 // ∫ cos θ sin θ dθ dφ / π over the band (upper hemisphere only).
-                let share = if t1 <= 0.5 * PI { t1.sin().powi(2) - t0.sin().powi(2) } else { 0.0 };
+                let share = if t1 <= 0.5 * PI {
+                    t1.sin().powi(2) - t0.sin().powi(2)
+                } else {
+                    0.0
+                };
                 let expected = light.power() * share;
-                assert!((*h - expected).abs().max_element() <= 0.01 * light.power().max_element(), "band {b}: {h} vs {expected}");
+                assert!(
+                    (*h - expected).abs().max_element() <= 0.01 * light.power().max_element(),
+                    "band {b}: {h} vs {expected}"
+                );
             }
         } else {
             for (b, h) in hist.iter().enumerate() {
-                let (t0, t1) = (b as f32 / bands as f32 * PI, (b + 1) as f32 / bands as f32 * PI);
+                let (t0, t1) = (
+                    b as f32 / bands as f32 * PI,
+                    (b + 1) as f32 / bands as f32 * PI,
+                );
                 let steps = 400;
                 let mut expected = Vec3::ZERO;
                 for k in 0..steps {
@@ -177,9 +220,13 @@ fn emission_samples_carry_the_power_and_the_intensity_distribution() {
                     let frame = lustre_geometry::sampling::Frame::from_normal(axis);
                     let w = frame.to_world(Vec3::new(theta.sin(), 0.0, theta.cos()));
                     // Every light here is symmetric about its axis.
-                    expected += intensity(&light, w) * 2.0 * PI * theta.sin() * (t1 - t0) / steps as f32;
+                    expected +=
+                        intensity(&light, w) * 2.0 * PI * theta.sin() * (t1 - t0) / steps as f32;
                 }
-                assert!((*h - expected).abs().max_element() <= 0.01 * light.power().max_element(), "{light:?} band {b}: {h} vs {expected}");
+                assert!(
+                    (*h - expected).abs().max_element() <= 0.01 * light.power().max_element(),
+                    "{light:?} band {b}: {h} vs {expected}"
+                );
             }
         }
     }
@@ -205,8 +252,14 @@ fn polygon_irradiance(radiance: f32, polygon: &[Vec3], p: Vec3, n: Vec3) -> f32 
 fn direct_sampling_estimates_polygon_irradiance() {
     let receivers = [
         (Vec3::new(0.0, -1.0, 0.0), Vec3::Y),
-        (Vec3::new(0.7, -0.5, 0.3), Vec3::new(-0.3, 1.0, 0.1).normalize()),
-        (Vec3::new(-0.9, 0.5, -0.9), Vec3::new(1.0, 0.2, 0.3).normalize()),
+        (
+            Vec3::new(0.7, -0.5, 0.3),
+            Vec3::new(-0.3, 1.0, 0.1).normalize(),
+        ),
+        (
+            Vec3::new(-0.9, 0.5, -0.9),
+            Vec3::new(1.0, 0.2, 0.3).normalize(),
+        ),
     ];
     let light = rect_light();
     let polygon = [
@@ -217,8 +270,16 @@ fn direct_sampling_estimates_polygon_irradiance() {
     ];
     let tri = triangle_light();
     let tri_polys = [
-        [Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.5), Vec3::new(0.5, 1.0, 0.0)],
-        [Vec3::new(-0.5, 1.0, 0.0), Vec3::new(-0.5, 1.0, 0.2), Vec3::new(-0.2, 1.0, 0.0)],
+        [
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.5),
+            Vec3::new(0.5, 1.0, 0.0),
+        ],
+        [
+            Vec3::new(-0.5, 1.0, 0.0),
+            Vec3::new(-0.5, 1.0, 0.2),
+            Vec3::new(-0.2, 1.0, 0.0),
+        ],
     ];
     for (p, n) in receivers {
         let mut rng = SplitMix(3);
@@ -236,9 +297,18 @@ fn direct_sampling_estimates_polygon_irradiance() {
             }
         }
         let expected_rect = polygon_irradiance(18.387, &polygon, p, n);
-        let expected_tri: f32 = tri_polys.iter().map(|t| polygon_irradiance(5.0, t, p, n)).sum();
-        assert!((e_rect - expected_rect).abs() <= 0.01 * expected_rect, "{e_rect} vs {expected_rect}");
-        assert!((e_tri - expected_tri).abs() <= 0.01 * expected_tri, "{e_tri} vs {expected_tri}");
+        let expected_tri: f32 = tri_polys
+            .iter()
+            .map(|t| polygon_irradiance(5.0, t, p, n))
+            .sum();
+        assert!(
+            (e_rect - expected_rect).abs() <= 0.01 * expected_rect,
+            "{e_rect} vs {expected_rect}"
+        );
+        assert!(
+            (e_tri - expected_tri).abs() <= 0.01 * expected_tri,
+            "{e_tri} vs {expected_tri}"
+        );
     }
 }
 
@@ -254,23 +324,41 @@ fn point_direct_samples_follow_inverse_square() {
         };
         let Some(s) = light.sample_direct(p, Vec2::ZERO) else {
             // Only a light that sends nothing toward p may return no sample.
-            assert_eq!(intensity(&light, (p - pos).normalize()), Vec3::ZERO, "{light:?}");
+            assert_eq!(
+                intensity(&light, (p - pos).normalize()),
+                Vec3::ZERO,
+                "{light:?}"
+            );
             continue;
         };
         let d = pos - p;
         assert!(s.is_delta);
         let expected = intensity(&light, -d.normalize()) / d.length_squared();
-        assert!(close(s.weight, expected, 1e-4), "{light:?}: {} vs {expected}", s.weight);
+        assert!(
+            close(s.weight, expected, 1e-4),
+            "{light:?}: {} vs {expected}",
+            s.weight
+        );
     }
     // A receiver behind an area light gets nothing.
-    assert!(rect_light().sample_direct(Vec3::new(0.0, 2.0, 0.0), Vec2::splat(0.5)).is_none());
+    assert!(
+        rect_light()
+            .sample_direct(Vec3::new(0.0, 2.0, 0.0), Vec2::splat(0.5))
+            .is_none()
+    );
 }
 
 #[test]
 fn invalid_lights_are_rejected() {
-    let zero = Light::Point(PointLight { position: Vec3::ZERO, intensity: Vec3::ZERO });
+    let zero = Light::Point(PointLight {
+        position: Vec3::ZERO,
+        intensity: Vec3::ZERO,
+    });
     assert!(zero.validate("zero").is_err());
-    let nan = Light::Point(PointLight { position: Vec3::ZERO, intensity: Vec3::new(f32::NAN, 1.0, 1.0) });
+    let nan = Light::Point(PointLight {
+        position: Vec3::ZERO,
+        intensity: Vec3::new(f32::NAN, 1.0, 1.0),
+    });
     assert!(nan.validate("nan").is_err());
     let spot = Light::Spot(SpotLight {
         position: Vec3::ZERO,
@@ -282,7 +370,11 @@ fn invalid_lights_are_rejected() {
     assert!(spot.validate("spot").is_err());
     let flat = Light::Area(AreaLight {
         mesh: None,
-        shape: AreaShape::Rectangle { origin: Vec3::ZERO, edge_u: Vec3::X, edge_v: Vec3::X },
+        shape: AreaShape::Rectangle {
+            origin: Vec3::ZERO,
+            edge_u: Vec3::X,
+            edge_v: Vec3::X,
+        },
         radiance: Vec3::ONE,
     });
     assert!(flat.validate("flat").is_err());

@@ -21,7 +21,10 @@ fn cornell_matches_the_design() {
     let b = scene.bounds();
     // The large box (centre y = -0.4, half height 0.61) sinks 1 cm into the floor, as in Mitsuba.
     let expected_min = Vec3::new(-1.0, -1.01, -1.0);
-    assert!((b.min - expected_min).length() < 1e-6 && (b.max - Vec3::ONE).length() < 1e-6, "{b:?}");
+    assert!(
+        (b.min - expected_min).length() < 1e-6 && (b.max - Vec3::ONE).length() < 1e-6,
+        "{b:?}"
+    );
     // Six walls and the light are one planar surface each; each box has six faces.
     assert_eq!(scene.surfaces().len(), 6 + 12);
     for (name, normal) in [
@@ -34,45 +37,92 @@ fn cornell_matches_the_design() {
     ] {
         let s = surface_of(&scene, name);
         assert_eq!(s.len(), 1, "{name}");
-        let SurfaceKind::Planar(plane) = s[0].kind else { panic!("{name} is not planar") };
-        assert!((plane.normal - normal).length() < 1e-6, "{name}: {:?}", plane.normal);
+        let SurfaceKind::Planar(plane) = s[0].kind else {
+            panic!("{name} is not planar")
+        };
+        assert!(
+            (plane.normal - normal).length() < 1e-6,
+            "{name}: {:?}",
+            plane.normal
+        );
         let expected_area = if name == "light" { 0.46 * 0.38 } else { 4.0 };
-        assert!((s[0].area - expected_area).abs() < 1e-5, "{name}: {}", s[0].area);
+        assert!(
+            (s[0].area - expected_area).abs() < 1e-5,
+            "{name}: {}",
+            s[0].area
+        );
     }
     // Boxes: side 0.6 (scale 0.3 of [-1,1]); the large box is 1.22 tall.
     let small: f32 = surface_of(&scene, "small-box").iter().map(|s| s.area).sum();
     assert!((small - 6.0 * 0.36).abs() < 1e-4, "{small}");
-    let large: Vec<f32> = surface_of(&scene, "large-box").iter().map(|s| s.area).collect();
+    let large: Vec<f32> = surface_of(&scene, "large-box")
+        .iter()
+        .map(|s| s.area)
+        .collect();
     assert_eq!(large.len(), 6);
     assert!((large.iter().sum::<f32>() - (2.0 * 0.36 + 4.0 * 0.6 * 1.22)).abs() < 1e-4);
     // The small box stands on the floor: its bottom at y = -1, top at y = -0.4.
-    let small_id = scene.meshes().iter().position(|m| m.name == "small-box").unwrap() as u32;
-    let ys: Vec<f32> = scene.world_positions(small_id).iter().map(|p| p.y).collect();
+    let small_id = scene
+        .meshes()
+        .iter()
+        .position(|m| m.name == "small-box")
+        .unwrap() as u32;
+    let ys: Vec<f32> = scene
+        .world_positions(small_id)
+        .iter()
+        .map(|p| p.y)
+        .collect();
     assert!((ys.iter().copied().fold(f32::MAX, f32::min) + 1.0).abs() < 1e-6);
     assert!((ys.iter().copied().fold(f32::MIN, f32::max) + 0.4).abs() < 1e-6);
     // One area light: the rectangle, with power π L A.
     assert_eq!(scene.lights().len(), 1);
-    let Light::Area(light) = &scene.lights()[0] else { panic!("not an area light") };
-    let AreaShape::Rectangle { origin, edge_u, edge_v } = light.shape else { panic!("not a rectangle") };
+    let Light::Area(light) = &scene.lights()[0] else {
+        panic!("not an area light")
+    };
+    let AreaShape::Rectangle {
+        origin,
+        edge_u,
+        edge_v,
+    } = light.shape
+    else {
+        panic!("not a rectangle")
+    };
     let centre = origin + 0.5 * (edge_u + edge_v);
-    assert!((centre - Vec3::new(0.0, 0.99, 0.01)).length() < 1e-6, "{centre}");
+    assert!(
+        (centre - Vec3::new(0.0, 0.99, 0.01)).length() < 1e-6,
+        "{centre}"
+    );
     assert!(edge_u.cross(edge_v).normalize().dot(-Vec3::Y) > 0.9999);
     let radiance = Vec3::new(18.387, 13.9873, 6.75357);
     assert!((scene.total_power() - PI * radiance * 0.46 * 0.38).length() < 1e-4);
     // Materials: the walls' reflectances.
     let diffuse = |name: &str| {
-        let m = scene.meshes().iter().find(|m| m.name == name).unwrap().material;
+        let m = scene
+            .meshes()
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap()
+            .material;
         match &scene.materials()[m as usize].model {
             MaterialModel::Diffuse { reflectance } => *reflectance,
             other => panic!("{other:?}"),
         }
     };
-    assert_eq!(diffuse("red-wall"), Vec3::new(0.570068, 0.0430135, 0.0443706));
-    assert_eq!(diffuse("green-wall"), Vec3::new(0.105421, 0.37798, 0.076425));
+    assert_eq!(
+        diffuse("red-wall"),
+        Vec3::new(0.570068, 0.0430135, 0.0443706)
+    );
+    assert_eq!(
+        diffuse("green-wall"),
+        Vec3::new(0.105421, 0.37798, 0.076425)
+    );
     assert_eq!(diffuse("floor"), Vec3::new(0.885809, 0.698859, 0.666422));
     assert_eq!(diffuse("light"), Vec3::new(0.885809, 0.698859, 0.666422));
     let cam = scene.camera();
-    assert_eq!((cam.position, cam.target, cam.fov_y_degrees), (Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, 39.3077));
+    assert_eq!(
+        (cam.position, cam.target, cam.fov_y_degrees),
+        (Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, 39.3077)
+    );
 }
 
 #[test]
@@ -81,15 +131,33 @@ fn box_transforms_are_the_rotations_mitsuba_builds() {
     // DESIGN.md are those products. Check ours against the product.
     let scene = builtin("cornell").unwrap();
     for (name, t, degrees, s) in [
-        ("small-box", Vec3::new(0.335, -0.7, 0.38), -17.0f32, Vec3::splat(0.3)),
-        ("large-box", Vec3::new(-0.33, -0.4, -0.28), 18.25, Vec3::new(0.3, 0.61, 0.3)),
+        (
+            "small-box",
+            Vec3::new(0.335, -0.7, 0.38),
+            -17.0f32,
+            Vec3::splat(0.3),
+        ),
+        (
+            "large-box",
+            Vec3::new(-0.33, -0.4, -0.28),
+            18.25,
+            Vec3::new(0.3, 0.61, 0.3),
+        ),
     ] {
-        let xf = Affine3A::from_scale_rotation_translation(s, Quat::from_rotation_y(degrees.to_radians()), t);
+        let xf = Affine3A::from_scale_rotation_translation(
+            s,
+            Quat::from_rotation_y(degrees.to_radians()),
+            t,
+        );
         let id = scene.meshes().iter().position(|m| m.name == name).unwrap() as u32;
         for p in scene.world_positions(id) {
             // Every corner is xf of a corner of [-1, 1]^3.
             let local = xf.inverse().transform_point3(p);
-            assert!(local.abs().cmple(Vec3::splat(1.0 + 1e-4)).all() && (local.abs() - Vec3::ONE).abs().max_element() < 1e-4, "{name}: {local}");
+            assert!(
+                local.abs().cmple(Vec3::splat(1.0 + 1e-4)).all()
+                    && (local.abs() - Vec3::ONE).abs().max_element() < 1e-4,
+                "{name}: {local}"
+            );
         }
     }
 }
@@ -98,7 +166,12 @@ fn box_transforms_are_the_rotations_mitsuba_builds() {
 fn glosbox_has_the_gold_box_and_the_glossy_floor() {
     let scene = builtin("glosbox").unwrap();
     let material = |name: &str| {
-        let m = scene.meshes().iter().find(|m| m.name == name).unwrap().material;
+        let m = scene
+            .meshes()
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap()
+            .material;
         scene.materials()[m as usize].model.clone()
     };
     assert_eq!(
@@ -106,14 +179,36 @@ fn glosbox_has_the_gold_box_and_the_glossy_floor() {
         MaterialModel::RoughConductor {
             distribution: MicrofacetDistribution::Beckmann,
             alpha: 0.1,
-            fresnel: ConductorFresnel::Complex { eta: Vec3::new(0.143, 0.374, 1.442), k: Vec3::new(3.983, 2.385, 1.603) },
+            fresnel: ConductorFresnel::Complex {
+                eta: Vec3::new(0.143, 0.374, 1.442),
+                k: Vec3::new(3.983, 2.385, 1.603)
+            },
             specular: Vec3::ONE,
         }
     );
-    let MaterialModel::Blend { weight, first, second } = material("floor") else { panic!() };
+    let MaterialModel::Blend {
+        weight,
+        first,
+        second,
+    } = material("floor")
+    else {
+        panic!()
+    };
     assert_eq!(weight, 0.3);
-    assert_eq!(*first, MaterialModel::Diffuse { reflectance: Vec3::new(0.885809, 0.698859, 0.666422) });
-    assert!(matches!(*second, MaterialModel::RoughConductor { alpha: 0.05, fresnel: ConductorFresnel::None, .. }));
+    assert_eq!(
+        *first,
+        MaterialModel::Diffuse {
+            reflectance: Vec3::new(0.885809, 0.698859, 0.666422)
+        }
+    );
+    assert!(matches!(
+        *second,
+        MaterialModel::RoughConductor {
+            alpha: 0.05,
+            fresnel: ConductorFresnel::None,
+            ..
+        }
+    ));
     // Everything else is the Cornell box.
     let cornell = builtin("cornell").unwrap();
     assert_eq!(scene.triangle_count(), cornell.triangle_count());
@@ -121,7 +216,10 @@ fn glosbox_has_the_gold_box_and_the_glossy_floor() {
     for name in BUILTIN_SCENES {
         assert!(builtin(name).is_ok());
     }
-    assert!(matches!(builtin("nope"), Err(GeometryError::UnknownScene { .. })));
+    assert!(matches!(
+        builtin("nope"),
+        Err(GeometryError::UnknownScene { .. })
+    ));
 }
 
 #[test]
@@ -129,23 +227,35 @@ fn moving_an_object_moves_its_light_and_keeps_its_areas() {
     let mut scene = builtin("cornell").unwrap();
     let before: Vec<f32> = scene.surfaces().iter().map(|s| s.area).collect();
     let light = scene.object_by_name("light").unwrap();
-    let motion = Affine3A::from_rotation_translation(Quat::from_rotation_y(0.7), Vec3::new(0.1, -0.2, 0.05));
+    let motion =
+        Affine3A::from_rotation_translation(Quat::from_rotation_y(0.7), Vec3::new(0.1, -0.2, 0.05));
     scene.set_object_transform(light, motion).unwrap();
     let after: Vec<f32> = scene.surfaces().iter().map(|s| s.area).collect();
     for (a, b) in before.iter().zip(&after) {
         assert!((a - b).abs() < 1e-5);
     }
-    let Light::Area(l) = &scene.lights()[0] else { panic!() };
+    let Light::Area(l) = &scene.lights()[0] else {
+        panic!()
+    };
     let expected = motion.transform_point3(Vec3::new(0.0, 0.99, 0.01));
     assert!((l.shape.centroid() - expected).length() < 1e-5);
     assert!(scene.set_object_transform(99, Affine3A::IDENTITY).is_err());
-    assert!(scene.set_object_transform(light, Affine3A::from_scale(Vec3::splat(f32::NAN))).is_err());
+    assert!(
+        scene
+            .set_object_transform(light, Affine3A::from_scale(Vec3::splat(f32::NAN)))
+            .is_err()
+    );
 }
 
 fn quad(name: &str, y: f32, material: u32) -> Mesh {
     Mesh::flat(
         name,
-        &[Vec3::new(-1.0, y, -1.0), Vec3::new(-1.0, y, 1.0), Vec3::new(1.0, y, 1.0), Vec3::new(1.0, y, -1.0)],
+        &[
+            Vec3::new(-1.0, y, -1.0),
+            Vec3::new(-1.0, y, 1.0),
+            Vec3::new(1.0, y, 1.0),
+            Vec3::new(1.0, y, -1.0),
+        ],
         &[[0, 1, 2], [2, 3, 0]],
         material,
     )
@@ -155,28 +265,70 @@ fn quad(name: &str, y: f32, material: u32) -> Mesh {
 fn invalid_scenes_are_typed_errors() {
     let cam = lustre_geometry::Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0);
     let white = Material::diffuse("white", Vec3::splat(0.5));
-    let object = |meshes: Vec<u32>| Object { name: "o".into(), meshes, transform: Affine3A::IDENTITY };
+    let object = |meshes: Vec<u32>| Object {
+        name: "o".into(),
+        meshes,
+        transform: Affine3A::IDENTITY,
+    };
     // No light.
-    let err = Scene::new("dark", vec![quad("q", 0.0, 0)], vec![white.clone()], vec![object(vec![0])], vec![], cam);
+    let err = Scene::new(
+        "dark",
+        vec![quad("q", 0.0, 0)],
+        vec![white.clone()],
+        vec![object(vec![0])],
+        vec![],
+        cam,
+    );
     assert!(matches!(err, Err(GeometryError::NoLight(_))), "{err:?}");
     // A mesh in no object, a mesh in two, a missing material, an index out of range, NaN, empty.
     let lit = || vec![white.clone(), white.clone().with_emission(Vec3::ONE)];
     let two = || vec![quad("q", 0.0, 0), quad("l", 1.0, 1)];
     assert!(Scene::new("s", two(), lit(), vec![object(vec![0])], vec![], cam).is_err());
-    assert!(Scene::new("s", two(), lit(), vec![object(vec![0, 1]), object(vec![1])], vec![], cam).is_err());
-    assert!(Scene::new("s", vec![quad("q", 0.0, 5)], lit(), vec![object(vec![0])], vec![], cam).is_err());
+    assert!(
+        Scene::new(
+            "s",
+            two(),
+            lit(),
+            vec![object(vec![0, 1]), object(vec![1])],
+            vec![],
+            cam
+        )
+        .is_err()
+    );
+    assert!(
+        Scene::new(
+            "s",
+            vec![quad("q", 0.0, 5)],
+            lit(),
+            vec![object(vec![0])],
+            vec![],
+            cam
+        )
+        .is_err()
+    );
     let mut bad = two();
     bad[0].indices[0] = [0, 1, 99];
-    assert!(matches!(Scene::new("s", bad, lit(), vec![object(vec![0, 1])], vec![], cam), Err(GeometryError::InvalidMesh { .. })));
+    assert!(matches!(
+        Scene::new("s", bad, lit(), vec![object(vec![0, 1])], vec![], cam),
+        Err(GeometryError::InvalidMesh { .. })
+    ));
     let mut nan = two();
     nan[0].positions[0].x = f32::NAN;
-    assert!(matches!(Scene::new("s", nan, lit(), vec![object(vec![0, 1])], vec![], cam), Err(GeometryError::InvalidMesh { .. })));
+    assert!(matches!(
+        Scene::new("s", nan, lit(), vec![object(vec![0, 1])], vec![], cam),
+        Err(GeometryError::InvalidMesh { .. })
+    ));
     let mut empty = two();
     empty[0].indices.clear();
-    assert!(matches!(Scene::new("s", empty, lit(), vec![object(vec![0, 1])], vec![], cam), Err(GeometryError::EmptyMesh { .. })));
+    assert!(matches!(
+        Scene::new("s", empty, lit(), vec![object(vec![0, 1])], vec![], cam),
+        Err(GeometryError::EmptyMesh { .. })
+    ));
     // A valid one: the emissive quad became a rectangle light with the right orientation.
     let scene = Scene::new("s", two(), lit(), vec![object(vec![0, 1])], vec![], cam).unwrap();
-    let Light::Area(l) = &scene.lights()[0] else { panic!() };
+    let Light::Area(l) = &scene.lights()[0] else {
+        panic!()
+    };
     assert!(matches!(l.shape, AreaShape::Rectangle { .. }));
     assert!((l.shape.mean_normal() - Vec3::Y).length() < 1e-6);
     assert_eq!(l.mesh, Some(1));
@@ -191,7 +343,10 @@ fn degenerate_triangles_are_removed_and_counted() {
     m.normals.push(Vec3::Y);
     m.uvs.push(glam::Vec2::ZERO);
     let n = m.positions.len() as u32;
-    assert_eq!((m.positions[0], m.positions[4]), (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0)));
+    assert_eq!(
+        (m.positions[0], m.positions[4]),
+        (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0))
+    );
     m.indices.push([0, 4, n - 1]);
     let removed = m.remove_degenerate(1e-12);
     assert_eq!(removed, 2);
@@ -202,7 +357,16 @@ fn degenerate_triangles_are_removed_and_counted() {
 fn curved_meshes_form_one_curved_surface() {
     // An octahedron with smooth normals (the normalised positions): one curved surface.
     let p = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let indices = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    let indices = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
     let mesh = Mesh {
         name: "ball".into(),
         positions: p.to_vec(),
@@ -217,7 +381,11 @@ fn curved_meshes_form_one_curved_surface() {
         "ball",
         vec![mesh, quad("l", 3.0, 1)],
         vec![white.clone(), white.with_emission(Vec3::ONE)],
-        vec![Object { name: "o".into(), meshes: vec![0, 1], transform: Affine3A::IDENTITY }],
+        vec![Object {
+            name: "o".into(),
+            meshes: vec![0, 1],
+            transform: Affine3A::IDENTITY,
+        }],
         vec![],
         lustre_geometry::Camera::look_at(Vec3::Z * 4.0, Vec3::ZERO, Vec3::Y, 40.0),
     )

@@ -1,1 +1,163 @@
-fn main() {}
+//! `lustre`: information about a scene, Mitsuba 3 export, and (as the
+//! techniques land) rendering.
+
+mod scene_arg;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use lustre_geometry::SurfaceKind;
+use lustre_geometry::light::Light;
+use lustre_geometry::mitsuba::{self, ExportOptions};
+
+/// Lustre: interactive global illumination of glossy, mirror and refractive scenes.
+#[derive(Debug, Parser)]
+#[command(name = "lustre", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print a scene's triangles, surfaces, materials, lights and bounds.
+    Info {
+        /// A built-in scene (cornell, glosbox) or an OBJ file.
+        scene: String,
+    },
+    /// Write a scene as Mitsuba 3 XML, with its meshes as PLY files beside it.
+    ExportMitsuba {
+        /// A built-in scene (cornell, glosbox) or an OBJ file.
+        scene: String,
+        /// The XML file to write.
+        out: PathBuf,
+        /// Image width and height in pixels, `WxH`.
+        #[arg(long, default_value = "256x256", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Samples per pixel of the reference render.
+        #[arg(long, default_value_t = 1024)]
+        spp: u32,
+        /// Export materials Mitsuba lacks (Phong, Ward, ...) as their diffuse
+        /// part, with a warning, instead of failing.
+        #[arg(long)]
+        approximate: bool,
+    },
+}
+
+/// Parses `WxH` into a width and height, both at least 1.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT, e.g. 640x480"))?;
+    let parse = |v: &str| match v.trim().parse::<u32>() {
+        Ok(n) if n > 0 && n <= 16384 => Ok(n),
+        _ => Err(format!("`{v}` is not a size between 1 and 16384")),
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+fn info(arg: &str) -> anyhow::Result<()> {
+    let loaded = scene_arg::load(arg)?;
+    let scene = &loaded.scene;
+    let bounds = scene.bounds();
+    println!("scene       {}", scene.name);
+    println!("triangles   {}", scene.triangle_count());
+    println!(
+        "meshes      {} in {} objects",
+        scene.meshes().len(),
+        scene.objects().len()
+    );
+    let planar = scene
+        .surfaces()
+        .iter()
+        .filter(|s| matches!(s.kind, SurfaceKind::Planar(_)))
+        .count();
+    let area: f32 = scene.surfaces().iter().map(|s| s.area).sum();
+    println!(
+        "surfaces    {} ({planar} planar, {} curved), {area:.4} m² in all",
+        scene.surfaces().len(),
+        scene.surfaces().len() - planar
+    );
+    println!("materials   {}", scene.materials().len());
+    for m in scene.materials() {
+        let emits = if m.is_emissive() {
+            format!(", emits {:.4?} W/(m² sr)", m.emission.to_array())
+        } else {
+            String::new()
+        };
+        println!("  {:<14} {}{emits}", m.name, m.model.name());
+    }
+    println!("lights      {}", scene.lights().len());
+    for light in scene.lights() {
+        let kind = match light {
+            Light::Point(_) => "point",
+            Light::OrientedPoint(_) => "oriented point",
+            Light::Spot(_) => "spot",
+            Light::Area(_) => "area",
+        };
+        println!("  {kind:<14} power {:.4?} W", light.power().to_array());
+    }
+    println!("power       {:.4?} W", scene.total_power().to_array());
+    println!(
+        "bounds      {:.4?} .. {:.4?}",
+        bounds.min.to_array(),
+        bounds.max.to_array()
+    );
+    if loaded.degenerate_triangles_dropped > 0 {
+        println!(
+            "dropped     {} degenerate triangles",
+            loaded.degenerate_triangles_dropped
+        );
+    }
+    for w in &loaded.warnings {
+        println!("warning     {w}");
+    }
+    Ok(())
+}
+
+fn export(
+    arg: &str,
+    out: &std::path::Path,
+    size: (u32, u32),
+    spp: u32,
+    approximate: bool,
+) -> anyhow::Result<()> {
+    let loaded = scene_arg::load(arg)?;
+    let options = ExportOptions {
+        width: size.0,
+        height: size.1,
+        spp,
+        approximate,
+        ..ExportOptions::default()
+    };
+    let report = mitsuba::export(&loaded.scene, out, &options)
+        .with_context(|| format!("cannot export `{arg}` to {}", out.display()))?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Info { scene } => info(scene),
+        Command::ExportMitsuba {
+            scene,
+            out,
+            size,
+            spp,
+            approximate,
+        } => export(scene, out, *size, *spp, *approximate),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lustre: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

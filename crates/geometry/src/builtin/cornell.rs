@@ -83,18 +83,44 @@ fn affine_rows(rows: [[f32; 4]; 3]) -> Affine3A {
 
 /// Mitsuba's `T().translate(t).rotate(axis, degrees)` applied to Mitsuba's rectangle.
 fn placed(t: Vec3, axis: Vec3, degrees: f32) -> Affine3A {
-    Affine3A::from_translation(t) * Affine3A::from_quat(Quat::from_axis_angle(axis, degrees.to_radians()))
+    Affine3A::from_translation(t)
+        * Affine3A::from_quat(Quat::from_axis_angle(axis, degrees.to_radians()))
 }
 
 /// The Cornell box parts with the materials of each part given by the caller.
-fn box_scene(name: &str, materials: Vec<Material>, large_box_material: u32, floor_material: u32) -> Scene {
+fn box_scene(
+    name: &str,
+    materials: Vec<Material>,
+    large_box_material: u32,
+    floor_material: u32,
+) -> Scene {
     let (white, red, green, light) = (0, 1, 2, 3);
     let meshes = vec![
-        rectangle("floor", placed(Vec3::new(0.0, -1.0, 0.0), Vec3::X, -90.0), floor_material),
-        rectangle("ceiling", placed(Vec3::new(0.0, 1.0, 0.0), Vec3::X, 90.0), white),
-        rectangle("back", placed(Vec3::new(0.0, 0.0, -1.0), Vec3::X, 0.0), white),
-        rectangle("green-wall", placed(Vec3::new(1.0, 0.0, 0.0), Vec3::Y, -90.0), green),
-        rectangle("red-wall", placed(Vec3::new(-1.0, 0.0, 0.0), Vec3::Y, 90.0), red),
+        rectangle(
+            "floor",
+            placed(Vec3::new(0.0, -1.0, 0.0), Vec3::X, -90.0),
+            floor_material,
+        ),
+        rectangle(
+            "ceiling",
+            placed(Vec3::new(0.0, 1.0, 0.0), Vec3::X, 90.0),
+            white,
+        ),
+        rectangle(
+            "back",
+            placed(Vec3::new(0.0, 0.0, -1.0), Vec3::X, 0.0),
+            white,
+        ),
+        rectangle(
+            "green-wall",
+            placed(Vec3::new(1.0, 0.0, 0.0), Vec3::Y, -90.0),
+            green,
+        ),
+        rectangle(
+            "red-wall",
+            placed(Vec3::new(-1.0, 0.0, 0.0), Vec3::Y, 90.0),
+            red,
+        ),
         rectangle(
             "light",
             placed(Vec3::new(0.0, 0.99, 0.01), Vec3::X, 90.0)

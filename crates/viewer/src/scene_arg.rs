@@ -1,0 +1,26 @@
+//! Scene arguments: a built-in name or a path to an OBJ file.
+
+use std::path::Path;
+
+use anyhow::{Context, bail};
+use lustre_geometry::builtin::BUILTIN_SCENES;
+use lustre_geometry::obj::{LoadedScene, load_obj};
+
+/// Loads a built-in scene by name, or an OBJ file by path.
+pub fn load(arg: &str) -> anyhow::Result<LoadedScene> {
+    if BUILTIN_SCENES.contains(&arg) {
+        return Ok(LoadedScene {
+            scene: lustre_geometry::builtin(arg)?,
+            degenerate_triangles_dropped: 0,
+            warnings: Vec::new(),
+        });
+    }
+    let path = Path::new(arg);
+    if !path.exists() {
+        bail!(
+            "`{arg}` is neither a built-in scene ({}) nor an existing file",
+            BUILTIN_SCENES.join(", ")
+        );
+    }
+    load_obj(path).with_context(|| format!("cannot load `{arg}`"))
+}

@@ -1,0 +1,125 @@
+//! `cargo xtask bench`: runs the criterion benches and writes BENCHMARKS.md
+//! from their medians.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::Context;
+use serde_json::Value;
+
+/// The criterion benches to run: (package, bench target).
+const BENCHES: &[(&str, &str)] = &[("lustre-geometry", "bvh")];
+
+/// One criterion result.
+struct Measurement {
+    id: String,
+    median_ns: f64,
+    elements: Option<f64>,
+}
+
+/// Runs every bench (or only those whose target matches `filter`) and rewrites BENCHMARKS.md.
+pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
+    for (package, bench) in BENCHES {
+        if filter.is_some_and(|f| !bench.contains(f)) {
+            continue;
+        }
+        crate::ci::cargo(&["bench", "-p", package, "--bench", bench, "--", "--noplot"])?;
+    }
+    let root = crate::workspace_root();
+    let mut results = Vec::new();
+    collect(&root.join("target/criterion"), &mut results)?;
+    results.sort_by(|a, b| a.id.cmp(&b.id));
+    let text = render(&results);
+    let path = root.join("BENCHMARKS.md");
+    let tmp = path.with_extension("md.tmp");
+    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, &path).with_context(|| format!("cannot write {}", path.display()))?;
+    println!("xtask: wrote {}", path.display());
+    Ok(())
+}
+
+/// Finds every `new/benchmark.json` + `new/estimates.json` pair under `dir`.
+fn collect(dir: &Path, out: &mut Vec<Measurement>) -> anyhow::Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries {
+        let path = entry?.path();
+        if !path.is_dir() {
+            continue;
+        }
+        if path.file_name().is_some_and(|n| n == "new") {
+            let read = |name: &str| -> anyhow::Result<Value> {
+                let p = path.join(name);
+                let text = std::fs::read_to_string(&p)
+                    .with_context(|| format!("cannot read {}", p.display()))?;
+                serde_json::from_str(&text).with_context(|| format!("{} is not JSON", p.display()))
+            };
+            let (benchmark, estimates) = (read("benchmark.json")?, read("estimates.json")?);
+            out.push(Measurement {
+                id: benchmark["full_id"].as_str().unwrap_or("?").to_owned(),
+                median_ns: estimates["median"]["point_estimate"]
+                    .as_f64()
+                    .unwrap_or(f64::NAN),
+                elements: benchmark["throughput"]["Elements"].as_f64(),
+            });
+        } else {
+            collect(&path, out)?;
+        }
+    }
+    Ok(())
+}
+
+/// The machine this runs on, from /proc/cpuinfo.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    format!("{cpu}, {cores} cores available")
+}
+
+fn render(results: &[Measurement]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Benchmarks\n");
+    let _ = writeln!(
+        s,
+        "Written by `cargo xtask bench` from criterion medians; do not edit by hand.\n"
+    );
+    let _ = writeln!(
+        s,
+        "Machine: {}. GPU adapter: none used by these benches (CPU only).\n",
+        machine()
+    );
+    let _ = writeln!(s, "## BVH closest hit (lustre-geometry, obvhs CWBVH)\n");
+    let _ = writeln!(
+        s,
+        "65,536 rays per batch, rayon-parallel: coherent rays are one primary ray per pixel of a \
+         256×256 image; incoherent rays start at random points inside the scene's bounds in \
+         uniformly random directions. `spheres-516k` is 64 UV spheres of 8,064 triangles \
+         (516,096 triangles).\n"
+    );
+    let _ = writeln!(s, "| benchmark | median time per batch | rays/s |");
+    let _ = writeln!(s, "|---|---:|---:|");
+    for r in results
+        .iter()
+        .filter(|r| r.id.starts_with("bvh-closest-hit/"))
+    {
+        let per_s = r.elements.map_or("-".into(), |n| {
+            format!("{:.2} M", n / (r.median_ns * 1e-9) / 1e6)
+        });
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} ms | {per_s} |",
+            r.id.trim_start_matches("bvh-closest-hit/"),
+            r.median_ns / 1e6
+        );
+    }
+    s
+}

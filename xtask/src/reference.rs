@@ -1,0 +1,344 @@
+//! `cargo xtask reference`: exports built-in scenes to Mitsuba 3 and renders
+//! path-traced references into `tests/references/` (DESIGN.md, "Testing").
+//!
+//! The Python side (`xtask/python/mitsuba_render.py`) runs in the virtual
+//! environment `.mitsuba-venv` at the workspace root, created here with
+//! `python3 -m venv` and `pip install mitsuba numpy` when missing. Each scene
+//! gives `tests/references/<scene>.exr` (linear float32 RGB) and a sidecar
+//! `tests/references/<scene>.json` with the settings and timing.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use anyhow::{Context, Result, bail, ensure};
+use clap::ValueEnum;
+use lustre_geometry::builtin::{BUILTIN_SCENES, builtin};
+use lustre_geometry::mitsuba::{self, ExportOptions, ReconstructionFilter};
+
+/// The spp a committed reference aims for.
+const TARGET_SPP: u32 = 4096;
+
+/// Options of `cargo xtask reference`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Render only this built-in scene (default: all of them).
+    #[arg(long)]
+    scene: Option<String>,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = TARGET_SPP)]
+    spp: u32,
+    /// Samples per pixel of each pass (the image is the mean of the passes).
+    #[arg(long, default_value_t = 64)]
+    spp_per_pass: u32,
+    /// Width and height of the square image in pixels.
+    #[arg(long, default_value_t = 256)]
+    size: u32,
+    /// Mitsuba variant: `llvm_ad_rgb` is faster but needs libLLVM 17 or newer.
+    #[arg(long, value_enum, default_value_t = Variant::LlvmAdRgb)]
+    variant: Variant,
+    /// Longest path (-1: unbounded; Mitsuba's Russian roulette ends paths from depth 5).
+    #[arg(long, default_value_t = -1, allow_negative_numbers = true)]
+    max_depth: i32,
+    /// Reconstruction filter of the film.
+    #[arg(long, value_enum, default_value_t = Filter::Box)]
+    filter: Filter,
+    /// Seed of the first pass (pass i uses seed + i).
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Where the EXR and JSON files go (default: `tests/references` in the workspace).
+    #[arg(long)]
+    out_dir: Option<PathBuf>,
+    /// A note for the sidecar (e.g. why the spp is below the target).
+    #[arg(long)]
+    note: Option<String>,
+    /// Only create the Python environment with Mitsuba; render nothing.
+    #[arg(long)]
+    install_only: bool,
+}
+
+/// The Mitsuba variants the references may use (CPU only).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Variant {
+    /// Scalar CPU variant: slow, no dependencies.
+    #[value(name = "scalar_rgb")]
+    ScalarRgb,
+    /// Vectorised CPU variant through LLVM: faster, needs libLLVM.
+    #[value(name = "llvm_ad_rgb")]
+    LlvmAdRgb,
+}
+
+impl Variant {
+    /// Mitsuba's name of the variant.
+    fn name(self) -> &'static str {
+        match self {
+            Self::ScalarRgb => "scalar_rgb",
+            Self::LlvmAdRgb => "llvm_ad_rgb",
+        }
+    }
+}
+
+/// Film reconstruction filters.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Filter {
+    /// One-pixel box.
+    Box,
+    /// Gaussian of standard deviation 0.5 pixels (Mitsuba's default).
+    Gaussian,
+}
+
+/// The workspace root (the parent of `xtask/`).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
+}
+
+/// The Python interpreter of `.mitsuba-venv`.
+pub fn venv_python(root: &Path) -> PathBuf {
+    root.join(".mitsuba-venv").join("bin").join("python")
+}
+
+/// Runs `cargo xtask reference`.
+pub fn run(args: Args) -> Result<()> {
+    let root = workspace_root();
+    let python = ensure_venv(&root)?;
+    if args.install_only {
+        eprintln!("reference: Mitsuba is ready in {}", python.display());
+        return Ok(());
+    }
+    ensure!(
+        args.spp > 0 && args.size > 0 && args.spp_per_pass > 0,
+        "--spp, --size and --spp-per-pass must be positive"
+    );
+    let scenes: Vec<&str> = match &args.scene {
+        Some(name) => {
+            builtin(name)?;
+            vec![name.as_str()]
+        }
+        None => BUILTIN_SCENES.to_vec(),
+    };
+    let out_dir = args
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| root.join("tests").join("references"));
+    std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let work = std::env::temp_dir().join(format!("lustre-reference-{}", std::process::id()));
+    let result = scenes
+        .iter()
+        .try_for_each(|name| render_scene(name, &args, &python, &root, &out_dir, &work));
+    let _ = std::fs::remove_dir_all(&work);
+    result
+}
+
+/// Exports one built-in scene, renders it and writes its EXR and sidecar.
+fn render_scene(
+    name: &str,
+    args: &Args,
+    python: &Path,
+    root: &Path,
+    out_dir: &Path,
+    work: &Path,
+) -> Result<()> {
+    let scene = builtin(name)?;
+    let xml = work.join(name).join("scene.xml");
+    let filter = match args.filter {
+        Filter::Box => ReconstructionFilter::Box,
+        Filter::Gaussian => ReconstructionFilter::Gaussian { stddev: 0.5 },
+    };
+    let options = ExportOptions {
+        width: args.size,
+        height: args.size,
+        spp: args.spp,
+        seed: args.seed,
+        max_depth: args.max_depth,
+        filter,
+        ..ExportOptions::default()
+    };
+    let report = mitsuba::export(&scene, &xml, &options)
+        .with_context(|| format!("exporting `{name}` to Mitsuba"))?;
+    for warning in &report.warnings {
+        eprintln!("reference: {name}: warning: {warning}");
+    }
+    eprintln!(
+        "reference: {name}: exported to {}; rendering {}x{} at {} spp with Mitsuba {} (path, max_depth {})",
+        xml.display(),
+        args.size,
+        args.size,
+        args.spp,
+        args.variant.name(),
+        args.max_depth
+    );
+    let exr = out_dir.join(format!("{name}.exr"));
+    let info = run_helper(
+        python,
+        root,
+        &[
+            "--variant",
+            args.variant.name(),
+            "--scene",
+            path_str(&xml)?,
+            "--out",
+            path_str(&exr)?,
+            "--spp",
+            &args.spp.to_string(),
+            "--spp-per-pass",
+            &args.spp_per_pass.to_string(),
+            "--seed",
+            &args.seed.to_string(),
+        ],
+    )
+    .with_context(|| {
+        let hint = match args.variant {
+            Variant::LlvmAdRgb => {
+                "; llvm_ad_rgb needs libLLVM 17 or newer (e.g. `apt-get install libllvm19`, or point \
+                 DRJIT_LIBLLVM_PATH at it), or use --variant scalar_rgb"
+            }
+            Variant::ScalarRgb => "",
+        };
+        format!("rendering `{name}` with Mitsuba{hint}")
+    })?;
+    let seconds = info["render_seconds"].as_f64().unwrap_or(f64::NAN);
+    let mut note = args.note.clone().unwrap_or_default();
+    if args.spp < TARGET_SPP && note.is_empty() {
+        note = format!("{} spp, below the {TARGET_SPP} spp target", args.spp);
+    }
+    let sidecar = serde_json::json!({
+        "scene": name,
+        "renderer": "Mitsuba 3",
+        "mitsuba_version": info["mitsuba_version"],
+        "variant": args.variant.name(),
+        "integrator": "path",
+        "max_depth": args.max_depth,
+        "rr_depth": 5,
+        "rfilter": match filter {
+            ReconstructionFilter::Box => "box".to_owned(),
+            ReconstructionFilter::Gaussian { stddev } => format!("gaussian (stddev {stddev})"),
+        },
+        "width": args.size,
+        "height": args.size,
+        "spp": info["spp"],
+        "spp_per_pass": info["spp_per_pass"],
+        "seed": args.seed,
+        "render_seconds": info["render_seconds"],
+        "date": info["date"],
+        "mean_rgb": info["mean"],
+        "export_warnings": report.warnings,
+        "note": note,
+        "command": format!(
+            "cargo xtask reference --scene {name} --spp {} --size {} --variant {} --max-depth {} --filter {} --seed {}",
+            args.spp,
+            args.size,
+            args.variant.name(),
+            args.max_depth,
+            match args.filter { Filter::Box => "box", Filter::Gaussian => "gaussian" },
+            args.seed
+        ),
+    });
+    let json_path = out_dir.join(format!("{name}.json"));
+    write_atomically(
+        &json_path,
+        format!("{}\n", serde_json::to_string_pretty(&sidecar)?).as_bytes(),
+    )?;
+    eprintln!(
+        "reference: {name}: wrote {} and {} ({seconds:.1} s)",
+        exr.display(),
+        json_path.display()
+    );
+    Ok(())
+}
+
+/// Runs the Python helper with `args`, passing its stderr (progress) through,
+/// and returns the JSON object on the last line of its stdout.
+pub fn run_helper(python: &Path, root: &Path, args: &[&str]) -> Result<serde_json::Value> {
+    let script = root.join("xtask").join("python").join("mitsuba_render.py");
+    let output = Command::new(python)
+        .arg(&script)
+        .args(args)
+        .stdin(Stdio::null())
+        .stderr(Stdio::inherit())
+        .output()
+        .with_context(|| format!("running {} {}", python.display(), script.display()))?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    if !output.status.success() {
+        bail!(
+            "{} failed ({}); its output:\n{stdout}",
+            script.display(),
+            output.status
+        );
+    }
+    let last = stdout
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("");
+    serde_json::from_str(last).with_context(|| format!("reading the helper's report {last:?}"))
+}
+
+/// Makes sure `.mitsuba-venv` exists and imports Mitsuba; returns its Python.
+fn ensure_venv(root: &Path) -> Result<PathBuf> {
+    let venv = root.join(".mitsuba-venv");
+    let python = venv_python(root);
+    if !python.exists() {
+        eprintln!(
+            "reference: creating the Python environment {}",
+            venv.display()
+        );
+        run_checked(Command::new("python3").args(["-m", "venv"]).arg(&venv)).context(
+            "creating the virtual environment (is python3 with the venv module installed?)",
+        )?;
+    }
+    if imports_mitsuba(&python) {
+        return Ok(python);
+    }
+    eprintln!(
+        "reference: installing mitsuba and numpy into {}",
+        venv.display()
+    );
+    run_checked(Command::new(&python).args(["-m", "pip", "install", "--upgrade", "pip"]))
+        .context("upgrading pip")?;
+    run_checked(Command::new(&python).args(["-m", "pip", "install", "mitsuba", "numpy"]))
+        .context("installing mitsuba and numpy with pip")?;
+    ensure!(
+        imports_mitsuba(&python),
+        "{} still cannot import mitsuba after pip install",
+        python.display()
+    );
+    Ok(python)
+}
+
+/// Whether `python` can import mitsuba and numpy.
+fn imports_mitsuba(python: &Path) -> bool {
+    Command::new(python)
+        .args(["-c", "import mitsuba, numpy"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Runs a command with inherited output and fails on a non-zero exit.
+fn run_checked(command: &mut Command) -> Result<()> {
+    let status = command
+        .status()
+        .with_context(|| format!("starting {command:?}"))?;
+    ensure!(status.success(), "{command:?} failed ({status})");
+    Ok(())
+}
+
+/// The path as UTF-8, for the helper's command line.
+fn path_str(path: &Path) -> Result<&str> {
+    path.to_str()
+        .with_context(|| format!("{} is not valid UTF-8", path.display()))
+}
+
+/// Writes `bytes` to a temporary name beside `path` and renames it.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_extension(format!("json.tmp-{}", std::process::id()));
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .with_context(|| format!("writing {}", path.display()))
+        .inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })
+}
