@@ -82,49 +82,61 @@ impl Mesh {
         Aabb::from_points(self.positions.iter().copied())
     }
 
-    /// Checks array lengths, index ranges, finiteness and normal lengths.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |message: String| GeometryError::InvalidMesh {
-            mesh: self.name.clone(),
-            message,
-        };
-        if self.indices.is_empty() {
-            return Err(GeometryError::EmptyMesh {
-                mesh: self.name.clone(),
-                file: None,
-            });
-        }
+    /// Checks that the attribute arrays have one entry per position, that the
+    /// positions are finite and that every index is in range; an empty mesh passes.
+    pub fn validate_arrays(&self) -> Result<()> {
         let n = self.positions.len();
         if self.normals.len() != n || self.uvs.len() != n {
-            return Err(bad(format!(
+            return Err(self.invalid(format!(
                 "{n} positions but {} normals and {} uvs",
                 self.normals.len(),
                 self.uvs.len()
             )));
         }
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
-            return Err(bad(format!("position {i} is not finite")));
-        }
-        if let Some(i) = self
-            .normals
-            .iter()
-            .position(|v| !v.is_finite() || (v.length() - 1.0).abs() > 1e-3)
-        {
-            return Err(bad(format!("normal {i} is not a unit vector")));
-        }
-        if let Some(i) = self.uvs.iter().position(|uv| !uv.is_finite()) {
-            return Err(bad(format!("uv {i} is not finite")));
+            return Err(self.invalid(format!("position {i} is not finite")));
         }
         if let Some(t) = self
             .indices
             .iter()
             .position(|tri| tri.iter().any(|&i| i as usize >= n))
         {
-            return Err(bad(format!(
+            return Err(self.invalid(format!(
                 "triangle {t} indexes a vertex beyond the {n} vertices"
             )));
         }
         Ok(())
+    }
+
+    /// Checks everything [`Mesh::validate_arrays`] does, plus that the mesh has
+    /// triangles, unit normals and finite UVs.
+    pub fn validate(&self) -> Result<()> {
+        if self.indices.is_empty() {
+            return Err(GeometryError::EmptyMesh {
+                mesh: self.name.clone(),
+                file: None,
+            });
+        }
+        self.validate_arrays()?;
+        if let Some(i) = self
+            .normals
+            .iter()
+            .position(|v| !v.is_finite() || (v.length() - 1.0).abs() > 1e-3)
+        {
+            return Err(self.invalid(format!("normal {i} is not a unit vector")));
+        }
+        if let Some(i) = self.uvs.iter().position(|uv| !uv.is_finite()) {
+            return Err(self.invalid(format!("uv {i} is not finite")));
+        }
+        Ok(())
+    }
+
+    /// An [`GeometryError::InvalidMesh`] naming this mesh.
+    fn invalid(&self, message: String) -> GeometryError {
+        GeometryError::InvalidMesh {
+            mesh: self.name.clone(),
+            message,
+        }
     }
 
     /// Removes triangles whose area is below `min_area` (or not finite); returns how many went.

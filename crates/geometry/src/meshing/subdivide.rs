@@ -28,7 +28,7 @@ pub fn subdivision_count(mesh: &Mesh, target_edge: f32) -> Result<u32> {
             "subdivision target edge length must be positive and finite, not {target_edge}"
         )));
     }
-    check_arrays(mesh)?;
+    mesh.validate_arrays()?;
     let longest = mesh
         .indices
         .iter()
@@ -60,35 +60,6 @@ pub fn subdivision_count(mesh: &Mesh, target_edge: f32) -> Result<u32> {
         )));
     }
     Ok(n as u32)
-}
-
-/// Checks that the attribute arrays have one entry per position, indices are in range and positions are finite.
-fn check_arrays(mesh: &Mesh) -> Result<()> {
-    let bad = |message: String| GeometryError::InvalidMesh {
-        mesh: mesh.name.clone(),
-        message,
-    };
-    let n = mesh.positions.len();
-    if mesh.normals.len() != n || mesh.uvs.len() != n {
-        return Err(bad(format!(
-            "{n} positions but {} normals and {} uvs",
-            mesh.normals.len(),
-            mesh.uvs.len()
-        )));
-    }
-    if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
-        return Err(bad(format!("position {i} is not finite")));
-    }
-    if let Some(t) = mesh
-        .indices
-        .iter()
-        .position(|tri| tri.iter().any(|&i| i as usize >= n))
-    {
-        return Err(bad(format!(
-            "triangle {t} indexes a vertex beyond the {n} vertices"
-        )));
-    }
-    Ok(())
 }
 
 /// Whether vertex `u` comes before vertex `v` along their edge: by position (x, y, z), then by index.
