@@ -10,6 +10,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{Vec2, Vec3};
 use lustre_geometry::sampling::sample_uniform_sphere;
 use lustre_geometry::{Bvh, Camera, Ray, WorldTriangle, builtin};
+use rayon::prelude::*;
 
 /// Rays per batch in every benchmark.
 const RAYS: u32 = 256 * 256;
@@ -138,6 +139,43 @@ fn bench(c: &mut Criterion) {
             b.iter(|| bvh.closest_hits(incoherent))
         });
     }
+    // Baseline: obvhs alone on the same triangles and coherent rays, with its
+    // own Möller-Trumbore test and no hit record, to show what our wrapper costs.
+    let spheres = sphere_grid();
+    let tris: Vec<obvhs::triangle::Triangle> = spheres
+        .iter()
+        .map(|t| obvhs::triangle::Triangle {
+            v0: t.positions[0].into(),
+            v1: t.positions[1].into(),
+            v2: t.positions[2].into(),
+        })
+        .collect();
+    let raw = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        &tris,
+        obvhs::BvhBuildParams::medium_build(),
+        &mut std::time::Duration::default(),
+    );
+    let ordered: Vec<_> = raw
+        .primitive_indices
+        .iter()
+        .map(|&i| tris[i as usize])
+        .collect();
+    let raw_rays: Vec<obvhs::ray::Ray> = primary_rays(&spheres_camera)
+        .iter()
+        .map(|r| obvhs::ray::Ray::new_inf(r.origin.into(), r.direction.into()))
+        .collect();
+    group.bench_function("spheres-516k/coherent-obvhs-baseline", |b| {
+        b.iter(|| {
+            raw_rays
+                .par_iter()
+                .map(|r| {
+                    let mut hit = obvhs::ray::RayHit::none();
+                    raw.ray_traverse(*r, &mut hit, |ray, id| ordered[id].intersect(ray));
+                    hit.t
+                })
+                .collect::<Vec<f32>>()
+        })
+    });
     group.finish();
 }
 

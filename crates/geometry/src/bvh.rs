@@ -10,7 +10,7 @@ use obvhs::ray::RayHit;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use crate::ray::{Hit, Ray, intersect_triangle};
+use crate::ray::{Hit, Ray, intersect_triangle_a};
 use crate::scene::{Scene, WorldTriangle};
 
 /// A BVH over every triangle of a scene in world space.
@@ -22,7 +22,7 @@ use crate::scene::{Scene, WorldTriangle};
 pub struct Bvh {
     cwbvh: Option<CwBvh>,
     /// Corner positions in BVH leaf order, for coherent memory access.
-    ordered: Vec<[Vec3; 3]>,
+    ordered: Vec<[Vec3A; 3]>,
     /// The shading attributes, by scene-wide triangle id.
     triangles: Vec<WorldTriangle>,
 }
@@ -70,7 +70,7 @@ impl Bvh {
         let ordered = cwbvh
             .primitive_indices
             .iter()
-            .map(|&i| triangles[i as usize].positions)
+            .map(|&i| triangles[i as usize].positions.map(Vec3A::from))
             .collect();
         Self {
             cwbvh: Some(cwbvh),
@@ -116,15 +116,18 @@ impl Bvh {
         let bvh = self.cwbvh.as_ref()?;
         let mut hit = RayHit::none();
         let mut best = None;
-        bvh.ray_traverse(to_obvhs(ray), &mut hit, |r, id| {
-            let query = Ray::segment(ray.origin, ray.direction, r.tmin, r.tmax);
-            match intersect_triangle(&query, self.ordered[id]) {
-                Some(h) => {
-                    best = Some((id, h));
-                    h.t
-                }
-                None => f32::INFINITY,
+        bvh.ray_traverse(to_obvhs(ray), &mut hit, |r, id| match intersect_triangle_a(
+            r.origin,
+            r.direction,
+            r.tmin,
+            r.tmax,
+            &self.ordered[id],
+        ) {
+            Some(h) => {
+                best = Some((id, h));
+                h.t
             }
+            None => f32::INFINITY,
         });
         let (slot, h) = best?;
         let id = bvh.primitive_indices[slot];
@@ -153,8 +156,8 @@ impl Bvh {
             return false;
         };
         !bvh.ray_traverse_miss(to_obvhs(ray), |r, id| {
-            let query = Ray::segment(ray.origin, ray.direction, r.tmin, r.tmax);
-            intersect_triangle(&query, self.ordered[id]).map_or(f32::INFINITY, |h| h.t)
+            intersect_triangle_a(r.origin, r.direction, r.tmin, r.tmax, &self.ordered[id])
+                .map_or(f32::INFINITY, |h| h.t)
         })
     }
 
