@@ -46,6 +46,30 @@ pub enum BrdfError {
         /// The allowed range, in words.
         expected: String,
     },
+    /// An iterative fit (Diefenbach's chi-square fit) stopped without converging.
+    #[error("{fit}: no convergence after {iterations} iterations (chi-square {chi_square})")]
+    FitDidNotConverge {
+        /// What was being fitted.
+        fit: String,
+        /// Iterations run.
+        iterations: usize,
+        /// The chi-square reached.
+        chi_square: f64,
+    },
+    /// A tabulated BRDF could not meet the requested error bound within the largest resolution allowed.
+    #[error(
+        "BRDF table of `{model}`: relative error {achieved} above the bound {requested} at the largest resolution {resolution}"
+    )]
+    ErrorBoundNotMet {
+        /// The tabulated model's name.
+        model: String,
+        /// The bound asked for.
+        requested: f32,
+        /// The validation error at the largest resolution tried.
+        achieved: f32,
+        /// That resolution (nodes per axis).
+        resolution: usize,
+    },
 }
 
 /// Result type of BRDF construction.

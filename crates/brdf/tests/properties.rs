@@ -279,7 +279,14 @@ fn pdf_integrates_to_the_smooth_share() {
                 (integral - smooth).abs() < 5.0 * sigma + 5e-3,
                 "{label} wo = {wo}: ∫pdf = {integral} but {smooth} of the draws are smooth"
             );
-            if ["lambert", "oren-nayar", "poulin-fournier"].contains(&label) {
+            if [
+                "lambert",
+                "oren-nayar",
+                "oren-nayar-full",
+                "poulin-fournier",
+            ]
+            .contains(&label)
+            {
                 assert!((integral - 1.0).abs() < 2e-3, "{label}: ∫pdf = {integral}");
             }
         }

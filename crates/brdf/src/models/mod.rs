@@ -2,6 +2,7 @@
 
 pub mod blinn_phong;
 pub mod cook_torrance;
+pub mod diefenbach_phong;
 pub mod dielectric;
 pub mod htsg;
 pub mod lafortune;
@@ -20,6 +21,7 @@ pub mod ward;
 
 pub use blinn_phong::BlinnPhong;
 pub use cook_torrance::CookTorrance;
+pub use diefenbach_phong::DiefenbachPhong;
 pub use dielectric::SmoothDielectric;
 pub use htsg::Htsg;
 pub use lafortune::{CosineLobe, Lafortune};
@@ -27,7 +29,7 @@ pub use lambert::Lambert;
 pub use lewis::lewis;
 pub use mixture::{BoxedBrdf, Mixture};
 pub use modified_phong::ModifiedPhong;
-pub use oren_nayar::OrenNayar;
+pub use oren_nayar::{OrenNayarFull, OrenNayarQualitative};
 pub use phong::Phong;
 pub use poulin_fournier::PoulinFournier;
 pub use schlick::Schlick;

@@ -202,6 +202,20 @@ pub fn catalogue() -> Vec<(&'static str, MaterialModel)> {
             named("oren-nayar", &[("reflectance", &[0.9]), ("sigma", &[0.5])]),
         ),
         (
+            "oren-nayar-full",
+            named(
+                "oren-nayar-full",
+                &[("reflectance", &[0.9, 0.6, 0.3]), ("sigma", &[0.5])],
+            ),
+        ),
+        (
+            "diefenbach-phong",
+            named(
+                "diefenbach-phong",
+                &[("diffuse", &[0.4]), ("specular", &[0.3]), ("alpha", &[0.2])],
+            ),
+        ),
+        (
             "schlick",
             named(
                 "schlick",
