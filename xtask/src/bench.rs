@@ -8,7 +8,7 @@ use anyhow::Context;
 use serde_json::Value;
 
 /// The criterion benches to run: (package, bench target).
-const BENCHES: &[(&str, &str)] = &[("lustre-geometry", "bvh")];
+const BENCHES: &[(&str, &str)] = &[("lustre-geometry", "bvh"), ("lustre-brdf", "brdf")];
 
 /// One criterion result.
 struct Measurement {
@@ -123,5 +123,44 @@ fn render(results: &[Measurement]) -> String {
             r.median_ns / 1e6
         );
     }
+    brdf_table(&mut s, results);
     s
+}
+
+/// Per model: evaluations/s and samples/s (groups `eval` and `sample` of lustre-brdf's bench).
+fn brdf_table(s: &mut String, results: &[Measurement]) {
+    let rate = |group: &str, model: &str| {
+        results
+            .iter()
+            .find(|r| r.id == format!("{group}/{model}"))
+            .and_then(|r| r.elements.map(|n| n / (r.median_ns * 1e-9) / 1e6))
+    };
+    let mut models: Vec<&str> = results
+        .iter()
+        .filter_map(|r| {
+            r.id.strip_prefix("eval/")
+                .or_else(|| r.id.strip_prefix("sample/"))
+        })
+        .collect();
+    models.sort_unstable();
+    models.dedup();
+    if models.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n## BRDF evaluation and sampling (lustre-brdf)\n");
+    let _ = writeln!(
+        s,
+        "Single thread, a batch of random direction pairs per iteration; millions per second.\n"
+    );
+    let _ = writeln!(s, "| model | evaluations/s | samples/s |");
+    let _ = writeln!(s, "|---|---:|---:|");
+    let show = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.2} M"));
+    for m in models {
+        let _ = writeln!(
+            s,
+            "| {m} | {} | {} |",
+            show(rate("eval", m)),
+            show(rate("sample", m))
+        );
+    }
 }

@@ -826,7 +826,7 @@ fn halton_bases_are_the_first_primes() {
     let mut primes = Vec::new();
     let mut candidate = 2_u32;
     while primes.len() < HALTON_DIMENSIONS {
-        if primes.iter().all(|p| candidate % p != 0) {
+        if primes.iter().all(|p| !candidate.is_multiple_of(*p)) {
             primes.push(candidate);
         }
         candidate += 1;

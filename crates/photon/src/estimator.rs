@@ -1,0 +1,306 @@
+//! The CPU splat estimator (section 2.2, equation 2): outgoing radiance from the photons around a point, for any view direction.
+//!
+//! `L(x, ω) = Σ_p f_r(x, ω_p, ω) φ_p K((x - x_p)/h) / h²`
+//!
+//! **Normalisation.** The paper writes `1/h` in front of the sum. With a
+//! unit-volume *2D* kernel `K` (Silverman's `K₂`), `K((x - x_p)/h)`
+//! integrates to `h²` over the surface, so dividing by `h` leaves a length
+//! in the result: `φ` [W] times `f_r` [1/sr] times `1/h` [1/m] is not a
+//! radiance. Dividing by `h²` makes `K(·/h)/h²` a density per m² and the
+//! sum a radiance in W/(m² sr); this crate implements `1/h²`.
+//!
+//! The support `h` of each surface comes from equation 3, `h = C √(A/n)`,
+//! with `n` the number of photons the estimator splats on that surface (all
+//! of them, or only those with more than one bounce for the optimised method
+//! of section 2.2.1), or is fixed by the caller. Photons are indexed per
+//! surface in a [`PointGrid`]: planar surfaces by `(u, v)`, curved ones by
+//! world position (the kernel then uses the straight-line distance, a good
+//! approximation of the distance along the surface while `h` is small
+//! against the curvature radius). Near a surface's edges part of the kernel
+//! falls outside the surface and the estimate is biased low, as in the paper.
+//!
+//! The BRDF is evaluated in the same two-sided frame as the tracer: the
+//! normal is flipped to the viewer's side, and photons that arrived on the
+//! other side contribute nothing.
+
+use glam::{Vec2, Vec3};
+use lustre_brdf::BoxedBrdf;
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
+
+use crate::error::{PhotonError, Result};
+use crate::grid::PointGrid;
+use crate::hit_record::{HitRecord, PhotonMap};
+use crate::kernel::{Kernel, kernel_support};
+use crate::parameterisation::{SurfaceParam, SurfaceParams};
+use crate::trace::scene_brdfs;
+
+/// Which photons are splatted (section 2.2.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BounceSelection {
+    /// Every photon: the full global illumination of section 2.2.
+    #[default]
+    All,
+    /// Only photons reflected at least once (`bounce > 1`): the indirect term of the optimised method (section 2.2.1).
+    Indirect,
+    /// Only first hits (`bounce == 1`): the direct term the optimised method renders otherwise.
+    Direct,
+}
+
+impl BounceSelection {
+    /// Whether a record is selected.
+    pub fn selects(&self, r: &HitRecord) -> bool {
+        match self {
+            Self::All => true,
+            Self::Indirect => r.bounce > 1,
+            Self::Direct => r.bounce == 1,
+        }
+    }
+}
+
+/// How the support `h` of each surface is chosen (equation 3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Support {
+    /// `h = C √(A/n)` per surface (equation 3); the paper uses C from 30 to 50.
+    Scaled(f32),
+    /// The same `h` on every surface, in metres (for tests and studies of the bias).
+    Fixed(f32),
+}
+
+/// Settings of the splat estimator (section 2.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimatorOptions {
+    /// The kernel `k` of equation 2.
+    pub kernel: Kernel,
+    /// The support rule (equation 3).
+    pub support: Support,
+    /// Which photons to splat (section 2.2.1).
+    pub selection: BounceSelection,
+}
+
+impl Default for EstimatorOptions {
+    fn default() -> Self {
+        Self {
+            kernel: Kernel::Silverman,
+            support: Support::Scaled(40.0),
+            selection: BounceSelection::All,
+        }
+    }
+}
+
+/// The photons of one surface.
+#[derive(Debug, Default)]
+struct SurfaceSplats {
+    /// Kernel support `h`.
+    h: f32,
+    /// Index over `points`.
+    grid: PointGrid,
+    /// Incoming world directions, by photon.
+    directions: Vec<Vec3>,
+    /// Powers `φ` (equation 1), by photon.
+    powers: Vec<Rgb>,
+    /// Index-space positions, by photon.
+    points: Vec<Vec3>,
+}
+
+/// Equation 2 on the CPU, with a spatial index per surface (section 2.2).
+#[derive(Debug)]
+pub struct SplatEstimator {
+    /// Options used.
+    options: EstimatorOptions,
+    /// Surface parameterisations.
+    params: SurfaceParams,
+    /// Material of each surface.
+    materials: Vec<u32>,
+    /// One BRDF per material.
+    brdfs: Vec<BoxedBrdf>,
+    /// Photons per surface.
+    surfaces: Vec<SurfaceSplats>,
+}
+
+impl SplatEstimator {
+    /// Indexes the selected photons of `map` per surface of `scene` and sets each surface's support (equation 3).
+    pub fn build(scene: &Scene, map: &PhotonMap, options: EstimatorOptions) -> Result<Self> {
+        match options.support {
+            Support::Scaled(c) | Support::Fixed(c) if !(c > 0.0 && c.is_finite()) => {
+                return Err(PhotonError::InvalidOption {
+                    option: "support",
+                    message: format!("{c} must be positive and finite"),
+                });
+            }
+            _ => {}
+        }
+        let params = SurfaceParams::new(scene);
+        let mut surfaces: Vec<SurfaceSplats> = (0..params.len())
+            .map(|_| SurfaceSplats::default())
+            .collect();
+        for (index, r) in map.records().iter().enumerate() {
+            if !options.selection.selects(r) {
+                continue;
+            }
+            let s =
+                surfaces
+                    .get_mut(r.surface as usize)
+                    .ok_or_else(|| PhotonError::InvalidRecord {
+                        index,
+                        message: format!("surface {} does not exist in the scene", r.surface),
+                    })?;
+            let point = match params.get(r.surface) {
+                Some(SurfaceParam::Planar(_)) => r.position.extend(0.0),
+                _ => params
+                    .world_position(r.surface, r.triangle, r.position)
+                    .ok_or_else(|| PhotonError::InvalidRecord {
+                        index,
+                        message: format!("surface {} has no triangle {}", r.surface, r.triangle),
+                    })?,
+            };
+            s.points.push(point);
+            s.directions.push(r.direction);
+            s.powers.push(map.photon_power(r));
+        }
+        for (id, s) in surfaces.iter_mut().enumerate() {
+            s.h = match options.support {
+                Support::Scaled(c) => {
+                    kernel_support(c, params.area(id as SurfaceId), s.points.len())
+                }
+                Support::Fixed(h) => h,
+            };
+            s.grid = PointGrid::build(&s.points, s.h);
+        }
+        Ok(Self {
+            options,
+            materials: scene.surfaces().iter().map(|s| s.material).collect(),
+            brdfs: scene_brdfs(scene)?,
+            params,
+            surfaces,
+        })
+    }
+
+    /// The options used.
+    pub fn options(&self) -> &EstimatorOptions {
+        &self.options
+    }
+
+    /// The kernel support `h` of a surface (equation 3; 0 for a surface without photons or that does not exist).
+    pub fn support(&self, surface: SurfaceId) -> f32 {
+        self.surfaces.get(surface as usize).map_or(0.0, |s| s.h)
+    }
+
+    /// Number of photons splatted on a surface.
+    pub fn photon_count(&self, surface: SurfaceId) -> usize {
+        self.surfaces
+            .get(surface as usize)
+            .map_or(0, |s| s.points.len())
+    }
+
+    /// The surface parameterisations.
+    pub fn params(&self) -> &SurfaceParams {
+        &self.params
+    }
+
+    /// Index-space point and shading frame of a query.
+    fn query_frame(
+        &self,
+        surface: SurfaceId,
+        x: Vec3,
+        normal: Vec3,
+        wo: Vec3,
+    ) -> Option<(Vec3, Frame)> {
+        match self.params.get(surface)? {
+            SurfaceParam::Planar(frame) => {
+                Some((frame.to_uv(x).extend(0.0), frame.shading_frame(wo)))
+            }
+            SurfaceParam::Curved => {
+                let n = normal.try_normalize()?;
+                let n = if wo.dot(n) >= 0.0 { n } else { -n };
+                Some((x, Frame::from_normal(n)))
+            }
+        }
+    }
+
+    /// Outgoing radiance `L(x, ω)` towards the unit direction `wo` at the point `x` of `surface` (equation 2 with the `1/h²` normalisation); `normal` is the shading normal at `x`, used on curved surfaces only. Zero for an unknown surface or a non-finite input.
+    pub fn radiance(&self, surface: SurfaceId, x: Vec3, normal: Vec3, wo: Vec3) -> Rgb {
+        let Some(s) = self.surfaces.get(surface as usize) else {
+            return Rgb::ZERO;
+        };
+        let Some(brdf) = self.brdf_of(surface) else {
+            return Rgb::ZERO;
+        };
+        let Some((q, frame)) = self.query_frame(surface, x, normal, wo) else {
+            return Rgb::ZERO;
+        };
+        if !(s.h > 0.0) || !wo.is_finite() {
+            return Rgb::ZERO;
+        }
+        let wo_local = frame.to_local(wo.normalize_or_zero());
+        let mut sum = Rgb::ZERO;
+        let kernel = self.options.kernel;
+        s.grid.for_each_within(q, s.h, |i, d2| {
+            let k = kernel.scaled(d2, s.h);
+            if k > 0.0 {
+                let wi = frame.to_local(s.directions[i]);
+                sum += brdf.eval(wi, wo_local) * s.powers[i] * k;
+            }
+        });
+        sum
+    }
+
+    /// [`SplatEstimator::radiance`] at a ray hit, towards the viewer along `wo`.
+    pub fn radiance_at_hit(&self, hit: &Hit, wo: Vec3) -> Rgb {
+        self.radiance(hit.surface, hit.position, hit.shading_normal, wo)
+    }
+
+    /// Equation 2 summed over every photon of the surface without the index: the reference the index is tested against.
+    pub fn radiance_brute_force(&self, surface: SurfaceId, x: Vec3, normal: Vec3, wo: Vec3) -> Rgb {
+        let (Some(s), Some(brdf), Some((q, frame))) = (
+            self.surfaces.get(surface as usize),
+            self.brdf_of(surface),
+            self.query_frame(surface, x, normal, wo),
+        ) else {
+            return Rgb::ZERO;
+        };
+        let wo_local = frame.to_local(wo.normalize_or_zero());
+        let mut sum = Rgb::ZERO;
+        for i in 0..s.points.len() {
+            let k = self
+                .options
+                .kernel
+                .scaled((s.points[i] - q).length_squared(), s.h);
+            if k > 0.0 {
+                sum += brdf.eval(frame.to_local(s.directions[i]), wo_local) * s.powers[i] * k;
+            }
+        }
+        sum
+    }
+
+    /// Irradiance-like density `Σ φ_p K/h²` (W/m², no BRDF) at `x`: what a diffuse surface of albedo ρ turns into radiance ρ/π times this.
+    pub fn flux_density(&self, surface: SurfaceId, x: Vec3, normal: Vec3, side: Vec3) -> Rgb {
+        let Some(s) = self.surfaces.get(surface as usize) else {
+            return Rgb::ZERO;
+        };
+        let Some((q, frame)) = self.query_frame(surface, x, normal, side) else {
+            return Rgb::ZERO;
+        };
+        let mut sum = Rgb::ZERO;
+        s.grid.for_each_within(q, s.h, |i, d2| {
+            if frame.to_local(s.directions[i]).z > 0.0 {
+                sum += s.powers[i] * self.options.kernel.scaled(d2, s.h);
+            }
+        });
+        sum
+    }
+
+    /// The BRDF of a surface.
+    fn brdf_of(&self, surface: SurfaceId) -> Option<&BoxedBrdf> {
+        self.brdfs
+            .get(*self.materials.get(surface as usize)? as usize)
+    }
+
+    /// The `(u, v)` of a world point on a planar surface (for callers that build query grids).
+    pub fn planar_uv(&self, surface: SurfaceId, x: Vec3) -> Option<Vec2> {
+        match self.params.get(surface)? {
+            SurfaceParam::Planar(frame) => Some(frame.to_uv(x)),
+            SurfaceParam::Curved => None,
+        }
+    }
+}

@@ -1,0 +1,80 @@
+//! Unit-volume reconstruction kernels and the kernel support (section 2.2, equations 2 and 3).
+//!
+//! Both kernels are radial, supported on the unit disc and integrate to one
+//! over the plane, so `K((x - x_p)/h) / h²` integrates to one over the
+//! disc of radius `h` around the photon: `h` in equation 3 is the support
+//! radius.
+
+use std::f32::consts::PI;
+
+/// Standard deviation of the Gaussian kernel before truncation, `1/(2√2)`: the per-axis variance 1/8 of Silverman's kernel, so both blur alike.
+pub const GAUSSIAN_SIGMA: f32 = 0.353_553_4;
+
+/// A unit-volume 2D kernel on the unit disc (section 2.2, `k` of equation 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Kernel {
+    /// Silverman's (1986, equation 4.5) second-order kernel `K₂(x) = 3/π (1 - |x|²)²` for `|x| < 1`, the paper's example.
+    #[default]
+    Silverman,
+    /// A Gaussian of standard deviation [`GAUSSIAN_SIGMA`] truncated at `|x| = 1` (2.83 σ, 1.8 % of its mass) and renormalised: `exp(-|x|²/2σ²) / (2πσ² (1 - exp(-1/2σ²)))`.
+    Gaussian,
+}
+
+impl Kernel {
+    /// `K(x)` for `|x|² = r2`; zero outside the unit disc.
+    pub fn eval_r2(&self, r2: f32) -> f32 {
+        if !(r2 < 1.0) {
+            return 0.0;
+        }
+        match self {
+            Self::Silverman => {
+                let t = 1.0 - r2;
+                3.0 / PI * t * t
+            }
+            Self::Gaussian => {
+                let s2 = GAUSSIAN_SIGMA * GAUSSIAN_SIGMA;
+                let norm = 2.0 * PI * s2 * (1.0 - (-0.5 / s2).exp());
+                (-0.5 * r2 / s2).exp() / norm
+            }
+        }
+    }
+
+    /// `K(x)` at a 2D offset already divided by the support `h`.
+    pub fn eval(&self, x: glam::Vec2) -> f32 {
+        self.eval_r2(x.length_squared())
+    }
+
+    /// The kernel scaled to support radius `h`: `K(d/h) / h²` for a squared distance `d2` (the 2D normalisation of equation 2; module documentation).
+    pub fn scaled(&self, d2: f32, h: f32) -> f32 {
+        if !(h > 0.0) {
+            return 0.0;
+        }
+        self.eval_r2(d2 / (h * h)) / (h * h)
+    }
+
+    /// A `size × size` regular sampling of the kernel over `[-1, 1]²` at texel centres, row-major: the kernel texture of section 3.2 (64 × 64 in the paper).
+    pub fn texture(&self, size: usize) -> Vec<f32> {
+        let mut out = Vec::with_capacity(size * size);
+        for j in 0..size {
+            for i in 0..size {
+                let x = (i as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+                let y = (j as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+                out.push(self.eval_r2(x * x + y * y));
+            }
+        }
+        out
+    }
+}
+
+/// The kernel support `h = C √(A / n)` of a surface of area `A` with `n` hit points (equation 3); zero when `n = 0` or the inputs are not positive and finite.
+pub fn kernel_support(c: f32, area: f32, n: usize) -> f32 {
+    if n == 0 || !(c > 0.0) || !(area > 0.0) || !c.is_finite() || !area.is_finite() {
+        return 0.0;
+    }
+    c * (area / n as f32).sqrt()
+}
+
+/// Side of the triangle that encloses the kernel support in the splat texture (section 3.2, figure 1): `g = (1/2 + √2) h`.
+pub fn splat_triangle_size(h: f32) -> f32 {
+    (0.5 + std::f32::consts::SQRT_2) * h
+}

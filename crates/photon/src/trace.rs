@@ -1,0 +1,300 @@
+//! Particle tracing (section 2.1): photons leave the lights, bounce by the BRDFs' samplers, and every surface hit becomes a [`HitRecord`].
+//!
+//! ## Absorption and reflection (Russian roulette)
+//!
+//! At a hit the photon arrives from `ω_in` (pointing away from the surface)
+//! with attenuation `ρ`. The BRDF's sampler, called with `wo = ω_in`, draws
+//! an outgoing direction `ω_out` with density `p` and weight
+//! `w = f(ω_out, ω_in) |cos θ_out| / p` (RGB). By Helmholtz reciprocity
+//! `f(ω_out, ω_in) = f(ω_in, ω_out)`, so `w` is the weight with which the
+//! photon's power leaves along `ω_out`, and `E[w] = a(ω_in)`, the
+//! directional albedo. A random number `ξ` then decides between absorption
+//! and reflection (section 2.1): the photon survives with probability
+//! `q = min(1, max_c w_c)` and its attenuation becomes `ρ' = ρ w / q`. The
+//! estimator stays unbiased: `E[ρ'] = q · ρ E[w | sampled] / q = ρ a(ω_in)`,
+//! which is the power a real surface reflects. For a grey Lambertian surface
+//! of albedo `a`, `w = a` and `q = a`, so `ρ` stays exactly 1 and the photon
+//! survives with probability `a`: the paper's scheme. Coloured surfaces
+//! survive with the largest channel and tint `ρ` by `w / q ≤ 1`. A sampler
+//! that returns nothing (a draw where the BRDF is zero) absorbs the photon,
+//! which is also unbiased since that draw contributes zero.
+//!
+//! Non-reciprocal models (the original Phong) are traced with their adjoint;
+//! refraction lacks the η² radiance scaling. A photon stops after
+//! [`TraceOptions::max_bounces`] hits (a truncation bias below `a^max` of the
+//! power), or when it leaves the scene.
+//!
+//! Surfaces are two-sided: the shading normal is flipped to the side the
+//! photon arrives from. Planar surfaces use their [`crate::PlanarFrame`]
+//! (tangent `u_axis`); curved ones the interpolated shading normal.
+
+use lustre_brdf::{BoxedBrdf, from_model};
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{Bvh, Hit, Ray, Scene};
+use rayon::prelude::*;
+
+use crate::emission::{EmissionSampling, allocate_photons, emission_numbers, photon_stream};
+use crate::error::{PhotonError, Result};
+use crate::hit_record::{HitRecord, PhotonMap};
+use crate::parameterisation::{SurfaceParam, SurfaceParams};
+use crate::progress::Progress;
+
+/// Photons traced per task: the unit of parallel work and of progress reports; it does not change the result.
+pub const PHOTONS_PER_CHUNK: u64 = 1024;
+
+/// Settings of a particle-tracing run (section 2.1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceOptions {
+    /// Photons to emit over all lights, split in proportion to power.
+    pub photons: u64,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Largest number of hits recorded per photon (1 to 255, the on-disk bounce field is one byte).
+    pub max_bounces: u8,
+    /// Pseudo-random or quasi-random emission.
+    pub emission: EmissionSampling,
+}
+
+impl Default for TraceOptions {
+    fn default() -> Self {
+        Self {
+            photons: 100_000,
+            seed: 0,
+            max_bounces: 64,
+            emission: EmissionSampling::Random,
+        }
+    }
+}
+
+/// A scene prepared for particle tracing: its BVH, one BRDF per material and the surface parameterisations (section 2.1).
+#[derive(Debug)]
+pub struct PhotonTracer<'a> {
+    /// The scene.
+    scene: &'a Scene,
+    /// Its BVH (current pose).
+    bvh: &'a Bvh,
+    /// One BRDF per material.
+    brdfs: Vec<BoxedBrdf>,
+    /// Surface parameterisations.
+    params: SurfaceParams,
+    /// Offset of ray origins from surfaces, relative to the scene size.
+    epsilon: f32,
+}
+
+/// The BRDF of every material of a scene, with the material named on failure.
+pub fn scene_brdfs(scene: &Scene) -> Result<Vec<BoxedBrdf>> {
+    scene
+        .materials()
+        .iter()
+        .map(|m| {
+            from_model(&m.model).map_err(|source| PhotonError::Brdf {
+                material: m.name.clone(),
+                source,
+            })
+        })
+        .collect()
+}
+
+impl<'a> PhotonTracer<'a> {
+    /// Prepares a scene; fails when a material has no valid BRDF.
+    pub fn new(scene: &'a Scene, bvh: &'a Bvh) -> Result<Self> {
+        let scale = scene.bounds().extent().max_element();
+        let scale = if scale.is_finite() && scale > 0.0 {
+            scale
+        } else {
+            1.0
+        };
+        Ok(Self {
+            scene,
+            bvh,
+            brdfs: scene_brdfs(scene)?,
+            params: SurfaceParams::new(scene),
+            epsilon: scale * 1e-5,
+        })
+    }
+
+    /// The surface parameterisations used for the records' positions.
+    pub fn params(&self) -> &SurfaceParams {
+        &self.params
+    }
+
+    /// Traces `options.photons` photons into a new map (section 2.1).
+    pub fn trace(&self, options: &TraceOptions, progress: &dyn Progress) -> Result<PhotonMap> {
+        let mut map = PhotonMap::for_scene(self.scene);
+        self.trace_more(&mut map, options, progress)?;
+        Ok(map)
+    }
+
+    /// Traces `options.photons` more photons into an existing map (incremental refinement, section 2.1): each light's photon indices continue from its emitted count `m_i`, so no photon repeats an earlier one, and earlier records are not touched.
+    pub fn trace_more(
+        &self,
+        map: &mut PhotonMap,
+        options: &TraceOptions,
+        progress: &dyn Progress,
+    ) -> Result<()> {
+        if options.max_bounces == 0 {
+            return Err(PhotonError::InvalidOption {
+                option: "max_bounces",
+                message: "must be at least 1".into(),
+            });
+        }
+        let lights = self.scene.lights();
+        let powers: Vec<_> = lights.iter().map(|l| l.power()).collect();
+        map.check_same_lights(PhotonMap::new(powers.iter().copied()).lights())?;
+        if lights.len() > u32::MAX as usize {
+            return Err(PhotonError::InvalidOption {
+                option: "lights",
+                message: "more than 2^32 lights".into(),
+            });
+        }
+        let counts = allocate_photons(&powers, options.photons);
+        let first: Vec<u64> = map.lights().iter().map(|l| l.emitted).collect();
+        // Global photon numbers 0..total, light by light; chunks of fixed size.
+        let mut starts = Vec::with_capacity(counts.len() + 1);
+        let mut total = 0u64;
+        for &c in &counts {
+            starts.push(total);
+            total += c;
+        }
+        starts.push(total);
+        let chunks = total.div_ceil(PHOTONS_PER_CHUNK);
+        progress.begin(total);
+        let records: Vec<Vec<HitRecord>> = (0..chunks)
+            .into_par_iter()
+            .map(|chunk| {
+                let lo = chunk * PHOTONS_PER_CHUNK;
+                let hi = (lo + PHOTONS_PER_CHUNK).min(total);
+                let mut out = Vec::new();
+                let mut light = starts.partition_point(|&s| s <= lo) - 1;
+                for g in lo..hi {
+                    while g >= starts[light + 1] {
+                        light += 1;
+                    }
+                    let index = first[light] + (g - starts[light]);
+                    self.trace_photon(light as u32, index, options, &mut out);
+                }
+                progress.advance(hi - lo);
+                out
+            })
+            .collect();
+        progress.finish();
+        map.extend_traced(&counts, records.into_iter().flatten().collect());
+        Ok(())
+    }
+
+    /// The shading frame at a hit, on the side of `side` (two-sided surfaces).
+    fn frame_at(&self, hit: &Hit, side: glam::Vec3) -> Frame {
+        match self.params.get(hit.surface) {
+            Some(SurfaceParam::Planar(frame)) => frame.shading_frame(side),
+            _ => {
+                let geometric_side = if side.dot(hit.geometric_normal) >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                };
+                let mut n = hit.shading_normal;
+                if n.dot(hit.geometric_normal) * geometric_side < 0.0 {
+                    n = -n;
+                }
+                Frame::from_normal(n)
+            }
+        }
+    }
+
+    /// Follows one photon until it is absorbed, leaves the scene or reaches `max_bounces`, pushing a record per hit (section 2.1).
+    fn trace_photon(
+        &self,
+        light: u32,
+        index: u64,
+        options: &TraceOptions,
+        out: &mut Vec<HitRecord>,
+    ) {
+        let source = &self.scene.lights()[light as usize];
+        let mut rng = photon_stream(options.seed, light, index);
+        let (u_position, u_direction) =
+            emission_numbers(options.emission, options.seed, light, index, &mut rng);
+        let e = source.sample_emission(u_position, u_direction);
+        let power = source.power();
+        // ρ₀ = weight / Φ: 1 for uniform emitters, the fall-off for spot lights.
+        let rho0 = glam::Vec3::select(
+            power.cmpgt(glam::Vec3::ZERO),
+            e.weight / power,
+            glam::Vec3::ZERO,
+        );
+        if !rho0.is_finite() || rho0.max_element() <= 0.0 || !e.direction.is_finite() {
+            return;
+        }
+        let mut rho = rho0;
+        let side = if e.direction.dot(e.normal) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        let origin = if source.is_delta() {
+            e.position
+        } else {
+            e.position + side * self.epsilon * e.normal
+        };
+        let mut ray = Ray::new(origin, e.direction);
+        for bounce in 1..=options.max_bounces {
+            let Some(hit) = self.bvh.closest_hit(&ray) else {
+                return;
+            };
+            let incoming = -ray.direction;
+            let triangle = self.params.local_triangle(hit.triangle);
+            out.push(HitRecord {
+                surface: hit.surface,
+                triangle,
+                position: self.params.position_of(
+                    hit.surface,
+                    hit.position,
+                    glam::Vec2::new(hit.u, hit.v),
+                ),
+                direction: incoming,
+                light,
+                bounce,
+                rho,
+            });
+            if bounce == options.max_bounces {
+                return;
+            }
+            let Some(brdf) = self.brdfs.get(hit.material as usize) else {
+                return;
+            };
+            let frame = self.frame_at(&hit, incoming);
+            let wo = frame.to_local(incoming);
+            let u = rng.next_vec2();
+            let u_lobe = rng.next_f32();
+            let Some(sample) = brdf.sample(wo, u, u_lobe) else {
+                return;
+            };
+            let w = sample.weight;
+            if !w.is_finite() || !(w.max_element() > 0.0) {
+                return;
+            }
+            // Russian roulette on the sample weight (module documentation).
+            let q = w.max_element().min(1.0);
+            if rng.next_f32() >= q {
+                return;
+            }
+            rho *= w.max(glam::Vec3::ZERO) / q;
+            let direction = frame.to_world(sample.wi).normalize_or_zero();
+            if direction == glam::Vec3::ZERO {
+                return;
+            }
+            let n = hit.geometric_normal;
+            let offset = if direction.dot(n) >= 0.0 { n } else { -n };
+            ray = Ray::new(hit.position + self.epsilon * offset, direction);
+        }
+    }
+}
+
+/// Traces `options.photons` photons through a scene (section 2.1): builds the BRDFs and parameterisations, then runs [`PhotonTracer::trace`] on the current rayon pool.
+pub fn trace_photons(
+    scene: &Scene,
+    bvh: &Bvh,
+    options: &TraceOptions,
+    progress: &dyn Progress,
+) -> Result<PhotonMap> {
+    PhotonTracer::new(scene, bvh)?.trace(options, progress)
+}
