@@ -8,7 +8,11 @@ use anyhow::Context;
 use serde_json::Value;
 
 /// The criterion benches to run: (package, bench target).
-const BENCHES: &[(&str, &str)] = &[("lustre-geometry", "bvh"), ("lustre-brdf", "brdf")];
+const BENCHES: &[(&str, &str)] = &[
+    ("lustre-geometry", "bvh"),
+    ("lustre-brdf", "brdf"),
+    ("lustre-photon", "trace"),
+];
 
 /// One criterion result.
 struct Measurement {
@@ -124,7 +128,43 @@ fn render(results: &[Measurement]) -> String {
         );
     }
     brdf_table(&mut s, results);
+    photon_table(&mut s, results);
     s
+}
+
+/// Photons and bounces traced per second (group `trace_glosbox` of lustre-photon's bench).
+fn photon_table(s: &mut String, results: &[Measurement]) {
+    let rows: Vec<&Measurement> = results
+        .iter()
+        .filter(|r| r.id.starts_with("trace_glosbox/"))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    let _ = writeln!(s, "\n## Photon tracing (lustre-photon, section 2.1)\n");
+    let _ = writeln!(
+        s,
+        "`glosbox`, 20,000 photons per iteration, rayon over all cores; a bounce is one hit \
+         record. Target: 2 M bounces/s per core.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| benchmark | median time | per second | per second per core |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|");
+    for r in rows {
+        let Some(n) = r.elements else { continue };
+        let per_s = n / (r.median_ns * 1e-9);
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} ms | {:.2} M | {:.2} M |",
+            r.id.trim_start_matches("trace_glosbox/"),
+            r.median_ns / 1e6,
+            per_s / 1e6,
+            per_s / cores / 1e6
+        );
+    }
 }
 
 /// Per model: evaluations/s and samples/s (groups `eval` and `sample` of lustre-brdf's bench).
