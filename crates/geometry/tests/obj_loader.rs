@@ -375,6 +375,67 @@ fn polygons_relative_indices_w_comments_and_crlf_load() {
 }
 
 #[test]
+fn concave_polygons_are_triangulated_inside_their_outline() {
+    // An L-shaped hexagon listed from the corner where a fan around the first
+    // vertex would put the triangle (2,1) (1,1) (1,2) in the notch, outside
+    // the L, with the opposite winding.
+    let files = scene_files(
+        "concave",
+        "o ell\nusemtl white\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nf 1 2 3 4 5 6\n",
+        "newmtl white\nKd 1 1 1\n",
+    );
+    let loaded = load(&files);
+    let ell = mesh(&loaded.scene, "ell");
+    assert_eq!(ell.indices.len(), 4);
+    // The L's area by the shoelace formula, and every triangle wound like the face.
+    let p = [
+        (2.0, 1.0),
+        (1.0, 1.0),
+        (1.0, 2.0),
+        (0.0, 2.0),
+        (0.0, 0.0),
+        (2.0, 0.0),
+    ];
+    let shoelace: f32 = 0.5
+        * (0..6)
+            .map(|i| {
+                let (a, b) = (p[i], p[(i + 1) % 6]);
+                a.0 * b.1 - b.0 * a.1
+            })
+            .sum::<f32>();
+    assert!((shoelace.abs() - 3.0).abs() < 1e-6);
+    assert!((ell.area() - shoelace.abs()).abs() < 1e-5, "{}", ell.area());
+    for t in 0..ell.indices.len() {
+        assert_vec3_near(face_normal(ell, t), Vec3::Z * shoelace.signum(), 1e-6);
+        // No triangle's centroid lies in the notch x > 1, y > 1.
+        let c = ell.triangle(t).iter().sum::<Vec3>() / 3.0;
+        assert!(!(c.x > 1.0 && c.y > 1.0), "triangle {t} in the notch: {c}");
+    }
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+}
+
+#[test]
+fn non_planar_concave_polygons_fall_back_to_a_fan_with_a_warning() {
+    // The L of the test above with its reflex corner lifted out of the plane.
+    let files = scene_files(
+        "warped",
+        "o warped\nusemtl white\nv 2 1 0\nv 1 1 0.5\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nf 1 2 3 4 5 6\n",
+        "newmtl white\nKd 1 1 1\n",
+    );
+    let loaded = load(&files);
+    assert_eq!(mesh(&loaded.scene, "warped").indices.len(), 4);
+    let line = line_of(&files.obj, "f 1 2 3 4 5 6");
+    assert!(
+        loaded
+            .warnings
+            .iter()
+            .any(|w| w.contains(&format!(":{line}: face is not a simple planar polygon"))),
+        "{:?}",
+        loaded.warnings
+    );
+}
+
+#[test]
 fn lines_points_and_unknown_statements_are_ignored_with_a_warning() {
     let files = scene_files(
         "ignored",

@@ -33,8 +33,10 @@
 //!
 //! # Geometry
 //!
-//! - Polygons are triangulated as fans around their first vertex (tobj's
-//!   `triangulate`), which is right for convex polygons.
+//! - Polygons are triangulated with a constrained Delaunay triangulation of
+//!   their plane ([`crate::meshing::triangulate_polygon`]), so concave faces
+//!   stay inside their outline; a face that is not a simple planar polygon
+//!   is triangulated as a fan around its first vertex, with a warning.
 //! - Degenerate triangles are dropped and counted in
 //!   [`LoadedScene::degenerate_triangles_dropped`]: a triangle is degenerate
 //!   when `|(b - a) × (c - a)| <= 1e-6 · (longest edge)²`, which catches zero

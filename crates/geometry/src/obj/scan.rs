@@ -5,7 +5,10 @@ use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
+
 use super::{mtl, parse_error, parse_number, read_text, split_keyword};
+use crate::meshing::triangulate_polygon;
 use crate::{GeometryError, Material, Result};
 
 /// The result of scanning an OBJ file.
@@ -27,6 +30,7 @@ enum Out {
     Face {
         segment: usize,
         vertices: Vec<[usize; 3]>,
+        line: usize,
     },
 }
 
@@ -52,6 +56,8 @@ pub(super) fn scan_obj(
     let err = |line: usize, message: String| parse_error(path, Some(line), message);
     // Counts of `v`, `vt`, `vn` so far.
     let mut counts = [0usize; 3];
+    // The `v` positions, for triangulating polygons.
+    let mut positions: Vec<Vec3> = Vec::new();
     const KINDS: [&str; 3] = [
         "vertices (`v`)",
         "texture coordinates (`vt`)",
@@ -107,6 +113,7 @@ pub(super) fn scan_obj(
                     }
                 }
                 counts[0] += 1;
+                positions.push(Vec3::from(p));
                 out.push(Out::Text(format!("v {} {} {}", p[0], p[1], p[2])));
             }
             "vt" => {
@@ -216,6 +223,7 @@ pub(super) fn scan_obj(
                 out.push(Out::Face {
                     segment: segments.len() - 1,
                     vertices,
+                    line: n,
                 });
             }
             "o" | "g" => {
@@ -333,20 +341,26 @@ pub(super) fn scan_obj(
                 text.push_str(&t);
                 text.push('\n');
             }
-            Out::Face { segment, vertices } => {
+            Out::Face {
+                segment,
+                vertices,
+                line,
+            } => {
                 let (keep_vt, keep_vn) = keep[segment];
-                text.push('f');
-                for [v, vt, vn] in vertices {
-                    let vt = if keep_vt { vt } else { 0 };
-                    let vn = if keep_vn { vn } else { 0 };
-                    let _ = match (vt, vn) {
-                        (0, 0) => write!(text, " {v}"),
-                        (vt, 0) => write!(text, " {v}/{vt}"),
-                        (0, vn) => write!(text, " {v}//{vn}"),
-                        (vt, vn) => write!(text, " {v}/{vt}/{vn}"),
-                    };
+                for triangle in triangulate_face(&vertices, &positions, path, line, warnings) {
+                    text.push('f');
+                    for [v, vt, vn] in triangle.map(|k| vertices[k]) {
+                        let vt = if keep_vt { vt } else { 0 };
+                        let vn = if keep_vn { vn } else { 0 };
+                        let _ = match (vt, vn) {
+                            (0, 0) => write!(text, " {v}"),
+                            (vt, 0) => write!(text, " {v}/{vt}"),
+                            (0, vn) => write!(text, " {v}//{vn}"),
+                            (vt, vn) => write!(text, " {v}/{vt}/{vn}"),
+                        };
+                    }
+                    text.push('\n');
                 }
-                text.push('\n');
             }
         }
     }
@@ -354,5 +368,66 @@ pub(super) fn scan_obj(
         text,
         materials,
         faces,
+    })
+}
+
+/// Triangles of a face as corner indices into `vertices`: a triangle as it
+/// is; a convex polygon as a fan around its first corner (as every OBJ
+/// reader does); a concave one by constrained Delaunay triangulation of its
+/// plane, so that no triangle leaves the outline. A polygon that is not
+/// simple and planar falls back to the fan, with a warning.
+fn triangulate_face(
+    vertices: &[[usize; 3]],
+    positions: &[Vec3],
+    path: &Path,
+    line: usize,
+    warnings: &mut Vec<String>,
+) -> Vec<[usize; 3]> {
+    let n = vertices.len();
+    let fan = || (1..n - 1).map(|k| [0, k, k + 1]).collect();
+    let outline: Vec<Vec3> = vertices.iter().map(|v| positions[v[0] - 1]).collect();
+    if n == 3 || is_convex(&outline) {
+        return fan();
+    }
+    let triangulated = triangulate_polygon(&outline, &[])
+        .ok()
+        .and_then(|(points, triangles)| {
+            // The triangulation returns input points (minus repeats); map them back to corners.
+            let corner = |p: Vec3| outline.iter().position(|&q| q == p);
+            triangles
+                .iter()
+                .map(|t| {
+                    Some([
+                        corner(points[t[0] as usize])?,
+                        corner(points[t[1] as usize])?,
+                        corner(points[t[2] as usize])?,
+                    ])
+                })
+                .collect::<Option<Vec<_>>>()
+        });
+    match triangulated {
+        // A simple polygon of n corners has n - 2 triangles; fewer means
+        // repeated or collinear corners, whose fan triangles are dropped as
+        // degenerate and counted instead.
+        Some(triangles) if triangles.len() == n - 2 => triangles,
+        Some(_) => fan(),
+        None => {
+            warnings.push(format!(
+                "{}:{line}: face is not a simple planar polygon; triangulated as a fan",
+                path.display()
+            ));
+            fan()
+        }
+    }
+}
+
+/// Whether a polygon turns the same way at every corner about its Newell
+/// normal (collinear corners allowed), so that its fan stays inside it.
+fn is_convex(outline: &[Vec3]) -> bool {
+    let normal = crate::meshing::newell_normal(outline);
+    let n = outline.len();
+    (0..n).all(|i| {
+        let (a, b, c) = (outline[i], outline[(i + 1) % n], outline[(i + 2) % n]);
+        (b - a).cross(c - b).dot(normal) >= 0.0
     })
 }
