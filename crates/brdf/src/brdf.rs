@@ -130,6 +130,24 @@ pub(crate) fn same_upper(wi: Vec3, wo: Vec3) -> bool {
     wi.z > 0.0 && wo.z > 0.0
 }
 
+/// Cosine-weighted hemisphere sampling for models without a closed-form
+/// inverse (Malley's method): `None` below the horizon, else the sample with
+/// weight `eval · cos / pdf` from [`finish_sample`].
+pub(crate) fn sample_cosine<B: Brdf + ?Sized>(brdf: &B, wo: Vec3, u: Vec2) -> Option<BrdfSample> {
+    if wo.z <= 0.0 {
+        return None;
+    }
+    finish_sample(brdf, sample_cosine_hemisphere(u), wo)
+}
+
+/// The density of [`sample_cosine`]: cos θi / π when both directions are above the surface.
+pub(crate) fn cosine_pdf(wi: Vec3, wo: Vec3) -> f32 {
+    if !same_upper(wi, wo) {
+        return 0.0;
+    }
+    cosine_hemisphere_pdf(wi.z)
+}
+
 /// Finishes a smooth sample: rejects the lower hemisphere and zero densities, and sets weight = `eval · cos / pdf` from the full model (the one-sample mixture estimator of Veach 1997, section 9.2.4).
 pub(crate) fn finish_sample<B: Brdf + ?Sized>(brdf: &B, wi: Vec3, wo: Vec3) -> Option<BrdfSample> {
     if wi.z <= 0.0 || !wi.is_finite() {

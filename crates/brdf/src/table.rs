@@ -23,9 +23,8 @@
 
 use glam::{Vec2, Vec3};
 use lustre_geometry::Rgb;
-use lustre_geometry::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
-use crate::brdf::{Brdf, BrdfSample, finish_sample, same_upper};
+use crate::brdf::{Brdf, BrdfSample, cosine_pdf, same_upper, sample_cosine};
 use crate::error::{BrdfError, Result};
 
 /// The parameterisation of a [`BrdfTable`] (Stürzlinger & Bastos 1997, section 3.2).
@@ -359,17 +358,11 @@ impl Brdf for BrdfTable {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, _u_lobe: f32) -> Option<BrdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        finish_sample(self, sample_cosine_hemisphere(u), wo)
+        sample_cosine(self, wo, u)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi.z)
+        cosine_pdf(wi, wo)
     }
 
     fn is_reciprocal(&self) -> bool {

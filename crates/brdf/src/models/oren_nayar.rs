@@ -4,9 +4,8 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::{Vec2, Vec3};
 use lustre_geometry::Rgb;
-use lustre_geometry::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
-use crate::brdf::{Brdf, BrdfSample, finish_sample, same_upper};
+use crate::brdf::{Brdf, BrdfSample, cosine_pdf, same_upper, sample_cosine};
 use crate::error::{Result, check_range, check_rgb};
 
 /// Oren-Nayar's qualitative model `f = ρ/π (A + B max(0, cos(φi - φo)) sin α tan β)`, `A = 1 - 0.5 σ²/(σ² + 0.33)`, `B = 0.45 σ²/(σ² + 0.09)`, α = max(θi, θo), β = min(θi, θo) (M. Oren and S. K. Nayar, "Generalization of Lambert's reflectance model", SIGGRAPH 1994, equation 30).
@@ -77,17 +76,11 @@ impl Brdf for OrenNayarQualitative {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, _u_lobe: f32) -> Option<BrdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        finish_sample(self, sample_cosine_hemisphere(u), wo)
+        sample_cosine(self, wo, u)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi.z)
+        cosine_pdf(wi, wo)
     }
 
     fn is_reciprocal(&self) -> bool {
@@ -179,17 +172,11 @@ impl Brdf for OrenNayarFull {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, _u_lobe: f32) -> Option<BrdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        finish_sample(self, sample_cosine_hemisphere(u), wo)
+        sample_cosine(self, wo, u)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi.z)
+        cosine_pdf(wi, wo)
     }
 
     fn is_reciprocal(&self) -> bool {

@@ -4,10 +4,9 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::{Vec2, Vec3};
 use lustre_geometry::Rgb;
-use lustre_geometry::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
 use super::phong::check_exponent;
-use crate::brdf::{Brdf, BrdfSample, finish_sample, reflect, same_upper};
+use crate::brdf::{Brdf, BrdfSample, cosine_pdf, reflect, same_upper, sample_cosine};
 use crate::error::{BrdfError, Result, check_range, check_rgb, check_sum};
 
 /// Quadrature points over the exposed arc of one cylinder.
@@ -180,17 +179,11 @@ impl Brdf for PoulinFournier {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, _u_lobe: f32) -> Option<BrdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        finish_sample(self, sample_cosine_hemisphere(u), wo)
+        sample_cosine(self, wo, u)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi.z)
+        cosine_pdf(wi, wo)
     }
 
     fn is_reciprocal(&self) -> bool {
