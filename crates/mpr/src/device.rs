@@ -1,0 +1,228 @@
+//! The headless wgpu device: adapter selection (hardware first, then the
+//! software one), the adapter's identity for every output, and whether float32
+//! targets can be blended (DESIGN.md "Data flow", step 3).
+
+use std::fmt;
+
+use crate::{MprError, Result};
+
+/// Which adapter [`GpuContext::new`] asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AdapterPreference {
+    /// A hardware GPU (`PowerPreference::HighPerformance`, not the fallback
+    /// adapter); when none exists, the software one.
+    #[default]
+    Hardware,
+    /// Only a software (CPU-type) adapter such as lavapipe or llvmpipe.
+    Software,
+}
+
+/// The adapter's identity, printed beside every result and benchmark (DESIGN.md "Benchmarks").
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AdapterSummary {
+    /// The adapter's name, e.g. `llvmpipe (LLVM 15.0.7, 256 bits)`.
+    pub name: String,
+    /// The graphics API it runs on.
+    pub backend: wgpu::Backend,
+    /// Discrete, integrated, virtual, CPU or other.
+    pub device_type: wgpu::DeviceType,
+    /// Driver name and version, as the driver reports them.
+    pub driver: String,
+}
+
+impl AdapterSummary {
+    /// Whether this is a software (CPU) adapter.
+    pub fn is_software(&self) -> bool {
+        self.device_type == wgpu::DeviceType::Cpu
+    }
+}
+
+impl fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} ({:?}, {:?}",
+            self.name, self.backend, self.device_type
+        )?;
+        if !self.driver.is_empty() {
+            write!(f, ", {}", self.driver)?;
+        }
+        write!(f, ")")
+    }
+}
+
+/// A headless device and queue with what the passes need to know about them.
+#[derive(Debug)]
+pub struct GpuContext {
+    /// The wgpu device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    adapter: wgpu::Adapter,
+    summary: AdapterSummary,
+    float32_blendable: bool,
+}
+
+/// Request options for the hardware-first attempt.
+fn hardware_options() -> wgpu::RequestAdapterOptions<'static, 'static> {
+    wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        force_fallback_adapter: false,
+        compatible_surface: None,
+        apply_limit_buckets: false,
+    }
+}
+
+/// Request options for the software (fallback) adapter.
+fn software_options() -> wgpu::RequestAdapterOptions<'static, 'static> {
+    wgpu::RequestAdapterOptions {
+        force_fallback_adapter: true,
+        ..hardware_options()
+    }
+}
+
+/// Picks an adapter per `preference`, ending with any CPU-type adapter the instance enumerates.
+fn select_adapter(
+    instance: &wgpu::Instance,
+    backends: wgpu::Backends,
+    preference: AdapterPreference,
+) -> Result<wgpu::Adapter> {
+    let attempts: &[(&str, wgpu::RequestAdapterOptions<'_, '_>)] = match preference {
+        AdapterPreference::Hardware => &[
+            ("a high-performance adapter", hardware_options()),
+            ("the fallback adapter", software_options()),
+        ],
+        AdapterPreference::Software => &[("the fallback adapter", software_options())],
+    };
+    for (_, options) in attempts {
+        if let Ok(adapter) = pollster::block_on(instance.request_adapter(options)) {
+            return Ok(adapter);
+        }
+    }
+    // `force_fallback_adapter` keeps only CPU-type adapters; enumerate in case
+    // a backend reports its software driver only through enumeration.
+    let adapters = pollster::block_on(instance.enumerate_adapters(backends));
+    if let Some(adapter) = adapters
+        .into_iter()
+        .find(|a| a.get_info().device_type == wgpu::DeviceType::Cpu)
+    {
+        return Ok(adapter);
+    }
+    let mut tried: Vec<&str> = attempts.iter().map(|(what, _)| *what).collect();
+    tried.push("any CPU-type adapter");
+    Err(MprError::NoAdapter {
+        tried: format!("{} on backends {backends:?}", tried.join(", then ")),
+    })
+}
+
+impl GpuContext {
+    /// Opens a headless device on the adapter `preference` selects; backends
+    /// come from `WGPU_BACKEND` when set, else every compiled one (Vulkan here).
+    pub fn new(preference: AdapterPreference) -> Result<Self> {
+        let backends =
+            wgpu::Backends::from_env().unwrap_or_else(wgpu::Instance::enabled_backend_features);
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        let instance = wgpu::Instance::new(desc);
+        let adapter = select_adapter(&instance, backends, preference)?;
+        let info = adapter.get_info();
+        let summary = AdapterSummary {
+            name: info.name.clone(),
+            backend: info.backend,
+            device_type: info.device_type,
+            driver: [info.driver.as_str(), info.driver_info.as_str()]
+                .iter()
+                .filter(|s| !s.is_empty())
+                .copied()
+                .collect::<Vec<_>>()
+                .join(" "),
+        };
+        let float32_blendable = adapter
+            .features()
+            .contains(wgpu::Features::FLOAT32_BLENDABLE);
+        let required_features = if float32_blendable {
+            wgpu::Features::FLOAT32_BLENDABLE
+        } else {
+            wgpu::Features::empty()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lustre-mpr"),
+            required_features,
+            required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
+            ..Default::default()
+        }))
+        .map_err(|source| MprError::RequestDevice {
+            adapter: summary.to_string(),
+            source,
+        })?;
+        Ok(Self {
+            device,
+            queue,
+            adapter,
+            summary,
+            float32_blendable,
+        })
+    }
+
+    /// The adapter's name, backend, type and driver.
+    pub fn adapter(&self) -> &AdapterSummary {
+        &self.summary
+    }
+
+    /// The underlying wgpu adapter.
+    pub fn wgpu_adapter(&self) -> &wgpu::Adapter {
+        &self.adapter
+    }
+
+    /// Whether `Rgba32Float` render targets can be blended (`FLOAT32_BLENDABLE` enabled on the device).
+    pub fn float32_blendable(&self) -> bool {
+        self.float32_blendable
+    }
+
+    /// Whether accumulation must fall back to 16-bit float targets (no float32 blending).
+    pub fn needs_16bit_fallback(&self) -> bool {
+        !self.float32_blendable
+    }
+
+    /// The HDR accumulation format: `Rgba32Float` when blendable, `Rgba16Float` otherwise.
+    pub fn hdr_format(&self) -> wgpu::TextureFormat {
+        if self.float32_blendable {
+            wgpu::TextureFormat::Rgba32Float
+        } else {
+            wgpu::TextureFormat::Rgba16Float
+        }
+    }
+
+    /// Whether `format` is blendable on this device (from its format features and enabled features).
+    pub fn is_blendable(&self, format: wgpu::TextureFormat) -> bool {
+        format
+            .guaranteed_format_features(self.device.features())
+            .flags
+            .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE)
+    }
+
+    /// Waits until every submitted command has finished.
+    pub fn wait(&self) -> Result<()> {
+        self.device.poll(wgpu::PollType::wait_indefinitely())?;
+        Ok(())
+    }
+}
+
+impl GpuContext {
+    /// Runs `f` inside validation and out-of-memory error scopes and turns a
+    /// captured wgpu error into [`MprError::Wgpu`] naming `what`.
+    pub fn checked<T>(&self, what: &'static str, f: impl FnOnce() -> T) -> Result<T> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = f();
+        let first = pollster::block_on(validation.pop());
+        let second = pollster::block_on(oom.pop());
+        match first.or(second) {
+            Some(error) => Err(MprError::Wgpu {
+                what,
+                message: error.to_string(),
+            }),
+            None => Ok(value),
+        }
+    }
+}

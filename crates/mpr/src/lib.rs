@@ -1,0 +1,34 @@
+//! # lustre-mpr
+//!
+//! Multi-pass pipeline rendering (Diefenbach & Badler 1997) on wgpu: a
+//! headless device ([`GpuContext`]), the frame's render targets
+//! ([`RenderTargets`]), one module per pass with its WGSL beside it
+//! ([`passes`]), the frame graph that runs them in one command encoder into
+//! any `TextureView` ([`FrameGraph`]), and synchronous readback
+//! ([`readback`]). Every pass has a CPU counterpart computing the same
+//! per-pixel quantity, which the tests hold the GPU to.
+//!
+//! ```no_run
+//! use lustre_mpr::{AdapterPreference, GpuContext, RenderTargets};
+//!
+//! let ctx = GpuContext::new(AdapterPreference::Hardware)?;
+//! println!("rendering on {}", ctx.adapter());
+//! let targets = RenderTargets::new(&ctx, 64, 64)?;
+//! assert_eq!(targets.hdr_format(), ctx.hdr_format());
+//! # Ok::<(), lustre_mpr::MprError>(())
+//! ```
+
+mod device;
+mod error;
+pub mod frame;
+pub mod passes;
+pub mod readback;
+pub mod scene_buffers;
+pub mod shaders;
+pub mod target;
+
+pub use device::{AdapterPreference, AdapterSummary, GpuContext};
+pub use error::{MprError, Result};
+pub use frame::{FrameGraph, FrameInputs};
+pub use scene_buffers::{GpuVertex, SceneBuffers};
+pub use target::{NO_SURFACE, RenderTargets};

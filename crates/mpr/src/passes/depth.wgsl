@@ -1,0 +1,36 @@
+// Depth pre-pass (Diefenbach & Badler 1997, section 7.2: later passes redraw
+// with an equal-depth test, so the visible surface is fixed here): world
+// triangles through the camera's reverse-Z view-projection into depth and a
+// surface-id target.
+//
+// Notation
+// | symbol | meaning                                                    | unit |
+// |--------|------------------------------------------------------------|------|
+// | P      | world position of a vertex                                 | m    |
+// | VP     | camera view-projection, reverse Z, infinite far plane      | -    |
+// | z/w    | stored depth: 1 at the near plane, 0 at infinity           | 1    |
+// | s      | scene SurfaceId of the triangle (flat)                     | -    |
+
+struct DepthUniforms {
+    view_projection: mat4x4f,
+}
+
+@group(0) @binding(0) var<uniform> uniforms: DepthUniforms;
+
+struct VertexOutput {
+    @builtin(position) clip: vec4f,
+    @location(0) @interpolate(flat) surface: u32,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3f, @location(1) surface: u32) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = uniforms.view_projection * vec4f(position, 1.0);
+    out.surface = surface;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) u32 {
+    return in.surface;
+}
