@@ -1,0 +1,258 @@
+//! The ray set of section 2.3 (figure 2.1): primary rays from the lights, each owning the list of its reflections.
+//!
+//! Every photon of a light is one [`PrimaryRay`]; its [`RaySegment`]s are the
+//! primary ray followed by its successive reflections (the paper's "simply
+//! linked list of rays produced by subsequent reflections", stored here as a
+//! `Vec`). Each segment keeps its origin, direction, hit (point and triangle,
+//! or none when it leaves the scene) and the power it carries. Photons
+//! are traced as in `lustre-photon` (section 2.1 of Stürzlinger & Bastos,
+//! reused as section 2.3 allows): powers `φ = Φ_i / m_i ρ`, absorption by
+//! Russian roulette on the BRDF sample weight, so a grey Lambertian surface of
+//! albedo `a` reflects with probability `a` and the power stays unchanged.
+
+use glam::Vec3;
+use lustre_brdf::BoxedBrdf;
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{Bvh, Ray, Rgb, Scene, TriangleId};
+use lustre_photon::trace::scene_brdfs;
+use lustre_photon::{allocate_photons, photon_stream};
+use rayon::prelude::*;
+
+use crate::error::{DensityError, Result};
+
+/// Settings of the photosimulation that builds a ray set (section 2.3, figure 2.1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RaySetOptions {
+    /// Photons (primary rays) over all lights, split in proportion to the lights' power (figure 2.1).
+    pub photons: u64,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Largest number of segments per primary ray (1 or more).
+    pub max_segments: u32,
+}
+
+impl Default for RaySetOptions {
+    fn default() -> Self {
+        Self {
+            photons: 100_000,
+            seed: 0,
+            max_segments: 64,
+        }
+    }
+}
+
+/// Where a ray segment ends on the scene (section 2.3: "we know which triangle intersected the ray").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentHit {
+    /// Scene-wide index of the triangle hit.
+    pub triangle: TriangleId,
+    /// The hit point in world space.
+    pub position: Vec3,
+    /// Unit geometric normal of the triangle hit.
+    pub normal: Vec3,
+    /// Distance from the segment's origin to the hit point.
+    pub distance: f32,
+}
+
+/// One ray of the ray set (section 2.3): a primary ray or one of its reflections.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RaySegment {
+    /// Origin (on the light, or just off the surface that reflected it).
+    pub origin: Vec3,
+    /// Unit direction.
+    pub direction: Vec3,
+    /// The first intersection with the scene; `None` when the ray leaves the scene (it is then a half-line).
+    pub hit: Option<SegmentHit>,
+    /// Power `φ` (W, RGB) carried along the segment and delivered at its hit.
+    pub power: Rgb,
+}
+
+impl RaySegment {
+    /// Length of the segment: the hit distance, or infinity for a ray that leaves the scene.
+    pub fn length(&self) -> f32 {
+        self.hit.map_or(f32::INFINITY, |h| h.distance)
+    }
+}
+
+/// A primary ray and the list of its reflections (section 2.3, the two-level ray list).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PrimaryRay {
+    /// Index of the emitting light in [`Scene::lights`].
+    pub light: u32,
+    /// The primary ray first, then each reflection in order (figure 2.1, `Ray ← REFLECT(Ray)`).
+    pub segments: Vec<RaySegment>,
+}
+
+/// The ray list of section 2.3: every primary ray of every light, with the number of photons each light emitted.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RaySet {
+    /// The primary rays (first level of the two-level list).
+    pub rays: Vec<PrimaryRay>,
+    /// Photons `m_i` emitted per light (figure 2.1), including those that produced no segment.
+    pub emitted_per_light: Vec<u64>,
+}
+
+impl RaySet {
+    /// Total photons emitted over all lights.
+    pub fn emitted(&self) -> u64 {
+        self.emitted_per_light.iter().sum()
+    }
+
+    /// Every segment of every primary ray (the whole ray set `S^t` of section 2.4.2).
+    pub fn segments(&self) -> impl Iterator<Item = &RaySegment> {
+        self.rays.iter().flat_map(|r| r.segments.iter())
+    }
+
+    /// Every segment that ends on the scene: the impacts used by Impact Count and Photon Maps (section 1.2).
+    pub fn impacts(&self) -> impl Iterator<Item = (&RaySegment, &SegmentHit)> {
+        self.segments()
+            .filter_map(|s| s.hit.as_ref().map(|h| (s, h)))
+    }
+}
+
+/// Builds the ray set of a static scene (section 2.3, figure 2.1: INITIALPHOTOSIMULATIONCALCULATION).
+pub fn trace_ray_set(scene: &Scene, bvh: &Bvh, options: &RaySetOptions) -> Result<RaySet> {
+    if options.max_segments == 0 {
+        return Err(DensityError::InvalidOption {
+            option: "max_segments",
+            message: "must be at least 1".into(),
+        });
+    }
+    if options.photons > u32::MAX as u64 {
+        return Err(DensityError::InvalidOption {
+            option: "photons",
+            message: format!("{} is more than 2^32", options.photons),
+        });
+    }
+    let brdfs = scene_brdfs(scene)?;
+    let scale = scene.bounds().extent().max_element();
+    let epsilon = if scale.is_finite() && scale > 0.0 {
+        scale * 1e-5
+    } else {
+        1e-5
+    };
+    let powers: Vec<Rgb> = scene.lights().iter().map(|l| l.power()).collect();
+    let counts = allocate_photons(&powers, options.photons);
+    let jobs: Vec<(u32, u64)> = counts
+        .iter()
+        .enumerate()
+        .flat_map(|(light, &m)| (0..m).map(move |i| (light as u32, i)))
+        .collect();
+    let tracer = Tracer {
+        scene,
+        bvh,
+        brdfs: &brdfs,
+        epsilon,
+        counts: &counts,
+        options,
+    };
+    let rays = jobs
+        .par_iter()
+        .filter_map(|&(light, index)| tracer.primary_ray(light, index))
+        .collect();
+    Ok(RaySet {
+        rays,
+        emitted_per_light: counts,
+    })
+}
+
+/// What tracing one photon needs.
+struct Tracer<'a> {
+    scene: &'a Scene,
+    bvh: &'a Bvh,
+    brdfs: &'a [BoxedBrdf],
+    epsilon: f32,
+    counts: &'a [u64],
+    options: &'a RaySetOptions,
+}
+
+impl Tracer<'_> {
+    /// Follows one photon (figure 2.1, inner loop), or `None` when it carries no power.
+    fn primary_ray(&self, light: u32, index: u64) -> Option<PrimaryRay> {
+        let source = &self.scene.lights()[light as usize];
+        let mut rng = photon_stream(self.options.seed, light, index);
+        let u_position = rng.next_vec2();
+        let u_direction = rng.next_vec2();
+        let e = source.sample_emission(u_position, u_direction);
+        let m = self.counts[light as usize].max(1) as f32;
+        // φ = weight / m: the weight's expectation is the light's power Φ_i.
+        let mut power = e.weight / m;
+        if !power.is_finite() || !(power.max_element() > 0.0) || !e.direction.is_finite() {
+            return None;
+        }
+        let origin = if source.is_delta() {
+            e.position
+        } else {
+            let side = if e.direction.dot(e.normal) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            e.position + side * self.epsilon * e.normal
+        };
+        let mut ray = Ray::new(origin, e.direction);
+        let mut segments = Vec::new();
+        for n in 1..=self.options.max_segments {
+            let Some(hit) = self.bvh.closest_hit(&ray) else {
+                segments.push(RaySegment {
+                    origin: ray.origin,
+                    direction: ray.direction,
+                    hit: None,
+                    power,
+                });
+                break;
+            };
+            segments.push(RaySegment {
+                origin: ray.origin,
+                direction: ray.direction,
+                hit: Some(SegmentHit {
+                    triangle: hit.triangle,
+                    position: hit.position,
+                    normal: hit.geometric_normal,
+                    distance: hit.t,
+                }),
+                power,
+            });
+            if n == self.options.max_segments {
+                break;
+            }
+            let Some(brdf) = self.brdfs.get(hit.material as usize) else {
+                break;
+            };
+            let incoming = -ray.direction;
+            let mut normal = hit.shading_normal;
+            let side = if incoming.dot(hit.geometric_normal) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            if normal.dot(hit.geometric_normal) * side < 0.0 {
+                normal = -normal;
+            }
+            let frame = Frame::from_normal(normal);
+            let u = rng.next_vec2();
+            let u_lobe = rng.next_f32();
+            let Some(sample) = brdf.sample(frame.to_local(incoming), u, u_lobe) else {
+                break;
+            };
+            let w = sample.weight;
+            if !w.is_finite() || !(w.max_element() > 0.0) {
+                break;
+            }
+            // Absorption by Russian roulette (lustre-photon's `trace` module).
+            let q = w.max_element().min(1.0);
+            if rng.next_f32() >= q {
+                break;
+            }
+            power *= w.max(Rgb::ZERO) / q;
+            let direction = frame.to_world(sample.wi).normalize_or_zero();
+            if direction == Vec3::ZERO {
+                break;
+            }
+            let g = hit.geometric_normal;
+            let offset = if direction.dot(g) >= 0.0 { g } else { -g };
+            ray = Ray::new(hit.position + self.epsilon * offset, direction);
+        }
+        Some(PrimaryRay { light, segments })
+    }
+}

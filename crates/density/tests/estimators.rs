@@ -1,0 +1,388 @@
+//! Estimators of section 1.2 against the analytic irradiance of a point light over a large diffuse floor, the disc test against a sampled one, and the kd-tree against brute force.
+
+use std::f64::consts::PI;
+use std::sync::OnceLock;
+
+use glam::{Affine3A, DVec2, Vec3};
+use lustre_density::kdtree::brute_force_nearest;
+use lustre_density::{
+    DensityError, Disc, KdTree, RaySegment, RaySet, RaySetOptions, SegmentHit, detp, impact_count,
+    photon_maps, trace_ray_set,
+};
+use lustre_geometry::light::PointLight;
+use lustre_geometry::meshing::subdivide;
+use lustre_geometry::{Bvh, Camera, Light, Material, Mesh, Object, Rgb, Scene};
+use proptest::prelude::*;
+
+/// Half-size of the floor (y = 0, facing +y).
+const HALF: f32 = 3.0;
+/// Height of the point light above the origin.
+const HEIGHT: f64 = 1.0;
+/// Intensity `I` of the point light (W/sr, every channel).
+const INTENSITY: f64 = 1.0;
+/// Photons of the shared ray set.
+const PHOTONS: u64 = 200_000;
+/// Allowed deviation from the expectation, in standard deviations of the estimator's noise.
+const SIGMAS: f64 = 5.0;
+
+/// The floor, subdivided to edges of at most 0.25 m (a 24 × 24 grid of quads), albedo 0.5, under an isotropic point light; no other geometry.
+fn floor_scene() -> Scene {
+    let positions = [
+        Vec3::new(-HALF, 0.0, -HALF),
+        Vec3::new(-HALF, 0.0, HALF),
+        Vec3::new(HALF, 0.0, HALF),
+        Vec3::new(HALF, 0.0, -HALF),
+    ];
+    let floor = Mesh::flat("floor", &positions, &[[0, 1, 2], [2, 3, 0]], 0);
+    let floor = subdivide(&floor, 0.25).expect("subdivides");
+    Scene::new(
+        "floor",
+        vec![floor],
+        vec![Material::diffuse("floor", Rgb::splat(0.5))],
+        vec![Object {
+            name: "floor".into(),
+            meshes: vec![0],
+            transform: Affine3A::IDENTITY,
+        }],
+        vec![Light::Point(PointLight {
+            position: Vec3::new(0.0, HEIGHT as f32, 0.0),
+            intensity: Rgb::splat(INTENSITY as f32),
+        })],
+        Camera::look_at(Vec3::new(0.0, 3.0, 3.0), Vec3::ZERO, Vec3::Y, 40.0),
+    )
+    .expect("valid scene")
+}
+
+/// The scene and its ray set, traced once for all tests.
+fn shared() -> &'static (Scene, RaySet) {
+    static SHARED: OnceLock<(Scene, RaySet)> = OnceLock::new();
+    SHARED.get_or_init(|| {
+        let scene = floor_scene();
+        let bvh = Bvh::build(&scene);
+        let rays = trace_ray_set(
+            &scene,
+            &bvh,
+            &RaySetOptions {
+                photons: PHOTONS,
+                seed: 7,
+                max_segments: 16,
+            },
+        )
+        .expect("traces");
+        (scene, rays)
+    })
+}
+
+/// Power of one photon, `φ = Φ / N = 4π I / N`.
+fn photon_power() -> f64 {
+    4.0 * PI * INTENSITY / PHOTONS as f64
+}
+
+/// The analytic irradiance `E = I cos θ / d² = I h / d³` at `(x, z)` on the floor plane.
+fn analytic(p: DVec2) -> f64 {
+    let d2 = p.length_squared() + HEIGHT * HEIGHT;
+    INTENSITY * HEIGHT / (d2 * d2.sqrt())
+}
+
+/// `∫ E dA` over a triangle of the floor plane, by the centroid rule on `4^depth` congruent sub-triangles.
+fn triangle_integral(t: [DVec2; 3], depth: u32) -> f64 {
+    if depth == 0 {
+        let area = 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs();
+        return area * analytic((t[0] + t[1] + t[2]) / 3.0);
+    }
+    let m01 = (t[0] + t[1]) / 2.0;
+    let m12 = (t[1] + t[2]) / 2.0;
+    let m20 = (t[2] + t[0]) / 2.0;
+    [
+        [t[0], m01, m20],
+        [m01, t[1], m12],
+        [m20, m12, t[2]],
+        [m01, m12, m20],
+    ]
+    .into_iter()
+    .map(|s| triangle_integral(s, depth - 1))
+    .sum()
+}
+
+/// `∫ E dA` over the disc of radius `r` at `c` on the floor plane (polar midpoint rule).
+fn disc_integral(c: DVec2, r: f64) -> f64 {
+    let (nr, na) = (48, 96);
+    let mut sum = 0.0;
+    for i in 0..nr {
+        let rho = (i as f64 + 0.5) / nr as f64 * r;
+        for j in 0..na {
+            let a = (j as f64 + 0.5) / na as f64 * 2.0 * PI;
+            sum += analytic(c + rho * DVec2::new(a.cos(), a.sin())) * rho;
+        }
+    }
+    sum * (r / nr as f64) * (2.0 * PI / na as f64)
+}
+
+/// Floor coordinates `(x, z)` of a vertex.
+fn xz(p: Vec3) -> DVec2 {
+    DVec2::new(p.x as f64, p.z as f64)
+}
+
+#[test]
+fn power_reaching_the_floor_matches_its_solid_angle() {
+    let (_, rays) = shared();
+    assert_eq!(rays.emitted(), PHOTONS);
+    assert_eq!(rays.rays.len() as u64, PHOTONS);
+    let emitted: f64 = rays.rays.iter().map(|r| r.segments[0].power.x as f64).sum();
+    assert!((emitted - 4.0 * PI * INTENSITY).abs() < 1e-3, "{emitted}");
+    // Every segment starts where its predecessor hit (within the offset).
+    for r in &rays.rays {
+        for w in r.segments.windows(2) {
+            let hit = w[0].hit.expect("only the last segment may miss");
+            assert!(hit.position.distance(w[1].origin) < 1e-3);
+        }
+    }
+    // Solid angle of the floor from the light: Ω = 4 asin(a² / (a² + h²)).
+    let a2 = (HALF as f64).powi(2);
+    let omega = 4.0 * (a2 / (a2 + HEIGHT * HEIGHT)).asin();
+    let fraction = omega / (4.0 * PI);
+    let first_hits = rays
+        .rays
+        .iter()
+        .filter(|r| r.segments[0].hit.is_some())
+        .count() as f64
+        / PHOTONS as f64;
+    let sigma = (fraction * (1.0 - fraction) / PHOTONS as f64).sqrt();
+    eprintln!("first-hit fraction {first_hits:.5}, expected {fraction:.5} ± {sigma:.5}");
+    assert!((first_hits - fraction).abs() < SIGMAS * sigma);
+}
+
+#[test]
+fn impact_count_converges_to_the_analytic_irradiance() {
+    let (scene, rays) = shared();
+    let e = impact_count(scene, rays);
+    let mesh = &scene.meshes()[0];
+    let positions = scene.world_positions(0);
+    let mut worst: f64 = 0.0;
+    for (v, &p) in positions.iter().enumerate() {
+        // Expectation: the mean of E over the vertex's star (the estimator's bias is that mean minus E).
+        let (mut integral, mut area) = (0.0, 0.0);
+        for idx in mesh.indices.iter().filter(|idx| idx.contains(&(v as u32))) {
+            let t = idx.map(|i| xz(positions[i as usize]));
+            integral += triangle_integral(t, 4);
+            area += 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs();
+        }
+        let mean = integral / area;
+        // Noise: the impact count in the star is Poisson with mean ∫E/φ, each impact of power φ.
+        let sigma = (photon_power() * integral).sqrt() / area;
+        let exact = analytic(xz(p));
+        let bias = mean - exact;
+        let got = e[0][v].x as f64;
+        let z = (got - mean) / sigma;
+        worst = worst.max(z.abs());
+        assert!(
+            (got - exact).abs() <= bias.abs() + SIGMAS * sigma + 1e-5 * exact,
+            "vertex {v} at {p}: {got} against E = {exact} (bias {bias}, σ {sigma})"
+        );
+    }
+    eprintln!(
+        "impact count: {} vertices, worst |z| = {worst:.2}",
+        positions.len()
+    );
+}
+
+#[test]
+fn photon_maps_converge_to_the_analytic_irradiance_inside_the_floor() {
+    let (scene, rays) = shared();
+    let k = 400usize;
+    let e = photon_maps(scene, rays, k).expect("k > 0");
+    let kf = k as f64;
+    // With λ impacts per m², π r_k² λ ~ Gamma(k, 1): E[Σ_k φ / (π r_k²)] = E k/(k-1), relative σ = k/((k-1)√(k-2)).
+    let rel_sigma = kf / ((kf - 1.0) * (kf - 2.0).sqrt());
+    let mut checked = 0;
+    let mut worst: f64 = 0.0;
+    for (v, &p) in scene.world_positions(0).iter().enumerate() {
+        let c = xz(p);
+        if c.x.abs() > 1.5 || c.y.abs() > 1.5 {
+            continue; // the border bias 1 - α/2π (section 2.9.1) is tested below
+        }
+        // Radius where the expected impact count reaches k.
+        let (mut lo, mut hi) = (0.0, 1.5);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if disc_integral(c, mid) / photon_power() < kf {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        assert!(
+            c.x.abs().max(c.y.abs()) + hi < HALF as f64,
+            "disc leaves the floor"
+        );
+        let mean = kf / (kf - 1.0) * disc_integral(c, hi) / (PI * hi * hi);
+        let exact = analytic(c);
+        let bias = mean - exact;
+        let sigma = rel_sigma * mean;
+        let got = e[0][v].x as f64;
+        worst = worst.max(((got - mean) / sigma).abs());
+        assert!(
+            (got - exact).abs() <= bias.abs() + SIGMAS * sigma,
+            "vertex {v} at {p}: {got} against E = {exact} (bias {bias}, σ {sigma}, r {hi})"
+        );
+        checked += 1;
+    }
+    eprintln!("photon maps k = {k}: {checked} vertices, worst |z| = {worst:.2}");
+    assert!(checked > 100);
+    // A corner vertex (α = π/2) sees only a quarter of its circle: about α/2π of the true value.
+    let corner = scene
+        .world_positions(0)
+        .iter()
+        .position(|p| p.x == HALF && p.z == HALF)
+        .expect("corner vertex");
+    let ratio = e[0][corner].x as f64 / analytic(DVec2::splat(HALF as f64));
+    eprintln!("photon maps at the corner: {ratio:.3} of E");
+    assert!(ratio < 0.5, "{ratio}");
+}
+
+#[test]
+fn detp_converges_to_the_analytic_irradiance_everywhere() {
+    let (scene, rays) = shared();
+    let r = 0.2;
+    let e = detp(scene, rays, r as f32).expect("valid radius");
+    let mut worst: f64 = 0.0;
+    let positions = scene.world_positions(0);
+    for (v, &p) in positions.iter().enumerate() {
+        let c = xz(p);
+        // Rays crossing the disc outside the floor leave the scene but still count, so even border vertices estimate the disc mean of E.
+        let integral = disc_integral(c, r);
+        let area = PI * r * r;
+        let mean = integral / area;
+        let sigma = (photon_power() * integral).sqrt() / area;
+        let exact = analytic(c);
+        let bias = mean - exact;
+        let got = e[0][v].x as f64;
+        let z = (got - mean) / sigma;
+        worst = worst.max(z.abs());
+        assert!(
+            (got - exact).abs() <= bias.abs() + SIGMAS * sigma + 1e-5 * exact,
+            "vertex {v} at {p}: {got} against E = {exact} (bias {bias}, σ {sigma})"
+        );
+    }
+    eprintln!(
+        "DETP r = {r}: {} vertices, worst |z| = {worst:.2}",
+        positions.len()
+    );
+}
+
+#[test]
+fn invalid_options_are_errors() {
+    let (scene, rays) = shared();
+    let bvh = Bvh::build(scene);
+    let bad = RaySetOptions {
+        max_segments: 0,
+        ..RaySetOptions::default()
+    };
+    assert!(matches!(
+        trace_ray_set(scene, &bvh, &bad),
+        Err(DensityError::InvalidOption { .. })
+    ));
+    assert!(photon_maps(scene, rays, 0).is_err());
+    for r in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        assert!(detp(scene, rays, r).is_err());
+    }
+    assert!(KdTree::build(&[Vec3::ZERO, Vec3::NAN]).is_err());
+    // An empty ray set gives zero everywhere.
+    let empty = RaySet::default();
+    assert!(
+        impact_count(scene, &empty)[0]
+            .iter()
+            .all(|e| *e == Rgb::ZERO)
+    );
+    assert!(
+        photon_maps(scene, &empty, 5).unwrap()[0]
+            .iter()
+            .all(|e| *e == Rgb::ZERO)
+    );
+}
+
+/// Whether the segment crosses the disc from the front, by marching: a step whose samples go from the front to the back of the plane, with the sample nearest the plane inside the disc.
+fn marched_crossing(disc: &Disc, s: &RaySegment, steps: usize) -> bool {
+    let length = s.length();
+    let side = |t: f32| (s.origin + t * s.direction - disc.centre).dot(disc.normal);
+    for i in 0..steps {
+        let (t0, t1) = (
+            length * i as f32 / steps as f32,
+            length * (i + 1) as f32 / steps as f32,
+        );
+        if side(t0) > 0.0 && side(t1) <= 0.0 {
+            let t = if side(t0).abs() < side(t1).abs() {
+                t0
+            } else {
+                t1
+            };
+            let p = s.origin + t * s.direction;
+            return p.distance(disc.centre) <= disc.radius;
+        }
+    }
+    false
+}
+
+fn unit(v: [f32; 3]) -> Option<Vec3> {
+    let v = Vec3::from(v);
+    (v.length() > 0.1).then(|| v.normalize())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn disc_test_agrees_with_marching(
+        centre in prop::array::uniform3(-1.0f32..1.0),
+        normal in prop::array::uniform3(-1.0f32..1.0),
+        radius in 0.05f32..1.0,
+        origin in prop::array::uniform3(-2.0f32..2.0),
+        direction in prop::array::uniform3(-1.0f32..1.0),
+        length in 0.1f32..5.0,
+    ) {
+        let (Some(normal), Some(direction)) = (unit(normal), unit(direction)) else {
+            return Ok(());
+        };
+        let disc = Disc { centre: Vec3::from(centre), normal, radius };
+        let segment = RaySegment {
+            origin: Vec3::from(origin),
+            direction,
+            hit: Some(SegmentHit { triangle: 0, position: Vec3::from(origin) + length * direction, normal: Vec3::Y, distance: length }),
+            power: Rgb::ONE,
+        };
+        let steps = 20_000;
+        let step = length / steps as f32;
+        // Skip the cases the marching cannot decide: the crossing within a few steps of the rim, of either end, or a grazing ray.
+        let denom = direction.dot(normal);
+        if denom.abs() > 0.05 {
+            let t = (disc.centre - segment.origin).dot(normal) / denom;
+            let rim = (segment.origin + t * direction).distance(disc.centre) - radius;
+            if rim.abs() < 4.0 * step / denom.abs() || t.abs() < 4.0 * step || (t - length).abs() < 4.0 * step {
+                return Ok(());
+            }
+        } else {
+            return Ok(());
+        }
+        prop_assert_eq!(disc.is_crossed_by(&segment, 0.0), marched_crossing(&disc, &segment, steps));
+        let expected = if disc.is_crossed_by(&segment, 0.0) { 1.0 / (std::f32::consts::PI * radius * radius) } else { 0.0 };
+        prop_assert_eq!(disc.irradiance_of(&segment, 0.0).x, expected);
+    }
+
+    #[test]
+    fn kd_tree_agrees_with_brute_force(
+        points in prop::collection::vec(prop::array::uniform3(-10.0f32..10.0), 0..300),
+        query in prop::array::uniform3(-12.0f32..12.0),
+        k in 1usize..40,
+        grid in any::<bool>(),
+    ) {
+        // Snapping to a coarse grid makes many equal distances, to exercise the ties.
+        let points: Vec<Vec3> = points.iter().map(|&p| {
+            let p = Vec3::from(p);
+            if grid { p.round() } else { p }
+        }).collect();
+        let tree = KdTree::build(&points).unwrap();
+        prop_assert_eq!(tree.len(), points.len());
+        let query = Vec3::from(query);
+        prop_assert_eq!(tree.nearest(query, k), brute_force_nearest(&points, query, k));
+    }
+}
