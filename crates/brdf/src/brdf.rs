@@ -191,6 +191,59 @@ pub(crate) fn diffuse_or_pdf(wi: Vec3, p_diffuse: f32, lobe_pdf: f32) -> f32 {
     p_diffuse * cosine_hemisphere_pdf(wi.z) + (1.0 - p_diffuse) * lobe_pdf
 }
 
+/// The cosine hemisphere mixed with a cosⁿ lobe about the mirror direction
+/// of `wo` (Phong's lobe, sampled as in Lafortune & Willems 1994): the sample.
+pub(crate) fn sample_mirror_lobe_mixture<B: Brdf + ?Sized>(
+    brdf: &B,
+    wo: Vec3,
+    u: Vec2,
+    u_lobe: f32,
+    p_diffuse: f32,
+    exponent: f32,
+) -> Option<BrdfSample> {
+    sample_diffuse_or(brdf, wo, u, u_lobe, p_diffuse, |u| {
+        Some(sample_cos_power_lobe(reflect_z(wo), exponent, u))
+    })
+}
+
+/// Density of [`sample_mirror_lobe_mixture`].
+pub(crate) fn mirror_lobe_mixture_pdf(wi: Vec3, wo: Vec3, p_diffuse: f32, exponent: f32) -> f32 {
+    if !same_upper(wi, wo) {
+        return 0.0;
+    }
+    let lobe = cos_power_lobe_pdf(wi.dot(reflect_z(wo)), exponent);
+    diffuse_or_pdf(wi, p_diffuse, lobe)
+}
+
+/// The cosine hemisphere mixed with a cosⁿ lobe of half vectors about the
+/// normal, reflected into `wi` (Blinn's lobe): the sample.
+pub(crate) fn sample_half_vector_mixture<B: Brdf + ?Sized>(
+    brdf: &B,
+    wo: Vec3,
+    u: Vec2,
+    u_lobe: f32,
+    p_diffuse: f32,
+    exponent: f32,
+) -> Option<BrdfSample> {
+    sample_diffuse_or(brdf, wo, u, u_lobe, p_diffuse, |u| {
+        let h = sample_cos_power_lobe(Vec3::Z, exponent, u);
+        if h.dot(wo) <= 0.0 {
+            return None;
+        }
+        Some(reflect(wo, h))
+    })
+}
+
+/// Density of [`sample_half_vector_mixture`]: the half-vector density times the Jacobian `1 / (4 wo·h)`.
+pub(crate) fn half_vector_mixture_pdf(wi: Vec3, wo: Vec3, p_diffuse: f32, exponent: f32) -> f32 {
+    if !same_upper(wi, wo) {
+        return 0.0;
+    }
+    let h = (wi + wo).normalize();
+    let lobe = cos_power_lobe_pdf(h.z, exponent) / (4.0 * wo.dot(h));
+    diffuse_or_pdf(wi, p_diffuse, lobe)
+}
+
 /// Probability of choosing the diffuse lobe given the mean diffuse and lobe reflectances (a balance heuristic on albedo, Veach 1997 section 9.2).
 pub(crate) fn diffuse_probability(diffuse: Rgb, lobe: Rgb) -> f32 {
     let d = mean(diffuse).max(0.0);

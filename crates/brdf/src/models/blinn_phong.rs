@@ -7,8 +7,8 @@ use lustre_geometry::Rgb;
 
 use super::phong::check_exponent;
 use crate::brdf::{
-    Brdf, BrdfSample, cos_power_lobe_pdf, diffuse_or_pdf, diffuse_probability, reflect, same_upper,
-    sample_cos_power_lobe, sample_diffuse_or,
+    Brdf, BrdfSample, diffuse_probability, half_vector_mixture_pdf, same_upper,
+    sample_half_vector_mixture,
 };
 use crate::error::{Result, check_rgb};
 
@@ -61,22 +61,11 @@ impl Brdf for BlinnPhong {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BrdfSample> {
-        sample_diffuse_or(self, wo, u, u_lobe, self.p_diffuse, |u| {
-            let h = sample_cos_power_lobe(Vec3::Z, self.exponent, u);
-            if h.dot(wo) <= 0.0 {
-                return None;
-            }
-            Some(reflect(wo, h))
-        })
+        sample_half_vector_mixture(self, wo, u, u_lobe, self.p_diffuse, self.exponent)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        let h = (wi + wo).normalize();
-        let lobe = cos_power_lobe_pdf(h.z, self.exponent) / (4.0 * wo.dot(h));
-        diffuse_or_pdf(wi, self.p_diffuse, lobe)
+        half_vector_mixture_pdf(wi, wo, self.p_diffuse, self.exponent)
     }
 
     fn is_reciprocal(&self) -> bool {

@@ -6,8 +6,8 @@ use glam::{Vec2, Vec3};
 use lustre_geometry::Rgb;
 
 use crate::brdf::{
-    Brdf, BrdfSample, cos_power_lobe_pdf, diffuse_or_pdf, diffuse_probability, reflect, same_upper,
-    sample_cos_power_lobe, sample_diffuse_or,
+    Brdf, BrdfSample, diffuse_probability, half_vector_mixture_pdf, same_upper,
+    sample_half_vector_mixture,
 };
 use crate::diefenbach_fit::{DIEFENBACH_AMPLITUDE, DIEFENBACH_EXPONENT_SCALE};
 use crate::error::{BrdfError, Result, check_rgb, check_sum};
@@ -117,22 +117,11 @@ impl Brdf for DiefenbachPhong {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BrdfSample> {
-        sample_diffuse_or(self, wo, u, u_lobe, self.p_diffuse, |u| {
-            let h = sample_cos_power_lobe(Vec3::Z, self.exponent, u);
-            if h.dot(wo) <= 0.0 {
-                return None;
-            }
-            Some(reflect(wo, h))
-        })
+        sample_half_vector_mixture(self, wo, u, u_lobe, self.p_diffuse, self.exponent)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        let h = (wi + wo).normalize();
-        let lobe = cos_power_lobe_pdf(h.z, self.exponent) / (4.0 * wo.dot(h));
-        diffuse_or_pdf(wi, self.p_diffuse, lobe)
+        half_vector_mixture_pdf(wi, wo, self.p_diffuse, self.exponent)
     }
 
     fn is_reciprocal(&self) -> bool {

@@ -7,8 +7,8 @@ use lustre_geometry::Rgb;
 
 use super::phong::check_exponent;
 use crate::brdf::{
-    Brdf, BrdfSample, cos_power_lobe_pdf, diffuse_or_pdf, diffuse_probability, reflect_z,
-    same_upper, sample_cos_power_lobe, sample_diffuse_or,
+    Brdf, BrdfSample, diffuse_probability, mirror_lobe_mixture_pdf, reflect_z, same_upper,
+    sample_mirror_lobe_mixture,
 };
 use crate::error::{Result, check_rgb, check_sum};
 
@@ -74,17 +74,11 @@ impl Brdf for ModifiedPhong {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BrdfSample> {
-        sample_diffuse_or(self, wo, u, u_lobe, self.p_diffuse, |u| {
-            Some(sample_cos_power_lobe(reflect_z(wo), self.exponent, u))
-        })
+        sample_mirror_lobe_mixture(self, wo, u, u_lobe, self.p_diffuse, self.exponent)
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        let lobe = cos_power_lobe_pdf(wi.dot(reflect_z(wo)), self.exponent);
-        diffuse_or_pdf(wi, self.p_diffuse, lobe)
+        mirror_lobe_mixture_pdf(wi, wo, self.p_diffuse, self.exponent)
     }
 
     fn is_reciprocal(&self) -> bool {

@@ -6,8 +6,7 @@ use glam::{Vec2, Vec3};
 use lustre_geometry::Rgb;
 
 use crate::brdf::{
-    Brdf, BrdfSample, cos_power_lobe_pdf, diffuse_or_pdf, reflect_z, same_upper,
-    sample_cos_power_lobe, sample_diffuse_or,
+    Brdf, BrdfSample, mirror_lobe_mixture_pdf, reflect_z, same_upper, sample_mirror_lobe_mixture,
 };
 use crate::error::{Result, check_range, check_rgb};
 
@@ -110,17 +109,11 @@ impl Brdf for Strauss {
     }
 
     fn sample(&self, wo: Vec3, u: Vec2, u_lobe: f32) -> Option<BrdfSample> {
-        sample_diffuse_or(self, wo, u, u_lobe, self.p_diffuse, |u| {
-            Some(sample_cos_power_lobe(reflect_z(wo), self.exponent(), u))
-        })
+        sample_mirror_lobe_mixture(self, wo, u, u_lobe, self.p_diffuse, self.exponent())
     }
 
     fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        if !same_upper(wi, wo) {
-            return 0.0;
-        }
-        let lobe = cos_power_lobe_pdf(wi.dot(reflect_z(wo)), self.exponent());
-        diffuse_or_pdf(wi, self.p_diffuse, lobe)
+        mirror_lobe_mixture_pdf(wi, wo, self.p_diffuse, self.exponent())
     }
 
     fn is_reciprocal(&self) -> bool {
