@@ -404,15 +404,7 @@ fn perturbed(change: impl FnOnce(&mut Vec<Material>)) -> Scene {
     let scene = builtin("cornell").unwrap();
     let mut materials = scene.materials().to_vec();
     change(&mut materials);
-    Scene::new(
-        "perturbed",
-        scene.meshes().to_vec(),
-        materials,
-        scene.objects().to_vec(),
-        Vec::new(),
-        *scene.camera(),
-    )
-    .unwrap()
+    scene.with_materials(materials).unwrap()
 }
 
 /// The comparison must reject scenes that differ from `cornell_box()` a little.

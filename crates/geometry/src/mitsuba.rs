@@ -1123,15 +1123,7 @@ mod tests {
         let scene = builtin("cornell").unwrap();
         let mut materials = scene.materials().to_vec();
         materials[0] = Material::new("strange", model);
-        Scene::new(
-            "strange",
-            scene.meshes().to_vec(),
-            materials,
-            scene.objects().to_vec(),
-            Vec::new(),
-            *scene.camera(),
-        )
-        .unwrap()
+        scene.with_materials(materials).unwrap()
     }
 
     #[test]

@@ -178,6 +178,19 @@ impl Scene {
         Ok(scene)
     }
 
+    /// The same geometry, objects, explicit lights and camera with other
+    /// materials (same count and order); emissive materials become area lights.
+    pub fn with_materials(&self, materials: Vec<Material>) -> Result<Self> {
+        Self::new(
+            self.name.clone(),
+            self.meshes.clone(),
+            materials,
+            self.objects.clone(),
+            self.explicit_lights.clone(),
+            self.camera,
+        )
+    }
+
     /// The meshes (rest pose).
     pub fn meshes(&self) -> &[Mesh] {
         &self.meshes
