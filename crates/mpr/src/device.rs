@@ -2,6 +2,7 @@
 //! software one), the adapter's identity for every output, and whether float32
 //! targets can be blended (DESIGN.md "Data flow", step 3).
 
+use crate::target::DEPTH_FORMAT;
 use std::fmt;
 
 use crate::{MprError, Result};
@@ -61,6 +62,7 @@ pub struct GpuContext {
     adapter: wgpu::Adapter,
     summary: AdapterSummary,
     float32_blendable: bool,
+    depth_stencil: bool,
 }
 
 /// Request options for the hardware-first attempt.
@@ -140,11 +142,16 @@ impl GpuContext {
         let float32_blendable = adapter
             .features()
             .contains(wgpu::Features::FLOAT32_BLENDABLE);
-        let required_features = if float32_blendable {
-            wgpu::Features::FLOAT32_BLENDABLE
-        } else {
-            wgpu::Features::empty()
-        };
+        let depth_stencil = adapter
+            .features()
+            .contains(wgpu::Features::DEPTH32FLOAT_STENCIL8);
+        let mut required_features = wgpu::Features::empty();
+        if float32_blendable {
+            required_features |= wgpu::Features::FLOAT32_BLENDABLE;
+        }
+        if depth_stencil {
+            required_features |= wgpu::Features::DEPTH32FLOAT_STENCIL8;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lustre-mpr"),
             required_features,
@@ -161,6 +168,7 @@ impl GpuContext {
             adapter,
             summary,
             float32_blendable,
+            depth_stencil,
         })
     }
 
@@ -182,6 +190,20 @@ impl GpuContext {
     /// Whether accumulation must fall back to 16-bit float targets (no float32 blending).
     pub fn needs_16bit_fallback(&self) -> bool {
         !self.float32_blendable
+    }
+
+    /// Whether the depth target carries a stencil (`Depth32FloatStencil8`), which the stencilled passes need.
+    pub fn has_stencil(&self) -> bool {
+        self.depth_stencil
+    }
+
+    /// The depth format of every pass: `Depth32FloatStencil8` where the device has it, else `Depth32Float`.
+    pub fn depth_format(&self) -> wgpu::TextureFormat {
+        if self.depth_stencil {
+            wgpu::TextureFormat::Depth32FloatStencil8
+        } else {
+            DEPTH_FORMAT
+        }
     }
 
     /// The HDR accumulation format: `Rgba32Float` when blendable, `Rgba16Float` otherwise.

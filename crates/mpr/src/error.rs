@@ -61,6 +61,14 @@ pub enum MprError {
         /// What is wrong with it.
         message: String,
     },
+    /// A material the GPU passes cannot evaluate.
+    #[error("material `{material}`: {message}")]
+    UnsupportedMaterial {
+        /// The material's name.
+        material: String,
+        /// Why.
+        message: String,
+    },
     /// Mapping a readback buffer failed.
     #[error("reading back `{what}` failed: {message}")]
     Readback {

@@ -163,7 +163,7 @@ pub fn read_u32(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<u32>> {
 /// Reads the depth aspect of a `Depth32Float` texture.
 pub fn read_depth(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<f32>> {
     match texture.format() {
-        wgpu::TextureFormat::Depth32Float => {
+        wgpu::TextureFormat::Depth32Float | wgpu::TextureFormat::Depth32FloatStencil8 => {
             let bytes = read_texture_bytes(ctx, texture, wgpu::TextureAspect::DepthOnly)?;
             Ok(bytes
                 .chunks_exact(4)

@@ -14,19 +14,35 @@ pub const TONEMAP_WGSL: &str = concat!(
     include_str!("passes/tonemap.wgsl")
 );
 
+/// Materials as weighted lobes (`src/shaders/common/material.wgsl`); needs [`lustre_brdf::shaders::BRDF_WGSL`] before it ([`material_module`]).
+pub const MATERIAL_WGSL: &str = include_str!("shaders/common/material.wgsl");
+
+/// The BRDF twins of `lustre-brdf` followed by [`MATERIAL_WGSL`]: the prefix of every pass that evaluates materials.
+pub fn material_module() -> String {
+    format!("{}\n{MATERIAL_WGSL}", lustre_brdf::shaders::BRDF_WGSL)
+}
+
+/// `pass` (a pass's own WGSL) after [`material_module`].
+pub fn with_materials(pass: &str) -> String {
+    format!("{}\n{pass}", material_module())
+}
+
 /// Each WGSL file under `src/` (path relative to `src/`) with the complete
 /// module it is validated in: shared modules alone, passes as compiled.
-pub const ALL_WGSL: &[(&str, &str)] = &[
-    ("shaders/common/color.wgsl", COLOR_WGSL),
-    ("passes/depth.wgsl", DEPTH_WGSL),
-    ("passes/tonemap.wgsl", TONEMAP_WGSL),
-];
+pub fn all_wgsl() -> Vec<(&'static str, String)> {
+    vec![
+        ("shaders/common/color.wgsl", COLOR_WGSL.to_owned()),
+        ("shaders/common/material.wgsl", material_module()),
+        ("passes/depth.wgsl", DEPTH_WGSL.to_owned()),
+        ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
+    ]
+}
 
 #[cfg(test)]
 mod tests {
     use std::path::{Path, PathBuf};
 
-    use super::ALL_WGSL;
+    use super::all_wgsl;
 
     /// Parses and validates `src` with naga, naming `path` in the diagnostic.
     fn validate(path: &str, src: &str) {
@@ -55,8 +71,8 @@ mod tests {
 
     #[test]
     fn every_wgsl_module_parses_and_validates_with_naga() {
-        for (path, src) in ALL_WGSL {
-            validate(path, src);
+        for (path, src) in all_wgsl() {
+            validate(path, &src);
         }
     }
 
@@ -66,14 +82,17 @@ mod tests {
         let mut files = Vec::new();
         wgsl_files(&root, &root, &mut files);
         files.sort();
-        let mut listed: Vec<String> = ALL_WGSL.iter().map(|(p, _)| p.to_string()).collect();
+        let mut listed: Vec<String> = all_wgsl().iter().map(|(p, _)| p.to_string()).collect();
         listed.sort();
-        assert_eq!(files, listed, "a WGSL file is missing from ALL_WGSL");
+        assert_eq!(files, listed, "a WGSL file is missing from all_wgsl()");
     }
 
     #[test]
     fn shared_wgsl_opens_with_a_notation_table() {
-        for (path, src) in ALL_WGSL {
+        for (path, src) in all_wgsl() {
+            let src = src
+                .split_once(lustre_brdf::shaders::BRDF_WGSL)
+                .map_or(src.as_str(), |(_, rest)| rest.trim_start());
             let head: String = src.lines().take(12).collect::<Vec<_>>().join("\n");
             assert!(head.contains("Notation"), "{path} has no notation table");
         }

@@ -3,7 +3,7 @@
 
 use crate::{GpuContext, MprError, Result};
 
-/// Depth format of every pass: 32-bit float, reverse Z (see [`REVERSE_Z_CLEAR`]).
+/// Depth format without stencil: 32-bit float, reverse Z (see [`REVERSE_Z_CLEAR`]); [`GpuContext::depth_format`] adds an 8-bit stencil where the device has one.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Depth clear value with reverse Z: 0 is infinitely far, 1 the near plane.
 pub const REVERSE_Z_CLEAR: f32 = 0.0;
@@ -82,7 +82,7 @@ pub struct RenderTargets {
     pub height: u32,
     /// Linear HDR radiance in W/(m² sr), RGBA.
     pub hdr: Target,
-    /// Reverse-Z depth ([`DEPTH_FORMAT`]).
+    /// Reverse-Z depth ([`GpuContext::depth_format`]: with stencil where available).
     pub depth: Target,
     /// Scene surface id per pixel ([`SURFACE_ID_FORMAT`], [`NO_SURFACE`] where none).
     pub surface_id: Target,
@@ -115,7 +115,7 @@ impl RenderTargets {
             width,
             height,
             hdr: Target::new(ctx, "hdr", width, height, hdr_format),
-            depth: Target::new(ctx, "depth", width, height, DEPTH_FORMAT),
+            depth: Target::new(ctx, "depth", width, height, ctx.depth_format()),
             surface_id: Target::new(ctx, "surface-id", width, height, SURFACE_ID_FORMAT),
         })
     }
@@ -123,6 +123,11 @@ impl RenderTargets {
     /// The HDR format in use.
     pub fn hdr_format(&self) -> wgpu::TextureFormat {
         self.hdr.texture.format()
+    }
+
+    /// The depth format in use.
+    pub fn depth_format(&self) -> wgpu::TextureFormat {
+        self.depth.texture.format()
     }
 
     /// Width over height, for [`lustre_geometry::Camera::with_aspect`].

@@ -9,7 +9,7 @@ use lustre_geometry::{Bvh, Camera};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
 use crate::shaders::DEPTH_WGSL;
 use crate::target::{
-    DEPTH_FORMAT, NO_SURFACE, REVERSE_Z_CLEAR, REVERSE_Z_COMPARE, RenderTargets, SURFACE_ID_FORMAT,
+    NO_SURFACE, REVERSE_Z_CLEAR, REVERSE_Z_COMPARE, RenderTargets, SURFACE_ID_FORMAT,
 };
 use crate::{GpuContext, Result};
 
@@ -71,7 +71,7 @@ impl DepthPass {
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
+                    format: ctx.depth_format(),
                     depth_write_enabled: Some(true),
                     depth_compare: Some(REVERSE_Z_COMPARE),
                     stencil: wgpu::StencilState::default(),
@@ -151,7 +151,14 @@ impl DepthPass {
                     load: wgpu::LoadOp::Clear(REVERSE_Z_CLEAR),
                     store: wgpu::StoreOp::Store,
                 }),
-                stencil_ops: None,
+                // The stencilled passes start from a zero stencil.
+                stencil_ops: targets
+                    .depth_format()
+                    .has_stencil_aspect()
+                    .then_some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0),
+                        store: wgpu::StoreOp::Store,
+                    }),
             }),
             timestamp_writes: None,
             occlusion_query_set: None,

@@ -18,7 +18,8 @@ struct DepthUniforms {
 @group(0) @binding(0) var<uniform> uniforms: DepthUniforms;
 
 struct VertexOutput {
-    @builtin(position) clip: vec4f,
+    // Invariant: passes that redraw the scene with an equal-depth test reuse this vertex stage.
+    @builtin(position) @invariant clip: vec4f,
     @location(0) @interpolate(flat) surface: u32,
 }
 
