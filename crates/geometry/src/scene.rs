@@ -85,6 +85,8 @@ pub struct Scene {
     surfaces: Vec<Surface>,
     triangle_surface: Vec<SurfaceId>,
     lights: Vec<Light>,
+    /// Whether area lights are replaced by cosine point lights of equal power.
+    area_lights_as_points: bool,
 }
 
 /// Cosine of the largest angle between a flat triangle's vertex normals and its
@@ -170,6 +172,7 @@ impl Scene {
             surfaces: Vec::new(),
             triangle_surface: Vec::new(),
             lights: Vec::new(),
+            area_lights_as_points: false,
         };
         scene.derive()?;
         if scene.lights.is_empty() {
@@ -387,7 +390,31 @@ impl Scene {
             light.validate(&mesh.name)?;
             self.lights.push(light);
         }
+        if self.area_lights_as_points {
+            for light in &mut self.lights {
+                if let Light::Area(area) = light {
+                    *light = Light::OrientedPoint(area.to_oriented_point());
+                }
+            }
+        }
         Ok(())
+    }
+
+    /// The scene with every area light (emissive meshes included, which stay
+    /// as visible geometry) replaced by the cosine point light of equal power
+    /// at its centroid ([`AreaLight::to_oriented_point`]); the replacement
+    /// persists through later object moves. Point-light techniques use it
+    /// (DESIGN.md, "Built-in scenes"; Stürzlinger & Bastos 1997, section 3).
+    pub fn with_area_lights_as_points(&self) -> Result<Self> {
+        let mut scene = self.clone();
+        scene.area_lights_as_points = true;
+        scene.derive()?;
+        Ok(scene)
+    }
+
+    /// Whether [`Scene::with_area_lights_as_points`] made this scene.
+    pub fn area_lights_as_points(&self) -> bool {
+        self.area_lights_as_points
     }
 }
 

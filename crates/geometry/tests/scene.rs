@@ -396,3 +396,34 @@ fn curved_meshes_form_one_curved_surface() {
     assert!((ball[0].area - area).abs() < 1e-5);
     assert!((area - 8.0 * 3f32.sqrt() / 2.0).abs() < 1e-5);
 }
+
+#[test]
+fn area_lights_become_cosine_point_lights_of_equal_power_and_stay_so_after_a_move() {
+    let scene = builtin("cornell").unwrap();
+    let points = scene.with_area_lights_as_points().unwrap();
+    assert!(points.area_lights_as_points());
+    assert_eq!(points.lights().len(), scene.lights().len());
+    for (a, p) in scene.lights().iter().zip(points.lights()) {
+        let Light::Area(area) = a else {
+            panic!("cornell's light is an area light");
+        };
+        let Light::OrientedPoint(o) = p else {
+            panic!("not replaced: {p:?}");
+        };
+        // Independent expectation: the centroid of cornell's light rectangle and I0 = L A.
+        assert!((o.position - Vec3::new(0.0, 0.99, 0.01)).length() < 1e-4);
+        let expected = area.radiance * (0.46 * 0.38);
+        assert!((o.intensity - expected).abs().max_element() < 1e-3 * expected.max_element());
+        assert!((p.power() - a.power()).abs().max_element() < 1e-3 * a.power().max_element());
+    }
+    // The emitter mesh stays as geometry.
+    assert_eq!(points.triangle_count(), scene.triangle_count());
+    let mut moved = points.clone();
+    moved
+        .set_object_transform(0, Affine3A::from_translation(Vec3::ZERO))
+        .unwrap();
+    assert!(matches!(
+        moved.lights()[0],
+        Light::OrientedPoint(_)
+    ));
+}

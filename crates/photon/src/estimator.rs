@@ -101,6 +101,25 @@ struct SurfaceSplats {
     powers: Vec<Rgb>,
     /// Index-space positions, by photon.
     points: Vec<Vec3>,
+    /// Unit surface normals (winding side) at the photons.
+    normals: Vec<Vec3>,
+}
+
+/// One photon as a splat (sections 2.2 and 3.2): a kernel of support `h` on the plane through `position` with normal `normal`, carrying `power` that arrived from `incoming`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Splat {
+    /// The surface the photon hit.
+    pub surface: SurfaceId,
+    /// World position of the hit.
+    pub position: Vec3,
+    /// Unit normal of the surface's plane (planar surfaces) or of the hit triangle (curved ones), on the winding side.
+    pub normal: Vec3,
+    /// Unit incoming direction, away from the surface (the BRDF's `wi`).
+    pub incoming: Vec3,
+    /// Photon power `φ` (equation 1).
+    pub power: Rgb,
+    /// Kernel support `h` of the surface (equation 3).
+    pub h: f32,
 }
 
 /// Equation 2 on the CPU, with a spatial index per surface (section 2.2).
@@ -154,7 +173,16 @@ impl SplatEstimator {
                         message: format!("surface {} has no triangle {}", r.surface, r.triangle),
                     })?,
             };
+            let normal = match params.get(r.surface) {
+                Some(SurfaceParam::Planar(frame)) => frame.normal,
+                _ => params
+                    .corners(r.surface, r.triangle)
+                    .map_or(Vec3::Z, |[a, b, c]| {
+                        (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Z)
+                    }),
+            };
             s.points.push(point);
+            s.normals.push(normal);
             s.directions.push(r.direction);
             s.powers.push(map.photon_power(r));
         }
@@ -240,6 +268,73 @@ impl SplatEstimator {
             if k > 0.0 {
                 let wi = frame.to_local(s.directions[i]);
                 sum += brdf.eval(wi, wo_local) * s.powers[i] * k;
+            }
+        });
+        sum
+    }
+
+    /// Every selected photon as a [`Splat`], surface by surface (the preprocessing of section 2.2: one splat per photon hit, sized by its surface's `h`).
+    pub fn splats(&self) -> Vec<Splat> {
+        let mut out = Vec::with_capacity(self.surfaces.iter().map(|s| s.points.len()).sum());
+        for (id, s) in self.surfaces.iter().enumerate() {
+            let id = id as SurfaceId;
+            for i in 0..s.points.len() {
+                out.push(Splat {
+                    surface: id,
+                    position: self.world_point(id, s.points[i]),
+                    normal: s.normals[i],
+                    incoming: s.directions[i],
+                    power: s.powers[i],
+                    h: s.h,
+                });
+            }
+        }
+        out
+    }
+
+    /// World position of an index-space point of `surface`.
+    fn world_point(&self, surface: SurfaceId, p: Vec3) -> Vec3 {
+        match self.params.get(surface) {
+            Some(SurfaceParam::Planar(frame)) => frame.to_world(p.truncate()),
+            _ => p,
+        }
+    }
+
+    /// Equation 2 as the splatting of section 2.2 computes it: the BRDF of
+    /// each photon evaluated once per splat, towards `eye` from the photon's
+    /// own position ("the BRDF w.r.t. the viewing direction for that surface
+    /// point"), rather than from `x`. The CPU counterpart of the GPU splat
+    /// pass; it differs from [`SplatEstimator::radiance`] by the change of
+    /// view direction across one kernel support.
+    pub fn radiance_splatted(&self, surface: SurfaceId, x: Vec3, normal: Vec3, eye: Vec3) -> Rgb {
+        let Some(s) = self.surfaces.get(surface as usize) else {
+            return Rgb::ZERO;
+        };
+        let Some(brdf) = self.brdf_of(surface) else {
+            return Rgb::ZERO;
+        };
+        let Some((q, _)) = self.query_frame(surface, x, normal, eye - x) else {
+            return Rgb::ZERO;
+        };
+        if !(s.h > 0.0) || !eye.is_finite() {
+            return Rgb::ZERO;
+        }
+        let mut sum = Rgb::ZERO;
+        let kernel = self.options.kernel;
+        s.grid.for_each_within(q, s.h, |i, d2| {
+            let k = kernel.scaled(d2, s.h);
+            if k > 0.0 {
+                let p = self.world_point(surface, s.points[i]);
+                let wo = (eye - p).normalize_or_zero();
+                let n = if wo.dot(s.normals[i]) >= 0.0 {
+                    s.normals[i]
+                } else {
+                    -s.normals[i]
+                };
+                let frame = Frame::from_normal(n);
+                sum += brdf.eval(frame.to_local(s.directions[i]), frame.to_local(wo))
+                    * s.powers[i]
+                    * k;
             }
         });
         sum

@@ -49,7 +49,7 @@ pub mod trace;
 pub use crc32::{Crc32, crc32};
 pub use emission::{EmissionSampling, allocate_photons, photon_stream};
 pub use error::{PhotonError, Result};
-pub use estimator::{BounceSelection, EstimatorOptions, SplatEstimator, Support};
+pub use estimator::{BounceSelection, EstimatorOptions, Splat, SplatEstimator, Support};
 pub use file::{append_photon_file, read_photon_file, read_photon_file_for, write_photon_file};
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};
