@@ -247,4 +247,13 @@ impl GpuContext {
             None => Ok(value),
         }
     }
+
+    /// [`GpuContext::checked`] for a closure that can fail itself: its error comes first, then wgpu's.
+    pub fn checked_result<T>(
+        &self,
+        what: &'static str,
+        f: impl FnOnce() -> Result<T>,
+    ) -> Result<T> {
+        self.checked(what, f)?
+    }
 }

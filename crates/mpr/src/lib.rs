@@ -21,6 +21,7 @@
 mod device;
 mod error;
 pub mod frame;
+pub mod kernel_texture;
 pub mod material;
 pub mod passes;
 pub mod readback;

@@ -120,7 +120,13 @@ fn flatten(
     };
     match model {
         MaterialModel::Diffuse { reflectance } => {
-            out.push(lobe(LOBE_LAMBERT, weight, *reflectance, Rgb::ZERO, [0.0; 4]));
+            out.push(lobe(
+                LOBE_LAMBERT,
+                weight,
+                *reflectance,
+                Rgb::ZERO,
+                [0.0; 4],
+            ));
         }
         MaterialModel::RoughConductor {
             distribution,
@@ -322,6 +328,9 @@ mod tests {
         let f0 = conductor_f0(eta, k);
         let fresnel = lustre_brdf::Fresnel::Conductor { eta, k };
         let expected = fresnel.eval(1.0);
-        assert!((f0 - expected).abs().max_element() < 1e-5, "{f0} vs {expected}");
+        assert!(
+            (f0 - expected).abs().max_element() < 1e-5,
+            "{f0} vs {expected}"
+        );
     }
 }

@@ -7,6 +7,12 @@ pub const COLOR_WGSL: &str = include_str!("shaders/common/color.wgsl");
 /// The depth pre-pass shader (`src/passes/depth.wgsl`), self-contained.
 pub const DEPTH_WGSL: &str = include_str!("passes/depth.wgsl");
 
+/// The shadow cube-map shader (`src/passes/shadow.wgsl`), self-contained.
+pub const SHADOW_WGSL: &str = include_str!("passes/shadow.wgsl");
+
+/// The direct light pass's own WGSL (`src/passes/direct.wgsl`); compiled after [`material_module`] ([`direct_wgsl`]).
+pub const DIRECT_WGSL: &str = include_str!("passes/direct.wgsl");
+
 /// The tone-map shader: [`COLOR_WGSL`] followed by `src/passes/tonemap.wgsl`.
 pub const TONEMAP_WGSL: &str = concat!(
     include_str!("shaders/common/color.wgsl"),
@@ -27,6 +33,11 @@ pub fn with_materials(pass: &str) -> String {
     format!("{}\n{pass}", material_module())
 }
 
+/// The direct light pass as compiled: [`DIRECT_WGSL`] after [`material_module`].
+pub fn direct_wgsl() -> String {
+    with_materials(DIRECT_WGSL)
+}
+
 /// Each WGSL file under `src/` (path relative to `src/`) with the complete
 /// module it is validated in: shared modules alone, passes as compiled.
 pub fn all_wgsl() -> Vec<(&'static str, String)> {
@@ -34,7 +45,13 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ("shaders/common/color.wgsl", COLOR_WGSL.to_owned()),
         ("shaders/common/material.wgsl", material_module()),
         ("passes/depth.wgsl", DEPTH_WGSL.to_owned()),
+        (
+            "passes/splat.wgsl",
+            with_materials(crate::passes::splat::SPLAT_WGSL),
+        ),
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
+        ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),
+        ("passes/direct.wgsl", direct_wgsl()),
     ]
 }
 

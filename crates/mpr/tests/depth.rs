@@ -238,6 +238,7 @@ fn frame_graph_renders_depth_and_black_into_any_view() {
                 tonemap: &Tonemap::default(),
                 targets: &targets,
                 output: &output.create_view(&Default::default()),
+                splats: None,
             },
         )
         .unwrap();

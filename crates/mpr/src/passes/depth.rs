@@ -152,13 +152,12 @@ impl DepthPass {
                     store: wgpu::StoreOp::Store,
                 }),
                 // The stencilled passes start from a zero stencil.
-                stencil_ops: targets
-                    .depth_format()
-                    .has_stencil_aspect()
-                    .then_some(wgpu::Operations {
+                stencil_ops: targets.depth_format().has_stencil_aspect().then_some(
+                    wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0),
                         store: wgpu::StoreOp::Store,
-                    }),
+                    },
+                ),
             }),
             timestamp_writes: None,
             occlusion_query_set: None,

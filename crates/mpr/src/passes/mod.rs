@@ -1,4 +1,7 @@
 //! One module per pass, its WGSL beside it (DESIGN.md "Layout").
 
 pub mod depth;
+pub mod direct;
+pub mod shadow;
+pub mod splat;
 pub mod tonemap;

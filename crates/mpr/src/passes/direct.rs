@@ -1,0 +1,720 @@
+//! Direct light from point lights with cube shadow maps (Stürzlinger &
+//! Bastos 1997, section 2.2.1, "Optimized Rendering Phase": for each light,
+//! activate its shadow map and add its direct illumination by redrawing the
+//! surfaces with per-pixel Phong-style shading), with its CPU twin.
+//!
+//! Per pixel and light, `L = f_r(wi, wo) I(wi) cos θi / d² · V`: the BRDF of
+//! the pixel's material ([`GpuMaterial`], exact or Diefenbach's fitted Phong,
+//! [`GlossyModel`]), the intensity `I` of the light towards the pixel as
+//! `Light::sample_direct` defines it (isotropic `I`, cosine `I₀ max(cos, 0)`,
+//! Mitsuba's spot fall-off), and the visibility `V` from the light's
+//! [`ShadowCube`] with the bias of [`ShadowSettings::bias`]. Surfaces are
+//! two-sided: the interpolated shading normal is flipped to the viewer's
+//! side, as the CPU estimators do. The scene is redrawn with depth test
+//! `Equal` against the depth pre-pass (read-only depth) and added One/One
+//! into the HDR target; the vertex stage computes its position exactly as
+//! `depth.wgsl` does and both mark it `@invariant`, which keeps the depths
+//! bit-identical (checked on lavapipe by the tests).
+//!
+//! Area lights are not rendered here: the paper replaces small area lights
+//! by point lights of equal power (section 3), which
+//! `AreaLight::to_oriented_point` does; passing one is an error.
+//!
+//! A frame: [`DirectPass::encode_shadows`] once per light or scene pose,
+//! then per frame [`DirectPass::prepare`] and, after the depth pre-pass,
+//! [`DirectPass::encode`].
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3};
+use lustre_brdf::models::{DiefenbachPhong, Mixture};
+use lustre_brdf::{BoxedBrdf, Fresnel};
+use lustre_geometry::light::Light;
+use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
+
+use crate::material::{GlossyModel, GpuMaterial, scene_materials};
+use crate::passes::shadow::{ShadowCube, ShadowPass, ShadowSettings};
+use crate::scene_buffers::{GpuVertex, SceneBuffers};
+use crate::shaders::direct_wgsl;
+use crate::target::{NO_SURFACE, RenderTargets};
+use crate::{GpuContext, MprError, Result};
+
+/// `GpuLight::kind` of an isotropic point light.
+pub const LIGHT_POINT: u32 = 0;
+/// `GpuLight::kind` of a cosine (oriented) point light.
+pub const LIGHT_ORIENTED_POINT: u32 = 1;
+/// `GpuLight::kind` of a spot light.
+pub const LIGHT_SPOT: u32 = 2;
+
+/// The direct pass's camera block (`DirectCamera` in `direct.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct DirectCamera {
+    /// Column-major world-to-clip matrix, the same as the depth pre-pass's.
+    pub view_projection: [[f32; 4]; 4],
+    /// Camera position (xyz), w unused.
+    pub position: [f32; 4],
+}
+
+/// One point light and its shadow lookup (`DirectLight` in `direct.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    /// Light position in m.
+    pub position: [f32; 3],
+    /// [`LIGHT_POINT`], [`LIGHT_ORIENTED_POINT`] or [`LIGHT_SPOT`].
+    pub kind: u32,
+    /// Intensity in W/sr: `I`, `I₀` along the normal, or the spot's on-axis intensity.
+    pub intensity: [f32; 3],
+    /// Spot cut-off half-angle in radians.
+    pub cutoff_angle: f32,
+    /// Unit emission axis (oriented point normal, spot direction).
+    pub axis: [f32; 3],
+    /// Spot beam-width half-angle in radians.
+    pub beam_width: f32,
+    /// [`ShadowSettings::constant_bias`].
+    pub constant_bias: f32,
+    /// [`ShadowSettings::slope_bias`] times [`ShadowSettings::texel_angle`].
+    pub slope_bias: f32,
+    /// [`ShadowSettings::max_slope`].
+    pub max_slope: f32,
+    /// Padding to 16 bytes.
+    pub pad: f32,
+}
+
+/// The error for an area light handed to a point-light pass.
+fn area_light_error(index: usize) -> MprError {
+    MprError::InvalidSetting {
+        what: "direct light",
+        message: format!(
+            "light #{index} is an area light; the direct pass takes point lights only: \
+             convert it with AreaLight::to_oriented_point (a point light of equal power, \
+             Stürzlinger & Bastos 1997, section 3)"
+        ),
+    }
+}
+
+impl GpuLight {
+    /// The GPU form of a point, oriented point or spot light; an area light is [`MprError::InvalidSetting`].
+    pub fn new(index: usize, light: &Light, settings: &ShadowSettings) -> Result<Self> {
+        let mut out = Self {
+            constant_bias: settings.constant_bias,
+            slope_bias: settings.slope_bias * settings.texel_angle(),
+            max_slope: settings.max_slope,
+            ..Self::zeroed()
+        };
+        match light {
+            Light::Point(p) => {
+                out.kind = LIGHT_POINT;
+                out.position = p.position.to_array();
+                out.intensity = p.intensity.to_array();
+            }
+            Light::OrientedPoint(p) => {
+                out.kind = LIGHT_ORIENTED_POINT;
+                out.position = p.position.to_array();
+                out.intensity = p.intensity.to_array();
+                out.axis = p.normal.normalize().to_array();
+            }
+            Light::Spot(s) => {
+                out.kind = LIGHT_SPOT;
+                out.position = s.position.to_array();
+                out.intensity = s.intensity.to_array();
+                out.axis = s.direction.normalize().to_array();
+                out.cutoff_angle = s.cutoff_angle;
+                out.beam_width = s.beam_width;
+            }
+            Light::Area(_) => return Err(area_light_error(index)),
+        }
+        Ok(out)
+    }
+
+    /// The light's position.
+    pub fn position(&self) -> Vec3 {
+        Vec3::from_array(self.position)
+    }
+}
+
+/// One light's uniform block, shadow cube and bind group.
+#[derive(Debug)]
+struct LightSlot {
+    light: GpuLight,
+    uniforms: wgpu::Buffer,
+    cube: ShadowCube,
+    bind_group: wgpu::BindGroup,
+}
+
+/// The lights and materials the direct pass shades with: per light a
+/// [`GpuLight`] and its [`ShadowCube`], and the scene's [`GpuMaterial`]s.
+#[derive(Debug)]
+pub struct DirectLights {
+    slots: Vec<LightSlot>,
+    materials: wgpu::Buffer,
+    material_count: usize,
+    settings: ShadowSettings,
+}
+
+impl DirectLights {
+    /// The scene's lights and materials (flattened with `glossy`), default [`ShadowSettings`].
+    pub fn new(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        scene: &Scene,
+        glossy: GlossyModel,
+    ) -> Result<Self> {
+        Self::with_settings(
+            ctx,
+            pass,
+            scene.lights(),
+            &scene_materials(scene, glossy)?,
+            ShadowSettings::default(),
+        )
+    }
+
+    /// Explicit point lights, materials (in `MaterialId` order) and shadow settings.
+    pub fn with_settings(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        lights: &[Light],
+        materials: &[GpuMaterial],
+        settings: ShadowSettings,
+    ) -> Result<Self> {
+        settings.validate(ctx)?;
+        let gpu_lights = lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| GpuLight::new(i, l, &settings))
+            .collect::<Result<Vec<_>>>()?;
+        let mut material_data = materials.to_vec();
+        if material_data.is_empty() {
+            // A zero-sized storage buffer cannot be bound; no triangle indexes this one.
+            material_data.push(GpuMaterial::zeroed());
+        }
+        let materials_buffer = ctx.checked("direct material upload", || {
+            wgpu::util::DeviceExt::create_buffer_init(
+                &ctx.device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("direct-materials"),
+                    contents: bytemuck::cast_slice(&material_data),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                },
+            )
+        })?;
+        let mut slots = Vec::with_capacity(gpu_lights.len());
+        for light in gpu_lights {
+            let cube = pass.shadow.create_cube(ctx, settings.size)?;
+            let (uniforms, bind_group) = ctx.checked("direct light creation", || {
+                let uniforms = wgpu::util::DeviceExt::create_buffer_init(
+                    &ctx.device,
+                    &wgpu::util::BufferInitDescriptor {
+                        label: Some("direct-light"),
+                        contents: bytemuck::bytes_of(&light),
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    },
+                );
+                let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("direct-light"),
+                    layout: &pass.light_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: materials_buffer.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: uniforms.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(&cube.view),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::Sampler(&pass.shadow_sampler),
+                        },
+                    ],
+                });
+                (uniforms, bind_group)
+            })?;
+            pass.shadow
+                .prepare(&ctx.queue, &cube, light.position(), settings.near);
+            slots.push(LightSlot {
+                light,
+                uniforms,
+                cube,
+                bind_group,
+            });
+        }
+        Ok(Self {
+            slots,
+            materials: materials_buffer,
+            material_count: materials.len(),
+            settings,
+        })
+    }
+
+    /// Moves or changes the lights (same count as before); their shadow cubes
+    /// must then be redrawn with [`DirectPass::encode_shadows`].
+    pub fn set_lights(
+        &mut self,
+        pass: &DirectPass,
+        queue: &wgpu::Queue,
+        lights: &[Light],
+    ) -> Result<()> {
+        if lights.len() != self.slots.len() {
+            return Err(MprError::InvalidSetting {
+                what: "direct lights",
+                message: format!(
+                    "{} lights given for {} shadow cubes; build new DirectLights to change the count",
+                    lights.len(),
+                    self.slots.len()
+                ),
+            });
+        }
+        let gpu_lights = lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| GpuLight::new(i, l, &self.settings))
+            .collect::<Result<Vec<_>>>()?;
+        for (slot, light) in self.slots.iter_mut().zip(gpu_lights) {
+            slot.light = light;
+            queue.write_buffer(&slot.uniforms, 0, bytemuck::bytes_of(&light));
+            pass.shadow
+                .prepare(queue, &slot.cube, light.position(), self.settings.near);
+        }
+        Ok(())
+    }
+
+    /// Replaces the materials (same count), e.g. with another [`GlossyModel`]'s [`scene_materials`].
+    pub fn set_materials(&self, queue: &wgpu::Queue, materials: &[GpuMaterial]) -> Result<()> {
+        if materials.len() != self.material_count {
+            return Err(MprError::InvalidSetting {
+                what: "direct materials",
+                message: format!(
+                    "{} materials given for a buffer of {}",
+                    materials.len(),
+                    self.material_count
+                ),
+            });
+        }
+        if !materials.is_empty() {
+            queue.write_buffer(&self.materials, 0, bytemuck::cast_slice(materials));
+        }
+        Ok(())
+    }
+
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Whether there is no light.
+    pub fn is_empty(&self) -> bool {
+        self.slots.is_empty()
+    }
+
+    /// The lights as the GPU sees them.
+    pub fn lights(&self) -> impl Iterator<Item = &GpuLight> {
+        self.slots.iter().map(|s| &s.light)
+    }
+
+    /// The shadow cube of light `index`.
+    pub fn shadow_cube(&self, index: usize) -> Option<&ShadowCube> {
+        self.slots.get(index).map(|s| &s.cube)
+    }
+
+    /// The shadow settings in use.
+    pub fn settings(&self) -> &ShadowSettings {
+        &self.settings
+    }
+}
+
+/// The GPU direct light pass: its pipeline, camera block and shadow pass.
+#[derive(Debug)]
+pub struct DirectPass {
+    pipeline: wgpu::RenderPipeline,
+    camera: wgpu::Buffer,
+    camera_bind_group: wgpu::BindGroup,
+    light_layout: wgpu::BindGroupLayout,
+    shadow_sampler: wgpu::Sampler,
+    shadow: ShadowPass,
+}
+
+impl DirectPass {
+    /// Builds the pipeline for HDR targets of `hdr_format` (which must be blendable):
+    /// cull none, depth `Equal` without writes, One/One blending.
+    pub fn new(ctx: &GpuContext, hdr_format: wgpu::TextureFormat) -> Result<Self> {
+        if !ctx.is_blendable(hdr_format) {
+            return Err(MprError::UnsupportedFormat {
+                what: "direct pass HDR target (additive blending)",
+                format: hdr_format,
+            });
+        }
+        let shadow = ShadowPass::new(ctx)?;
+        ctx.checked("direct pass creation", || {
+            let device = &ctx.device;
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("direct"),
+                source: wgpu::ShaderSource::Wgsl(direct_wgsl().into()),
+            });
+            let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("direct-camera"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<DirectCamera>() as u64),
+                    },
+                    count: None,
+                }],
+            });
+            let light_layout =
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("direct-light"),
+                    entries: &[
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 0,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Buffer {
+                                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                                has_dynamic_offset: false,
+                                min_binding_size: wgpu::BufferSize::new(
+                                    size_of::<GpuMaterial>() as u64
+                                ),
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 1,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Buffer {
+                                ty: wgpu::BufferBindingType::Uniform,
+                                has_dynamic_offset: false,
+                                min_binding_size: wgpu::BufferSize::new(
+                                    size_of::<GpuLight>() as u64
+                                ),
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 2,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Texture {
+                                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                                view_dimension: wgpu::TextureViewDimension::Cube,
+                                multisampled: false,
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 3,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+                            count: None,
+                        },
+                    ],
+                });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("direct"),
+                bind_group_layouts: &[Some(&camera_layout), Some(&light_layout)],
+                immediate_size: 0,
+            });
+            let additive = wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            };
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("direct"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(GpuVertex::LAYOUT)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: ctx.depth_format(),
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Equal),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: hdr_format,
+                        blend: Some(wgpu::BlendState {
+                            color: additive,
+                            alpha: additive,
+                        }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            let camera = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("direct-camera"),
+                size: size_of::<DirectCamera>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("direct-camera"),
+                layout: &camera_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: camera.as_entire_binding(),
+                }],
+            });
+            let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow-nearest"),
+                ..Default::default()
+            });
+            Self {
+                pipeline,
+                camera,
+                camera_bind_group,
+                light_layout,
+                shadow_sampler,
+                shadow,
+            }
+        })
+    }
+
+    /// The shadow pass that draws the lights' cubes.
+    pub fn shadow_pass(&self) -> &ShadowPass {
+        &self.shadow
+    }
+
+    /// Writes the camera for the next [`DirectPass::encode`] (the same camera as the depth pre-pass).
+    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera) {
+        let uniforms = DirectCamera {
+            view_projection: camera.view_projection().to_cols_array_2d(),
+            position: camera.position.extend(1.0).to_array(),
+        };
+        queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&uniforms));
+    }
+
+    /// Records the shadow cube of every light (section 2.2.1, "construct a
+    /// shadow map for each light source"): once per light or scene pose.
+    pub fn encode_shadows(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        lights: &DirectLights,
+    ) {
+        for slot in &lights.slots {
+            self.shadow.encode(encoder, scene, &slot.cube);
+        }
+    }
+
+    /// Records the direct light: one render pass that loads the HDR target
+    /// and the depth pre-pass's depth (read only), then per light binds its
+    /// shadow cube and adds its light over every scene triangle. Run after
+    /// the depth pre-pass and [`DirectPass::encode_shadows`].
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        lights: &DirectLights,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("direct"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &targets.hdr.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth.view,
+                depth_ops: None,
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        if scene.vertex_count == 0 || lights.is_empty() {
+            return;
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.camera_bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        for slot in &lights.slots {
+            pass.set_bind_group(1, &slot.bind_group, &[]);
+            pass.draw(0..scene.vertex_count, 0..1);
+        }
+    }
+}
+
+/// The CPU BRDF of a material model under `glossy`: `lustre_brdf::from_model`,
+/// or with Ward and Beckmann lobes replaced by Diefenbach's fitted Phong of the
+/// same α (equation 6; a conductor's Fresnel folded into `ks` at normal incidence).
+pub fn cpu_brdf(model: &MaterialModel, glossy: GlossyModel) -> lustre_brdf::Result<BoxedBrdf> {
+    if glossy == GlossyModel::Exact {
+        return lustre_brdf::from_model(model);
+    }
+    match model {
+        MaterialModel::RoughConductor {
+            distribution: MicrofacetDistribution::Beckmann,
+            alpha,
+            fresnel,
+            specular,
+        } => {
+            let f0 = match fresnel {
+                ConductorFresnel::Complex { eta, k } => {
+                    Fresnel::Conductor { eta: *eta, k: *k }.eval(1.0)
+                }
+                ConductorFresnel::None => Rgb::ONE,
+            };
+            Ok(Box::new(DiefenbachPhong::new(
+                Rgb::ZERO,
+                *specular * f0,
+                *alpha,
+            )?))
+        }
+        MaterialModel::Ward {
+            diffuse,
+            specular,
+            alpha_x,
+            alpha_y,
+        } if alpha_x == alpha_y => Ok(Box::new(DiefenbachPhong::new(
+            *diffuse, *specular, *alpha_x,
+        )?)),
+        MaterialModel::Blend {
+            weight,
+            first,
+            second,
+        } => Ok(Box::new(Mixture::new(vec![
+            (1.0 - weight, cpu_brdf(first, glossy)?),
+            (*weight, cpu_brdf(second, glossy)?),
+        ])?)),
+        other => lustre_brdf::from_model(other),
+    }
+}
+
+/// One pixel of the CPU twin: radiance, the surface seen and which lights reach it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectPixel {
+    /// Direct radiance in W/(m² sr).
+    pub radiance: [f32; 3],
+    /// Surface id of the closest hit ([`NO_SURFACE`] on a miss).
+    pub surface: u32,
+    /// Bit `j` set when light `j` (`j < 64`) is unoccluded and in front of the shading normal.
+    pub visible: u64,
+}
+
+/// CPU counterpart of [`DirectPass`] with per-pixel detail: through each
+/// pixel centre, the closest hit; per light, `f_r I cos θi / d²` (the weight
+/// of `Light::sample_direct`) times a BVH shadow ray from the hit to the light
+/// (both ends shortened by `1e-4` of the scene's extent), in the frame of the
+/// shading normal flipped to the viewer's side.
+pub fn direct_pixels_cpu(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    glossy: GlossyModel,
+) -> Result<Vec<DirectPixel>> {
+    if let Some(i) = scene.lights().iter().position(|l| !l.is_delta()) {
+        return Err(area_light_error(i));
+    }
+    let brdfs = scene
+        .materials()
+        .iter()
+        .map(|m| {
+            cpu_brdf(&m.model, glossy).map_err(|e| MprError::UnsupportedMaterial {
+                material: m.name.clone(),
+                message: e.to_string(),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let eps = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
+    let rays: Vec<Ray> = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
+        .collect();
+    let hits = bvh.closest_hits(&rays);
+    Ok(rays
+        .iter()
+        .zip(hits)
+        .map(|(ray, hit)| {
+            let Some(hit) = hit else {
+                return DirectPixel {
+                    radiance: [0.0; 3],
+                    surface: NO_SURFACE,
+                    visible: 0,
+                };
+            };
+            let wo = -ray.direction;
+            let n = if hit.shading_normal.dot(wo) < 0.0 {
+                -hit.shading_normal
+            } else {
+                hit.shading_normal
+            };
+            let frame = Frame::from_normal(n);
+            let wo_local = frame.to_local(wo);
+            let brdf = &brdfs[hit.material as usize];
+            let mut radiance = Rgb::ZERO;
+            let mut visible = 0u64;
+            for (j, light) in scene.lights().iter().enumerate() {
+                let Some(sample) = light.sample_direct(hit.position, Vec2::ZERO) else {
+                    continue;
+                };
+                let wi_local = frame.to_local(sample.direction);
+                if wi_local.z <= 0.0 {
+                    continue;
+                }
+                let shadow =
+                    Ray::segment(hit.position, sample.direction, eps, sample.distance - eps);
+                if bvh.any_hit(&shadow) {
+                    continue;
+                }
+                if j < 64 {
+                    visible |= 1 << j;
+                }
+                radiance += brdf.eval(wi_local, wo_local) * sample.weight * wi_local.z;
+            }
+            DirectPixel {
+                radiance: radiance.to_array(),
+                surface: hit.surface,
+                visible,
+            }
+        })
+        .collect())
+}
+
+/// CPU counterpart of [`DirectPass`]: the direct radiance per pixel (row 0 at the top), see [`direct_pixels_cpu`].
+pub fn direct_pass_cpu(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    glossy: GlossyModel,
+) -> Result<Vec<[f32; 3]>> {
+    Ok(
+        direct_pixels_cpu(scene, bvh, camera, width, height, glossy)?
+            .into_iter()
+            .map(|p| p.radiance)
+            .collect(),
+    )
+}

@@ -1,0 +1,142 @@
+// Direct light from point lights (Stürzlinger & Bastos 1997, section 2.2.1,
+// "Optimized Rendering Phase": per light, the scene redrawn with per-pixel
+// Phong-style shading and a shadow map, added into the framebuffer). The
+// scene is redrawn with an equal-depth test against the depth pre-pass, so
+// only the visible surface is shaded, and blended One/One into HDR radiance:
+//   L += f_r(wi, wo) I(wi) cos(theta_i) / d^2 V.
+// Needs the BRDF and material modules before it (shaders::with_materials).
+//
+// Notation
+// | symbol  | meaning                                                           | unit      |
+// |---------|-------------------------------------------------------------------|-----------|
+// | P       | world position of the shaded point                                | m         |
+// | E       | camera position                                                   | m         |
+// | Lp      | light position                                                    | m         |
+// | n       | interpolated shading normal, flipped to the viewer's side         | -         |
+// | wo, wi  | unit directions P->E and P->Lp (world; local in the n frame)      | -         |
+// | d       | |Lp - P|                                                          | m         |
+// | I(w)    | intensity towards direction w = -wi, as lustre-geometry's lights  | W/sr      |
+// | f_r     | material BRDF, sum of weighted lobes                              | 1/sr      |
+// | V       | 1 if d - bias <= the cube map's stored distance along P - Lp     | 1         |
+// | bias    | d (c + k (2/size) min(tan theta_i, t_max)), slope-scaled          | m         |
+// | L       | radiance added to the HDR target                                  | W/(m² sr) |
+
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_ORIENTED_POINT: u32 = 1u;
+const LIGHT_SPOT: u32 = 2u;
+
+struct DirectCamera {
+    view_projection: mat4x4f,
+    // xyz: E.
+    position: vec4f,
+}
+
+// One point light and its shadow-map lookup parameters (GpuLight in direct.rs).
+struct DirectLight {
+    position: vec3f,
+    kind: u32,
+    intensity: vec3f,
+    cutoff_angle: f32,
+    axis: vec3f,
+    beam_width: f32,
+    // c: bias relative to d.
+    constant_bias: f32,
+    // k (2/size): the slope term per unit tan(theta_i).
+    slope_bias: f32,
+    // t_max: the largest tan(theta_i) the slope term follows.
+    max_slope: f32,
+    pad: f32,
+}
+
+@group(0) @binding(0) var<uniform> camera: DirectCamera;
+@group(1) @binding(0) var<storage, read> materials: array<GpuMaterial>;
+@group(1) @binding(1) var<uniform> light: DirectLight;
+@group(1) @binding(2) var shadow_cube: texture_cube<f32>;
+@group(1) @binding(3) var shadow_sampler: sampler;
+
+struct VertexOutput {
+    // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) world: vec3f,
+    @location(1) normal: vec3f,
+    @location(2) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3f,
+    @location(2) normal: vec3f,
+    @location(3) material: u32,
+) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    out.material = material;
+    return out;
+}
+
+// Mitsuba's spot fall-off: 1 inside the beam width, linear in angle to 0 at the cut-off.
+fn spot_falloff(theta: f32) -> f32 {
+    if theta <= light.beam_width {
+        return 1.0;
+    }
+    if theta >= light.cutoff_angle {
+        return 0.0;
+    }
+    return (light.cutoff_angle - theta) / (light.cutoff_angle - light.beam_width);
+}
+
+// I(w) for the emitted direction w (unit, from the light towards P), as Light::sample_direct.
+fn light_intensity(w: vec3f) -> vec3f {
+    switch light.kind {
+        case LIGHT_ORIENTED_POINT: {
+            return light.intensity * max(dot(w, light.axis), 0.0);
+        }
+        case LIGHT_SPOT: {
+            // atan2 of sine and cosine: better conditioned than acos near the axis, and
+            // more accurate than some drivers' acos (llvmpipe's is off by ~1e-3 rad).
+            let theta = atan2(length(cross(w, light.axis)), dot(w, light.axis));
+            return light.intensity * spot_falloff(theta);
+        }
+        default: {
+            return light.intensity;
+        }
+    }
+}
+
+// V: whether P at distance d from the light, lit at cos(theta_i), is nearer than the stored occluder.
+fn shadow_visibility(to_point: vec3f, d: f32, cos_i: f32) -> f32 {
+    let tan_i = sqrt(max(1.0 - cos_i * cos_i, 0.0)) / cos_i;
+    let bias = d * (light.constant_bias + light.slope_bias * min(tan_i, light.max_slope));
+    let stored = textureSampleLevel(shadow_cube, shadow_sampler, to_point, 0.0).r;
+    return select(0.0, 1.0, d - bias <= stored);
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    let wo_world = normalize(camera.position.xyz - in.world);
+    var n = normalize(in.normal);
+    if dot(n, wo_world) < 0.0 {
+        n = -n;
+    }
+    let to_light = light.position - in.world;
+    let d = length(to_light);
+    let wi_world = to_light / d;
+    let cos_i = dot(n, wi_world);
+    if !(cos_i > 0.0) {
+        return vec4f(0.0);
+    }
+    let intensity = light_intensity(-wi_world);
+    if all(intensity == vec3f(0.0)) {
+        return vec4f(0.0);
+    }
+    let v = shadow_visibility(-to_light, d, cos_i);
+    let basis = material_basis(n);
+    let f = material_brdf(
+        materials[in.material],
+        material_to_local(basis, wi_world),
+        material_to_local(basis, wo_world),
+    );
+    return vec4f(f * intensity * (cos_i * v / (d * d)), 0.0);
+}

@@ -1,0 +1,683 @@
+//! The splat pass (Stürzlinger & Bastos 1997, sections 2.2 and 3.2): every
+//! photon hit drawn as a textured triangle on its surface's plane, coloured
+//! by its power times the BRDF towards the viewer and added into the HDR
+//! target. Splats are restricted to the visible part of their own surface in
+//! one of two ways ([`Restriction`]): a surface-id test in one draw, or the
+//! paper's per-surface stencil mask built from the depth buffer. The CPU
+//! counterpart is [`splat_pass_cpu`], built on
+//! [`SplatEstimator::radiance_splatted`].
+
+use std::ops::Range;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec2;
+use lustre_geometry::{Bvh, Camera, Scene};
+use lustre_photon::{Kernel, Splat, SplatEstimator};
+
+use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
+use crate::material::{GlossyModel, GpuMaterial, scene_materials};
+use crate::scene_buffers::{GpuVertex, SceneBuffers};
+use crate::shaders::{DEPTH_WGSL, with_materials};
+use crate::target::RenderTargets;
+use crate::{GpuContext, MprError, Result};
+
+/// The splat WGSL (`src/passes/splat.wgsl`), without the material prefix.
+pub const SPLAT_WGSL: &str = include_str!("splat.wgsl");
+
+/// How each splat is limited to the visible part of its own surface (section 2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Restriction {
+    /// One draw of every splat; the fragment compares the splat's surface with the depth pre-pass's surface id.
+    #[default]
+    SurfaceId,
+    /// The paper's method: per surface, a stencil mask from the surface's triangles with an equal-depth test, then its splats with a stencil test.
+    Stencil,
+}
+
+/// How the kernel texture is read per pixel (section 3.2: "Mip-mapping is used for filtering of small triangles").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum KernelFiltering {
+    /// Trilinear mip-mapping with 16× anisotropic filtering: the kernel averaged over each pixel's footprint, as the paper filters small splats.
+    #[default]
+    MipMapped,
+    /// Bilinear from level 0 at the pixel centre: the kernel point-sampled as the CPU estimator evaluates it.
+    PixelCentre,
+}
+
+/// One splat as the GPU reads it (instance attributes of `vs_splat`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuSplat {
+    /// Photon position `x_p` in m.
+    pub position: [f32; 3],
+    /// Scene `SurfaceId`.
+    pub surface: u32,
+    /// Unit incoming direction `wi`.
+    pub incoming: [f32; 3],
+    /// Kernel support `h` in m (equation 3).
+    pub h: f32,
+    /// Photon power `φ` in W (equation 1).
+    pub power: [f32; 3],
+    /// Padding.
+    pub pad0: f32,
+    /// Unit surface normal at `x_p` (winding side; flipped to the eye in the shader).
+    pub normal: [f32; 3],
+    /// Padding.
+    pub pad1: f32,
+}
+
+/// A vertex attribute at a byte offset (the padded fields of [`GpuSplat`] rule out `vertex_attr_array!`).
+const fn attribute(
+    format: wgpu::VertexFormat,
+    offset: u64,
+    location: u32,
+) -> wgpu::VertexAttribute {
+    wgpu::VertexAttribute {
+        format,
+        offset,
+        shader_location: location,
+    }
+}
+
+impl GpuSplat {
+    /// Instance layout: locations 0-5 (position, surface, incoming, h, power, normal) at the struct's offsets.
+    pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+        array_stride: size_of::<GpuSplat>() as wgpu::BufferAddress,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &[
+            attribute(wgpu::VertexFormat::Float32x3, 0, 0),
+            attribute(wgpu::VertexFormat::Uint32, 12, 1),
+            attribute(wgpu::VertexFormat::Float32x3, 16, 2),
+            attribute(wgpu::VertexFormat::Float32, 28, 3),
+            attribute(wgpu::VertexFormat::Float32x3, 32, 4),
+            attribute(wgpu::VertexFormat::Float32x3, 48, 5),
+        ],
+    };
+
+    /// The GPU form of a splat.
+    pub fn new(s: &Splat) -> Self {
+        Self {
+            position: s.position.to_array(),
+            surface: s.surface,
+            incoming: s.incoming.to_array(),
+            h: s.h,
+            power: s.power.to_array(),
+            pad0: 0.0,
+            normal: s.normal.to_array(),
+            pad1: 0.0,
+        }
+    }
+}
+
+/// The splats of a photon map on the GPU, grouped by surface, with the materials they are shaded with (the precomputed triangles of section 2.2).
+#[derive(Debug)]
+pub struct SplatBuffers {
+    instances: wgpu::Buffer,
+    /// Instance range of each surface, by `SurfaceId`.
+    pub surface_ranges: Vec<Range<u32>>,
+    materials: wgpu::Buffer,
+    surface_materials: wgpu::Buffer,
+    /// Number of splats.
+    pub count: u32,
+}
+
+impl SplatBuffers {
+    /// Uploads the splats of `estimator` (all its selected photons), shading with `glossy`.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        estimator: &SplatEstimator,
+        glossy: GlossyModel,
+    ) -> Result<Self> {
+        let splats = estimator.splats();
+        Self::from_splats(ctx, scene, &splats, glossy)
+    }
+
+    /// Uploads `splats` (any order; they are grouped by surface here).
+    pub fn from_splats(
+        ctx: &GpuContext,
+        scene: &Scene,
+        splats: &[Splat],
+        glossy: GlossyModel,
+    ) -> Result<Self> {
+        let surfaces = scene.surfaces().len();
+        let mut by_surface: Vec<Vec<GpuSplat>> = vec![Vec::new(); surfaces];
+        for s in splats {
+            let list =
+                by_surface
+                    .get_mut(s.surface as usize)
+                    .ok_or_else(|| MprError::InvalidSetting {
+                        what: "splats",
+                        message: format!("surface {} is not in scene `{}`", s.surface, scene.name),
+                    })?;
+            if s.h > 0.0 && s.power.is_finite() {
+                list.push(GpuSplat::new(s));
+            }
+        }
+        let mut instances = Vec::with_capacity(splats.len());
+        let mut surface_ranges = Vec::with_capacity(surfaces);
+        for list in by_surface {
+            let start = instances.len() as u32;
+            instances.extend(list);
+            surface_ranges.push(start..instances.len() as u32);
+        }
+        let count = instances.len() as u32;
+        if instances.is_empty() {
+            instances.push(GpuSplat::zeroed());
+        }
+        let mut materials = scene_materials(scene, glossy)?;
+        if materials.is_empty() {
+            materials.push(GpuMaterial::zeroed());
+        }
+        let mut surface_materials: Vec<u32> = scene.surfaces().iter().map(|s| s.material).collect();
+        if surface_materials.is_empty() {
+            surface_materials.push(0);
+        }
+        use wgpu::util::DeviceExt;
+        let buffer = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            ctx.checked("splat upload", || {
+                ctx.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(label),
+                        contents,
+                        usage,
+                    })
+            })
+        };
+        Ok(Self {
+            instances: buffer(
+                "splat-instances",
+                bytemuck::cast_slice(&instances),
+                wgpu::BufferUsages::VERTEX,
+            )?,
+            materials: buffer(
+                "splat-materials",
+                bytemuck::cast_slice(&materials),
+                wgpu::BufferUsages::STORAGE,
+            )?,
+            surface_materials: buffer(
+                "splat-surface-materials",
+                bytemuck::cast_slice(&surface_materials),
+                wgpu::BufferUsages::STORAGE,
+            )?,
+            surface_ranges,
+            count,
+        })
+    }
+}
+
+/// The splat pass's uniform block (`SplatUniforms` in `splat.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct SplatUniforms {
+    /// Column-major world-to-clip matrix.
+    pub view_projection: [[f32; 4]; 4],
+    /// Eye position (w unused).
+    pub eye: [f32; 4],
+    /// `x`: 1 for [`KernelFiltering::MipMapped`], 0 for [`KernelFiltering::PixelCentre`].
+    pub options: [u32; 4],
+}
+
+/// The GPU splat pass: pipelines of both restriction methods, the kernel texture and the uniforms.
+#[derive(Debug)]
+pub struct SplatPass {
+    layout: wgpu::BindGroupLayout,
+    mask_layout: wgpu::BindGroupLayout,
+    splat_id: wgpu::RenderPipeline,
+    splat_stencil: Option<wgpu::RenderPipeline>,
+    mask: Option<wgpu::RenderPipeline>,
+    uniforms: wgpu::Buffer,
+    kernel_view: wgpu::TextureView,
+    sampler: wgpu::Sampler,
+    point_sampler: wgpu::Sampler,
+}
+
+/// Additive blending: `dst + src` on colour and alpha (section 3.2, "hardware blending functions set up to add").
+const ADD: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+};
+
+/// Stencil state that keeps the stencil and passes where it equals the reference.
+fn stencil_equal() -> wgpu::StencilState {
+    let face = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Equal,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Keep,
+    };
+    wgpu::StencilState {
+        front: face,
+        back: face,
+        read_mask: 0xff,
+        write_mask: 0,
+    }
+}
+
+/// Stencil state that writes the reference wherever depth and stencil tests pass.
+fn stencil_replace() -> wgpu::StencilState {
+    let face = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Always,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Replace,
+    };
+    wgpu::StencilState {
+        front: face,
+        back: face,
+        read_mask: 0xff,
+        write_mask: 0xff,
+    }
+}
+
+impl SplatPass {
+    /// Builds the pipelines for an HDR target of `hdr_format` and the kernel texture of `kernel` (64 × 64 with mips).
+    pub fn new(ctx: &GpuContext, hdr_format: wgpu::TextureFormat, kernel: Kernel) -> Result<Self> {
+        let texture = kernel_texture(ctx, kernel, KERNEL_TEXTURE_SIZE)?;
+        let depth_format = ctx.depth_format();
+        let has_stencil = ctx.has_stencil();
+        ctx.checked("splat pass creation", || {
+            let device = &ctx.device;
+            let source = with_materials(SPLAT_WGSL);
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("splat"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let depth_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("splat-mask-depth"),
+                source: wgpu::ShaderSource::Wgsl(DEPTH_WGSL.into()),
+            });
+            let storage = |binding| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            let uniform_entry = wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(size_of::<SplatUniforms>() as u64),
+                },
+                count: None,
+            };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("splat"),
+                entries: &[
+                    uniform_entry,
+                    storage(1),
+                    storage(2),
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 3,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Texture {
+                            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                            multisampled: false,
+                        },
+                        count: None,
+                    },
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 4,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                        count: None,
+                    },
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 6,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                        count: None,
+                    },
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 5,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Texture {
+                            sample_type: wgpu::TextureSampleType::Uint,
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                            multisampled: false,
+                        },
+                        count: None,
+                    },
+                ],
+            });
+            let mask_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("splat-mask"),
+                entries: &[uniform_entry],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("splat"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let mask_pipeline_layout =
+                device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("splat-mask"),
+                    bind_group_layouts: &[Some(&mask_layout)],
+                    immediate_size: 0,
+                });
+            let splat_pipeline = |entry: &str, depth_stencil: Option<wgpu::DepthStencilState>| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_splat"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(GpuSplat::LAYOUT)],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil,
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: hdr_format,
+                            blend: Some(ADD),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+            let splat_id = splat_pipeline("fs_splat_id", None);
+            let (splat_stencil, mask) = if has_stencil {
+                let splat_stencil = splat_pipeline(
+                    "fs_splat_stencil",
+                    Some(wgpu::DepthStencilState {
+                        format: depth_format,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Always),
+                        stencil: stencil_equal(),
+                        bias: wgpu::DepthBiasState::default(),
+                    }),
+                );
+                let mask = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("splat-mask"),
+                    layout: Some(&mask_pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &depth_module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(GpuVertex::LAYOUT)],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: depth_format,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Equal),
+                        stencil: stencil_replace(),
+                        bias: wgpu::DepthBiasState::default(),
+                    }),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_mask"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: hdr_format,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::empty(),
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                });
+                (Some(splat_stencil), Some(mask))
+            } else {
+                (None, None)
+            };
+            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat-uniforms"),
+                size: size_of::<SplatUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("splat-kernel"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                // Splats seen at grazing angles have long, thin footprints:
+                // anisotropic filtering keeps them from blurring across the short axis.
+                anisotropy_clamp: 16,
+                ..Default::default()
+            });
+            let point_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("splat-kernel-centre"),
+                address_mode_u: wgpu::AddressMode::ClampToEdge,
+                address_mode_v: wgpu::AddressMode::ClampToEdge,
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            });
+            Self {
+                layout,
+                mask_layout,
+                splat_id,
+                splat_stencil,
+                mask,
+                uniforms,
+                kernel_view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
+                sampler,
+                point_sampler,
+            }
+        })
+    }
+
+    /// Whether [`Restriction::Stencil`] is available (the device has a depth format with stencil).
+    pub fn supports_stencil(&self) -> bool {
+        self.mask.is_some()
+    }
+
+    /// Writes the camera and the kernel filtering for the next [`SplatPass::encode`].
+    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera, filtering: KernelFiltering) {
+        let uniforms = SplatUniforms {
+            view_projection: camera.view_projection().to_cols_array_2d(),
+            eye: camera.position.extend(1.0).to_array(),
+            options: [u32::from(filtering == KernelFiltering::MipMapped), 0, 0, 0],
+        };
+        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+    }
+
+    /// Records the pass after the depth pre-pass: adds every splat into `targets.hdr`, restricted by `restriction`.
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        splats: &SplatBuffers,
+        targets: &RenderTargets,
+        restriction: Restriction,
+    ) -> Result<()> {
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: splats.materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: splats.surface_materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&self.kernel_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::Sampler(&self.point_sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&targets.surface_id.view),
+                },
+            ],
+        });
+        match restriction {
+            Restriction::SurfaceId => {
+                let mut pass = begin(encoder, targets, None);
+                if splats.count > 0 {
+                    pass.set_pipeline(&self.splat_id);
+                    pass.set_bind_group(0, &bind_group, &[]);
+                    pass.set_vertex_buffer(0, splats.instances.slice(..));
+                    pass.draw(0..3, 0..splats.count);
+                }
+            }
+            Restriction::Stencil => {
+                let (Some(mask), Some(splat_stencil)) = (&self.mask, &self.splat_stencil) else {
+                    return Err(MprError::InvalidSetting {
+                        what: "splat restriction",
+                        message: "the device has no depth format with stencil \
+                                  (Depth32FloatStencil8); use the surface-id restriction"
+                            .into(),
+                    });
+                };
+                let mask_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("splat-mask"),
+                    layout: &self.mask_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.uniforms.as_entire_binding(),
+                    }],
+                });
+                // Stencil references 1..=255 name the surfaces of one render
+                // pass; a new pass clears the stencil before they repeat.
+                let surfaces: Vec<usize> = (0..splats.surface_ranges.len())
+                    .filter(|&s| {
+                        !splats.surface_ranges[s].is_empty()
+                            && scene.surface_ranges.get(s).is_some_and(|r| !r.is_empty())
+                    })
+                    .collect();
+                for (chunk_index, chunk) in surfaces.chunks(255).enumerate() {
+                    let stencil_load = if chunk_index == 0 {
+                        wgpu::LoadOp::Load
+                    } else {
+                        wgpu::LoadOp::Clear(0)
+                    };
+                    let mut pass = begin(encoder, targets, Some(stencil_load));
+                    pass.set_vertex_buffer(1, splats.instances.slice(..));
+                    for (i, &s) in chunk.iter().enumerate() {
+                        pass.set_stencil_reference(i as u32 + 1);
+                        pass.set_pipeline(mask);
+                        pass.set_bind_group(0, &mask_group, &[]);
+                        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+                        pass.set_index_buffer(
+                            scene.surface_indices.slice(..),
+                            wgpu::IndexFormat::Uint32,
+                        );
+                        pass.draw_indexed(scene.surface_ranges[s].clone(), 0, 0..1);
+                        pass.set_pipeline(splat_stencil);
+                        pass.set_bind_group(0, &bind_group, &[]);
+                        pass.set_vertex_buffer(0, splats.instances.slice(..));
+                        pass.draw(0..3, splats.surface_ranges[s].clone());
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A render pass adding into the HDR target; with `stencil`, also on the depth-stencil target (depth read only).
+fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    targets: &RenderTargets,
+    stencil: Option<wgpu::LoadOp<u32>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("splat"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &targets.hdr.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: stencil.map(|load| wgpu::RenderPassDepthStencilAttachment {
+            view: &targets.depth.view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: Some(wgpu::Operations {
+                load,
+                store: wgpu::StoreOp::Store,
+            }),
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
+/// CPU counterpart of [`SplatPass`]: per pixel centre, the visible surface
+/// point (BVH ray cast) and [`SplatEstimator::radiance_splatted`] towards the
+/// camera position. Pixels that see no surface are zero. Row 0 is the top.
+pub fn splat_pass_cpu(
+    estimator: &SplatEstimator,
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Vec<[f32; 3]> {
+    let rays: Vec<_> = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
+        .collect();
+    let eye = camera.position;
+    bvh.closest_hits(&rays)
+        .iter()
+        .map(|hit| {
+            hit.map_or([0.0; 3], |h| {
+                estimator
+                    .radiance_splatted(h.surface, h.position, h.shading_normal, eye)
+                    .to_array()
+            })
+        })
+        .collect()
+}
+
+/// The surface seen at each pixel by the CPU ray cast ([`crate::NO_SURFACE`] where none), for masking comparisons.
+pub fn visible_surfaces_cpu(bvh: &Bvh, camera: &Camera, width: u32, height: u32) -> Vec<u32> {
+    crate::passes::depth::depth_pass_cpu(bvh, camera, width, height).surface
+}

@@ -1,0 +1,226 @@
+//! The splat pass on the GPU against its CPU counterpart
+//! (`SplatEstimator::radiance_splatted` at BVH ray hits), and the two
+//! restriction methods (surface ids, per-surface stencil masks) against each
+//! other, on `glosbox` and `cornell`.
+
+mod support;
+
+use lustre_geometry::{Bvh, Scene, builtin};
+use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::depth::{DepthPass, depth_pass_cpu};
+use lustre_mpr::passes::splat::{
+    KernelFiltering, Restriction, SplatBuffers, SplatPass, splat_pass_cpu,
+};
+use lustre_mpr::readback::{read_rgba_f32, read_u32};
+use lustre_mpr::{GpuContext, RenderTargets, SceneBuffers};
+use lustre_photon::{
+    BounceSelection, EstimatorOptions, Kernel, NoProgress, SplatEstimator, Support, TraceOptions,
+    trace_photons,
+};
+use support::gpu_or_skip;
+
+const SIZE: u32 = 64;
+
+/// GPU depth pre-pass then splat pass: (HDR rgb, surface ids).
+fn gpu_splats(
+    ctx: &GpuContext,
+    scene: &Scene,
+    estimator: &SplatEstimator,
+    restriction: Restriction,
+    filtering: KernelFiltering,
+) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let camera = scene.camera().with_aspect(1.0);
+    let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
+    let buffers = SceneBuffers::upload(ctx, scene).unwrap();
+    let splats = SplatBuffers::new(ctx, scene, estimator, GlossyModel::Exact).unwrap();
+    let depth = DepthPass::new(ctx).unwrap();
+    let pass = SplatPass::new(ctx, targets.hdr_format(), estimator.options().kernel).unwrap();
+    depth.prepare(&ctx.queue, &camera);
+    pass.prepare(&ctx.queue, &camera, filtering);
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    lustre_mpr::frame::clear_hdr(&mut encoder, &targets);
+    depth.encode(&mut encoder, &buffers, &targets);
+    pass.encode(
+        &ctx.device,
+        &mut encoder,
+        &buffers,
+        &splats,
+        &targets,
+        restriction,
+    )
+    .unwrap();
+    ctx.queue.submit([encoder.finish()]);
+    let hdr = read_rgba_f32(ctx, &targets.hdr.texture).unwrap();
+    let ids = read_u32(ctx, &targets.surface_id.texture).unwrap();
+    (hdr.iter().map(|p| [p[0], p[1], p[2]]).collect(), ids)
+}
+
+fn estimator(scene: &Scene, photons: u64, c: f32, selection: BounceSelection) -> SplatEstimator {
+    let bvh = Bvh::build(scene);
+    let options = TraceOptions {
+        photons,
+        seed: 7,
+        ..TraceOptions::default()
+    };
+    let map = trace_photons(scene, &bvh, &options, &NoProgress).unwrap();
+    SplatEstimator::build(
+        scene,
+        &map,
+        EstimatorOptions {
+            kernel: Kernel::Silverman,
+            support: Support::Scaled(c),
+            selection,
+        },
+    )
+    .unwrap()
+}
+
+/// Pixels whose 3×3 neighbourhood sees one surface in both the GPU and CPU id images (no boundary within a pixel).
+fn interior(gpu_ids: &[u32], cpu_ids: &[u32]) -> Vec<bool> {
+    let n = SIZE as i32;
+    (0..n * n)
+        .map(|i| {
+            let (x, y) = (i % n, i / n);
+            let id = cpu_ids[i as usize];
+            if id == lustre_mpr::NO_SURFACE {
+                return false;
+            }
+            (-1..=1).all(|dy| {
+                (-1..=1).all(|dx| {
+                    let (u, v) = (x + dx, y + dy);
+                    if u < 0 || v < 0 || u >= n || v >= n {
+                        return false;
+                    }
+                    let j = (v * n + u) as usize;
+                    cpu_ids[j] == id && gpu_ids[j] == id
+                })
+            })
+        })
+        .collect()
+}
+
+/// Compares GPU with CPU on interior pixels: returns (compared, worst relative error, relative error of the image sums).
+fn compare(gpu: &[[f32; 3]], cpu: &[[f32; 3]], mask: &[bool]) -> (usize, f32, f32) {
+    let mut worst = 0.0f32;
+    let (mut sum_gpu, mut sum_cpu) = (0.0f64, 0.0f64);
+    let mut compared = 0;
+    // Relative to the pixel's value, with a floor of 1 % of the brightest CPU pixel so near-black pixels do not dominate.
+    let peak = cpu
+        .iter()
+        .flat_map(|p| p.iter().copied())
+        .fold(0.0f32, f32::max);
+    for i in 0..gpu.len() {
+        if !mask[i] {
+            continue;
+        }
+        compared += 1;
+        for c in 0..3 {
+            let e = (gpu[i][c] - cpu[i][c]).abs() / cpu[i][c].max(0.01 * peak);
+            worst = worst.max(e);
+            sum_gpu += f64::from(gpu[i][c]);
+            sum_cpu += f64::from(cpu[i][c]);
+        }
+    }
+    (
+        compared,
+        worst,
+        ((sum_gpu - sum_cpu) / sum_cpu).abs() as f32,
+    )
+}
+
+fn check_scene(name: &str, selection: BounceSelection, tolerance: f32, mip_tolerance: f64) {
+    let test = format!("gpu_splats_match_cpu_{name}");
+    let Some(ctx) = gpu_or_skip(&test) else {
+        return;
+    };
+    let scene = builtin(name).unwrap();
+    let bvh = Bvh::build(&scene);
+    let camera = scene.camera().with_aspect(1.0);
+    let est = estimator(&scene, 20_000, 8.0, selection);
+    let cpu = splat_pass_cpu(&est, &bvh, &camera, SIZE, SIZE);
+    let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
+    let (gpu, gpu_ids) = gpu_splats(
+        &ctx,
+        &scene,
+        &est,
+        Restriction::SurfaceId,
+        KernelFiltering::PixelCentre,
+    );
+    let mask = interior(&gpu_ids, &cpu_ids);
+    let (compared, worst, sum_error) = compare(&gpu, &cpu, &mask);
+    eprintln!(
+        "{test}: {compared} interior pixels, worst relative error {worst:.4}, image-sum error {sum_error:.5}"
+    );
+    assert!(compared > SIZE as usize * SIZE as usize / 2);
+    // The GPU reads K from the 64² f16 texture bilinearly where the CPU
+    // evaluates it exactly (per-scene tolerance at the call); summed over the
+    // image the two agree to 1e-3.
+    assert!(worst < tolerance, "{test}: worst relative error {worst}");
+    assert!(sum_error < 1e-3, "{test}: image-sum error {sum_error}");
+
+    // Mip-mapped, anisotropic filtering averages K over each pixel's
+    // footprint instead of reading it at the centre (section 3.2). It moves
+    // energy between neighbouring pixels, and off a surface where a footprint
+    // straddles its visible edge (the id test then discards it): measured as
+    // the whole image's total against the CPU's. At 64² the splats on the
+    // ceiling and walls are a few pixels across at grazing angles; measured
+    // losses are 2.9 % (cornell) and 4.4 % (glosbox), bounded here by 6 %.
+    let (mipmapped, _) = gpu_splats(
+        &ctx,
+        &scene,
+        &est,
+        Restriction::SurfaceId,
+        KernelFiltering::MipMapped,
+    );
+    let total = |image: &[[f32; 3]]| -> f64 {
+        image
+            .iter()
+            .flat_map(|p| p.iter().map(|&v| f64::from(v)))
+            .sum()
+    };
+    let loss = 1.0 - total(&mipmapped) / total(&cpu);
+    eprintln!(
+        "{test}: mip-mapped filtering changes the image total by {:+.4}",
+        -loss
+    );
+    assert!(
+        loss.abs() < mip_tolerance,
+        "{test}: mip-mapped total off by {loss}"
+    );
+
+    if ctx.has_stencil() {
+        let (stencil, _) = gpu_splats(
+            &ctx,
+            &scene,
+            &est,
+            Restriction::Stencil,
+            KernelFiltering::PixelCentre,
+        );
+        // Both restrictions draw the same splats on the same pixels: they
+        // may differ only in float summation order and on pixels where the
+        // equal-depth mask and the id target disagree (none expected).
+        let (compared, worst, sum_error) = compare(&stencil, &gpu, &mask);
+        eprintln!(
+            "{test}: stencil vs surface id on {compared} pixels: worst {worst:.2e}, sum {sum_error:.2e}"
+        );
+        assert!(worst < 1e-4, "{test}: stencil vs id worst {worst}");
+    } else {
+        eprintln!(
+            "{test}: the device has no depth-stencil format; stencil restriction not compared"
+        );
+    }
+}
+
+#[test]
+fn gpu_splats_match_cpu_glosbox() {
+    // The floor's α = 0.05 lobe turns f32 differences in the per-splat view direction into a few per cent.
+    check_scene("glosbox", BounceSelection::All, 0.05, 0.06);
+}
+
+#[test]
+fn gpu_splats_match_cpu_cornell_indirect() {
+    // Lambertian only: the texture's bilinear and f16 error alone.
+    check_scene("cornell", BounceSelection::Indirect, 0.005, 0.06);
+}
