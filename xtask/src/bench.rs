@@ -33,12 +33,95 @@ pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     let mut results = Vec::new();
     collect(&root.join("target/criterion"), &mut results)?;
     results.sort_by(|a, b| a.id.cmp(&b.id));
-    let text = render(&results);
+    let mut text = render(&results);
     let path = root.join("BENCHMARKS.md");
+    // Keep the marker-delimited sections other subcommands own (`converge`).
+    let previous = std::fs::read_to_string(&path).unwrap_or_default();
+    for section in sections(&previous) {
+        text.push('\n');
+        text.push_str(section);
+        text.push('\n');
+    }
     let tmp = path.with_extension("md.tmp");
     std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
     std::fs::rename(&tmp, &path).with_context(|| format!("cannot write {}", path.display()))?;
     println!("xtask: wrote {}", path.display());
+    Ok(())
+}
+
+/// The markers around the section `name` of BENCHMARKS.md.
+fn markers(name: &str) -> (String, String) {
+    (
+        format!("<!-- {name}:start -->"),
+        format!("<!-- {name}:end -->"),
+    )
+}
+
+/// The sections `<!-- NAME:start -->` … `<!-- NAME:end -->` of `doc`, each
+/// with its markers, in order.
+pub fn sections(doc: &str) -> Vec<&str> {
+    let mut found = Vec::new();
+    let mut from = 0;
+    while let Some(offset) = doc[from..].find("<!-- ") {
+        let start = from + offset;
+        let name = doc[start + 5..]
+            .split_once(" -->")
+            .and_then(|(marker, _)| marker.strip_suffix(":start"));
+        let end = name.and_then(|name| {
+            let end_marker = markers(name).1;
+            doc[start..]
+                .find(&end_marker)
+                .map(|i| start + i + end_marker.len())
+        });
+        match end {
+            Some(end) => {
+                found.push(&doc[start..end]);
+                from = end;
+            }
+            None => from = start + 5,
+        }
+    }
+    found
+}
+
+/// `doc` with the section `name` replaced by `body` between its markers,
+/// or appended at the end when the markers are missing; the rest is kept.
+pub fn replace_section(doc: &str, name: &str, body: &str) -> String {
+    let (start_marker, end_marker) = markers(name);
+    let section = format!(
+        "{start_marker}\n{}\n{end_marker}",
+        body.trim_end_matches('\n')
+    );
+    let span = doc.find(&start_marker).and_then(|start| {
+        doc[start..]
+            .find(&end_marker)
+            .map(|end| (start, start + end + end_marker.len()))
+    });
+    if let Some((start, end)) = span {
+        return format!("{}{section}{}", &doc[..start], &doc[end..]);
+    }
+    let mut out = doc.to_owned();
+    if !out.is_empty() {
+        if !out.ends_with('\n') {
+            out.push('\n');
+        }
+        out.push('\n');
+    }
+    out.push_str(&section);
+    out.push('\n');
+    out
+}
+
+/// Replaces the section `name` of BENCHMARKS.md (created when missing) by `body`, atomically.
+pub fn write_section(name: &str, body: &str) -> anyhow::Result<()> {
+    let path = crate::workspace_root().join("BENCHMARKS.md");
+    let doc = match std::fs::read_to_string(&path) {
+        Ok(doc) => doc,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(e).with_context(|| format!("cannot read {}", path.display())),
+    };
+    lustre_image::write_bytes_atomic(&path, replace_section(&doc, name, body).as_bytes())?;
+    println!("xtask: wrote the {name} section of {}", path.display());
     Ok(())
 }
 
@@ -75,7 +158,7 @@ fn collect(dir: &Path, out: &mut Vec<Measurement>) -> anyhow::Result<()> {
 }
 
 /// The machine this runs on, from /proc/cpuinfo.
-fn machine() -> String {
+pub fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
@@ -202,5 +285,45 @@ fn brdf_table(s: &mut String, results: &[Measurement]) {
             show(rate("eval", m)),
             show(rate("sample", m))
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sections_are_found_with_their_markers() {
+        let doc = "# B\n<!-- note -->\n<!-- a:start -->\nA\n<!-- a:end -->\nx\n<!-- b:start -->B<!-- b:end -->\n<!-- c:start --> unterminated";
+        assert_eq!(
+            sections(doc),
+            vec![
+                "<!-- a:start -->\nA\n<!-- a:end -->",
+                "<!-- b:start -->B<!-- b:end -->"
+            ]
+        );
+        assert!(sections("").is_empty());
+    }
+
+    #[test]
+    fn replace_section_keeps_the_rest() {
+        let doc =
+            "# Benchmarks\n\ntext\n<!-- converge:start -->\nold\n<!-- converge:end -->\ntail\n";
+        assert_eq!(
+            replace_section(doc, "converge", "new\n"),
+            "# Benchmarks\n\ntext\n<!-- converge:start -->\nnew\n<!-- converge:end -->\ntail\n"
+        );
+        // Missing markers: appended after a blank line.
+        assert_eq!(
+            replace_section("# B\ntext", "converge", "t"),
+            "# B\ntext\n\n<!-- converge:start -->\nt\n<!-- converge:end -->\n"
+        );
+        assert_eq!(
+            replace_section("", "converge", "t\n"),
+            "<!-- converge:start -->\nt\n<!-- converge:end -->\n"
+        );
+        // Replacing twice is the same as once.
+        let once = replace_section("# B\n", "converge", "t\n");
+        assert_eq!(replace_section(&once, "converge", "t\n"), once);
     }
 }

@@ -19,8 +19,9 @@ pub fn cargo(args: &[&str]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Format check, clippy with warnings denied, then every test of the workspace,
-/// closing with one line that sums the test binaries' results.
+/// Format check, clippy with warnings denied, every test of the workspace
+/// (closing with one line that sums the test binaries' results), then the
+/// golden images (closing with their own summary line).
 pub fn run() -> anyhow::Result<()> {
     cargo(&["fmt", "--all", "--", "--check"])?;
     cargo(&[
@@ -31,7 +32,8 @@ pub fn run() -> anyhow::Result<()> {
         "-D",
         "warnings",
     ])?;
-    test_workspace()
+    test_workspace()?;
+    crate::golden::run(None)
 }
 
 /// Runs `cargo test --workspace`, echoing its output, and prints the totals

@@ -3,7 +3,10 @@
 
 mod bench;
 mod ci;
+mod converge;
+mod golden;
 mod reference;
+mod render;
 
 pub use reference::workspace_root;
 
@@ -30,7 +33,21 @@ enum Command {
         /// Only the bench targets whose name contains this.
         filter: Option<String>,
     },
-    /// The README's test command: format check, clippy with warnings denied, all tests.
+    /// Render the golden-image cases with `lustre render` and compare them with tests/goldens by FLIP.
+    Golden {
+        /// Only the case with this name.
+        #[arg(long)]
+        case: Option<String>,
+    },
+    /// Render the golden-image cases and write them as the new goldens, on purpose.
+    Bless {
+        /// Only the case with this name.
+        #[arg(long)]
+        case: Option<String>,
+    },
+    /// Measure relative MSE and FLIP against the references per technique and photon count, into BENCHMARKS.md.
+    Converge(converge::Args),
+    /// The README's test command: format check, clippy with warnings denied, all tests, golden images.
     Ci,
 }
 
@@ -38,6 +55,9 @@ fn main() -> ExitCode {
     let result = match Cli::parse().command {
         Command::Reference(args) => reference::run(args),
         Command::Bench { filter } => bench::run(filter.as_deref()),
+        Command::Golden { case } => golden::run(case.as_deref()),
+        Command::Bless { case } => golden::bless(case.as_deref()),
+        Command::Converge(args) => converge::run(args),
         Command::Ci => ci::run(),
     };
     match result {

@@ -1,6 +1,7 @@
-//! `lustre`: information about a scene, Mitsuba 3 export, and (as the
-//! techniques land) rendering.
+//! `lustre`: information about a scene, Mitsuba 3 export, and headless
+//! rendering (`lustre render`, see [`render`]).
 
+mod render;
 mod scene_arg;
 
 use std::path::PathBuf;
@@ -44,7 +45,12 @@ enum Command {
         #[arg(long)]
         approximate: bool,
     },
+    /// Render a scene to an EXR or PNG file (photon splatting, Stürzlinger & Bastos 1997).
+    Render(render::RenderArgs),
 }
+
+/// Exit status when no GPU adapter (not even the software one) exists, so scripts can skip rather than fail.
+const EXIT_NO_ADAPTER: u8 = 77;
 
 /// Parses `WxH` into a width and height, both at least 1.
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -152,12 +158,23 @@ fn main() -> ExitCode {
             spp,
             approximate,
         } => export(scene, out, *size, *spp, *approximate),
+        Command::Render(args) => render::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("lustre: {e:#}");
-            ExitCode::FAILURE
+            let no_adapter = e.chain().any(|c| {
+                matches!(
+                    c.downcast_ref::<lustre_mpr::MprError>(),
+                    Some(lustre_mpr::MprError::NoAdapter { .. })
+                )
+            });
+            if no_adapter {
+                ExitCode::from(EXIT_NO_ADAPTER)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

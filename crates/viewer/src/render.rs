@@ -1,0 +1,372 @@
+//! `lustre render`: a scene rendered headless by one technique into an EXR
+//! (linear) or PNG (sRGB) file, with a JSON sidecar of the settings, the
+//! adapter and the time of each phase (DESIGN.md "Data flow", step 4).
+//!
+//! Techniques (Stürzlinger & Bastos 1997):
+//! - `splat`: section 2.2, every photon hit splatted with the BRDF towards the viewer.
+//! - `splat-direct`: section 2.2.1, the optimised method: direct light from
+//!   point lights with shadow maps and per-pixel BRDF, plus the splats of
+//!   photons with more than one bounce. Small area lights become cosine point
+//!   lights of equal power in both phases, as in the paper's section 3.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::ValueEnum;
+use indicatif::{ProgressBar, ProgressStyle};
+use lustre_geometry::{Bvh, Scene};
+use lustre_image::{Image, Precision};
+use lustre_mpr::frame::SplatInputs;
+use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
+use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::{
+    AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
+};
+use lustre_photon::{
+    BounceSelection, EmissionSampling, EstimatorOptions, Kernel, Progress, SplatEstimator, Support,
+    TraceOptions, trace_photons,
+};
+use serde_json::json;
+
+use crate::scene_arg;
+
+/// Rendering technique.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Technique {
+    /// Photon splatting of every hit (section 2.2).
+    Splat,
+    /// Direct light by shadow maps plus splats of indirect photons (section 2.2.1).
+    SplatDirect,
+}
+
+/// Restriction of splats to their visible surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RestrictionArg {
+    /// Compare with the depth pre-pass's surface id, one draw for all splats.
+    SurfaceId,
+    /// Per-surface stencil masks, as in the paper.
+    Stencil,
+}
+
+/// Kernel texture filtering.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FilterArg {
+    /// Read the kernel at each pixel centre (the estimator exactly).
+    Centre,
+    /// Mip-mapped, anisotropic: the kernel averaged over each pixel (section 3.2).
+    Mip,
+}
+
+/// Reconstruction kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KernelArg {
+    /// Silverman's second-order kernel (the paper's example).
+    Silverman,
+    /// Truncated Gaussian.
+    Gaussian,
+}
+
+/// Photon emission sampling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EmissionArg {
+    /// Pseudo-random (PCG32).
+    Random,
+    /// Halton sequence.
+    Halton,
+    /// Owen-scrambled Sobol' sequence.
+    Sobol,
+}
+
+/// Glossy lobe model on the GPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum GlossyArg {
+    /// Each material's own BRDF.
+    Exact,
+    /// Diefenbach's fitted Phong for Beckmann and Ward lobes.
+    FittedPhong,
+}
+
+/// Options of `lustre render`.
+#[derive(Debug, clap::Args)]
+pub struct RenderArgs {
+    /// A built-in scene (cornell, glosbox) or an OBJ file.
+    pub scene: String,
+    /// Rendering technique.
+    #[arg(long, value_enum, default_value_t = Technique::Splat)]
+    pub technique: Technique,
+    /// Photons to emit over all lights.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub photons: u64,
+    /// The constant C of the kernel support h = C sqrt(A/n) (equation 3).
+    #[arg(long, default_value_t = DEFAULT_KERNEL_C)]
+    pub kernel_c: f32,
+    /// Reconstruction kernel.
+    #[arg(long, value_enum, default_value_t = KernelArg::Silverman)]
+    pub kernel: KernelArg,
+    /// Image width and height in pixels, `WxH`.
+    #[arg(long, default_value = "640x480", value_parser = crate::parse_size)]
+    pub size: (u32, u32),
+    /// Seed of the photon tracer.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output file: `.exr` (linear float) or `.png` (sRGB); a `.json` sidecar is written beside it.
+    #[arg(long, default_value = "render.png")]
+    pub out: PathBuf,
+    /// How splats are limited to the visible part of their surface.
+    #[arg(long, value_enum, default_value_t = RestrictionArg::SurfaceId)]
+    pub restriction: RestrictionArg,
+    /// How the kernel texture is read.
+    #[arg(long, value_enum, default_value_t = FilterArg::Centre)]
+    pub filter: FilterArg,
+    /// Photon emission sampling.
+    #[arg(long, value_enum, default_value_t = EmissionArg::Sobol)]
+    pub emission: EmissionArg,
+    /// Glossy BRDFs on the GPU.
+    #[arg(long, value_enum, default_value_t = GlossyArg::Exact)]
+    pub glossy: GlossyArg,
+    /// Exposure in stops applied to the PNG (EXR files are never scaled).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// Use the software adapter even where a hardware one exists.
+    #[arg(long)]
+    pub software: bool,
+}
+
+/// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
+pub const DEFAULT_KERNEL_C: f32 = 4.0;
+
+/// Milliseconds since `start`.
+fn ms(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// A progress bar on stderr for photon tracing (hidden when stderr is not a terminal).
+struct TraceBar(ProgressBar);
+
+impl Progress for TraceBar {
+    fn begin(&self, total: u64) {
+        self.0.set_length(total);
+    }
+    fn advance(&self, photons: u64) {
+        self.0.inc(photons);
+    }
+    fn finish(&self) {
+        self.0.finish_and_clear();
+    }
+}
+
+/// The scene with every area light replaced by a cosine point light of equal power (section 3: "small area light sources ... replaced by point light sources with equivalent power for both phases").
+fn with_point_lights(scene: &Scene) -> anyhow::Result<Scene> {
+    scene
+        .with_area_lights_as_points()
+        .context("cannot replace the area lights by point lights")
+}
+
+/// Renders as `args` says and writes the image and its sidecar.
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let ext = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("exr" | "png")) {
+        bail!(
+            "--out {}: the file must end in .exr or .png",
+            args.out.display()
+        );
+    }
+    if !(args.kernel_c > 0.0 && args.kernel_c.is_finite()) {
+        bail!("--kernel-c {}: must be positive", args.kernel_c);
+    }
+    if args.photons == 0 {
+        bail!("--photons 0: at least one photon is needed");
+    }
+    let mut timings = serde_json::Map::new();
+    let start = Instant::now();
+    let loaded = scene_arg::load(&args.scene)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut scene = loaded.scene;
+    if args.technique == Technique::SplatDirect {
+        scene = with_point_lights(&scene)?;
+    }
+    let (width, height) = args.size;
+    scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));
+    if scene.lights().is_empty() {
+        bail!("scene `{}` has no light", scene.name);
+    }
+    timings.insert("load".into(), json!(ms(start)));
+
+    // Particle tracing (section 2.1).
+    let start = Instant::now();
+    let bvh = Bvh::build(&scene);
+    let bar = ProgressBar::new(args.photons).with_style(
+        ProgressStyle::with_template("tracing photons {bar:40} {pos}/{len} ({eta} left)")
+            .context("progress bar template")?,
+    );
+    let options = TraceOptions {
+        photons: args.photons,
+        seed: args.seed,
+        emission: match args.emission {
+            EmissionArg::Random => EmissionSampling::Random,
+            EmissionArg::Halton => EmissionSampling::Halton,
+            EmissionArg::Sobol => EmissionSampling::Sobol,
+        },
+        ..TraceOptions::default()
+    };
+    let map = trace_photons(&scene, &bvh, &options, &TraceBar(bar))
+        .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
+    timings.insert("trace".into(), json!(ms(start)));
+    eprintln!(
+        "traced {} photons: {} hit records ({} indirect)",
+        map.emitted(),
+        map.len(),
+        map.indirect().count()
+    );
+
+    // Preprocessing (section 2.2): one splat per selected hit, sized by equation 3.
+    let start = Instant::now();
+    let selection = match args.technique {
+        Technique::Splat => BounceSelection::All,
+        Technique::SplatDirect => BounceSelection::Indirect,
+    };
+    let kernel = match args.kernel {
+        KernelArg::Silverman => Kernel::Silverman,
+        KernelArg::Gaussian => Kernel::Gaussian,
+    };
+    let estimator = SplatEstimator::build(
+        &scene,
+        &map,
+        EstimatorOptions {
+            kernel,
+            support: Support::Scaled(args.kernel_c),
+            selection,
+        },
+    )
+    .context("cannot build the splats")?;
+    timings.insert("splat_setup".into(), json!(ms(start)));
+
+    // GPU frame.
+    let start = Instant::now();
+    let preference = if args.software {
+        AdapterPreference::Software
+    } else {
+        AdapterPreference::Hardware
+    };
+    let ctx = GpuContext::new(preference)?;
+    eprintln!("rendering {width}x{height} on {}", ctx.adapter());
+    let glossy = match args.glossy {
+        GlossyArg::Exact => GlossyModel::Exact,
+        GlossyArg::FittedPhong => GlossyModel::FittedPhong,
+    };
+    let targets = RenderTargets::new(&ctx, width, height)?;
+    let scene_buffers = SceneBuffers::upload(&ctx, &scene)?;
+    let splats = SplatBuffers::new(&ctx, &scene, &estimator, glossy)
+        .with_context(|| format!("scene `{}`", scene.name))?;
+    let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let graph =
+        FrameGraph::new(&ctx, output_format)?.with_splats(&ctx, targets.hdr_format(), kernel)?;
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("lustre-render-output"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: output_format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let output_view = output.create_view(&wgpu::TextureViewDescriptor::default());
+    timings.insert("gpu_setup".into(), json!(ms(start)));
+
+    let camera = *scene.camera();
+    let restriction = match args.restriction {
+        RestrictionArg::SurfaceId => Restriction::SurfaceId,
+        RestrictionArg::Stencil => Restriction::Stencil,
+    };
+    let filtering = match args.filter {
+        FilterArg::Centre => KernelFiltering::PixelCentre,
+        FilterArg::Mip => KernelFiltering::MipMapped,
+    };
+    let start = Instant::now();
+    graph.render(
+        &ctx,
+        &FrameInputs {
+            scene: &scene_buffers,
+            camera: &camera,
+            tonemap: &Tonemap::default(),
+            targets: &targets,
+            output: &output_view,
+            splats: Some(SplatInputs {
+                buffers: &splats,
+                restriction,
+                filtering,
+            }),
+        },
+    )?;
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .context("waiting for the frame")?;
+    timings.insert("frame".into(), json!(ms(start)));
+
+    let start = Instant::now();
+    let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
+    let image = Image::from_rgba(width, height, &hdr)?;
+    timings.insert("readback".into(), json!(ms(start)));
+
+    let start = Instant::now();
+    write_outputs(args, &image)?;
+    timings.insert("write".into(), json!(ms(start)));
+
+    let sidecar = sidecar_path(&args.out);
+    let info = json!({
+        "scene": scene.name,
+        "technique": args.technique.to_possible_value().map(|v| v.get_name().to_owned()),
+        "photons": map.emitted(),
+        "hit_records": map.len(),
+        "splats": splats.count,
+        "kernel": format!("{kernel:?}"),
+        "kernel_c": args.kernel_c,
+        "emission": format!("{:?}", options.emission),
+        "seed": args.seed,
+        "size": [width, height],
+        "restriction": format!("{restriction:?}"),
+        "filter": format!("{filtering:?}"),
+        "glossy": format!("{glossy:?}"),
+        "exposure": args.exposure,
+        "adapter": ctx.adapter().to_string(),
+        "hdr_format": format!("{:?}", targets.hdr_format()),
+        "timings_ms": timings,
+        "version": env!("CARGO_PKG_VERSION"),
+    });
+    lustre_image::write_json_atomic(&sidecar, &info)
+        .with_context(|| format!("cannot write {}", sidecar.display()))?;
+    eprintln!("wrote {} and {}", args.out.display(), sidecar.display());
+    Ok(())
+}
+
+/// `out` with the extension `.json`.
+pub fn sidecar_path(out: &Path) -> PathBuf {
+    out.with_extension("json")
+}
+
+/// Writes the image as the extension of `--out` says, atomically.
+fn write_outputs(args: &RenderArgs, image: &Image) -> anyhow::Result<()> {
+    let is_exr = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if is_exr {
+        lustre_image::write_exr(&args.out, image, Precision::F32)
+    } else {
+        lustre_image::write_png(&args.out, image, args.exposure)
+    }
+    .with_context(|| format!("cannot write {}", args.out.display()))
+}

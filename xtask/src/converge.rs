@@ -1,0 +1,343 @@
+//! `cargo xtask converge`: how each technique converges to the path-traced
+//! reference with the photon count (DESIGN.md, "Testing", reference
+//! comparison). Renders every scene, technique and photon count at the
+//! reference's size with `--seed 1`, measures the relative MSE and the
+//! mean FLIP against `tests/references/<scene>.exr`, prints the table and
+//! writes it into BENCHMARKS.md between `<!-- converge:start -->` and
+//! `<!-- converge:end -->`.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use lustre_image::metrics::{self, PIXELS_PER_DEGREE, RELATIVE_MSE_EPSILON};
+use lustre_image::{Image, read_exr};
+use serde_json::Value;
+
+use crate::render::{Lustre, Render, Scratch};
+
+/// The seed of every convergence render.
+const SEED: &str = "1";
+
+/// The exposure (stops) at which FLIP tone maps both images.
+const EXPOSURE: f32 = 0.0;
+
+/// Options of `cargo xtask converge`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Built-in scenes, each with a reference `tests/references/<scene>.exr` (comma-separated).
+    #[arg(long = "scene", value_delimiter = ',', default_value = "glosbox")]
+    scenes: Vec<String>,
+    /// Photon counts (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "100000,1000000,4000000")]
+    photons: Vec<u64>,
+    /// Techniques of `lustre render --technique` (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "splat,splat-direct")]
+    techniques: Vec<String>,
+}
+
+/// A path-traced reference and what its sidecar says about it.
+struct Reference {
+    /// The scene.
+    scene: String,
+    /// The image.
+    image: Image,
+    /// Samples per pixel, from `tests/references/<scene>.json`.
+    spp: Option<u64>,
+    /// The renderer, from the sidecar (e.g. "Mitsuba 3").
+    renderer: String,
+}
+
+/// One measured render.
+#[derive(Debug)]
+struct Row {
+    /// The scene.
+    scene: String,
+    /// The technique.
+    technique: String,
+    /// Photons emitted.
+    photons: u64,
+    /// Relative MSE against the reference (ε = 0.01).
+    rel_mse: f64,
+    /// Mean FLIP against the reference.
+    flip_mean: f32,
+    /// Render time from the sidecar's `timings_ms`.
+    time_ms: Option<f64>,
+    /// The adapter from the sidecar.
+    adapter: String,
+}
+
+/// Reads `<dir>/<scene>.exr` and its sidecar `<dir>/<scene>.json`.
+fn load_reference(dir: &Path, scene: &str) -> Result<Reference> {
+    let exr = dir.join(format!("{scene}.exr"));
+    let image = read_exr(&exr).with_context(|| {
+        format!(
+            "no reference for `{scene}` (render one with `cargo xtask reference --scene {scene}`)"
+        )
+    })?;
+    let json = dir.join(format!("{scene}.json"));
+    let sidecar: Value = std::fs::read_to_string(&json)
+        .ok()
+        .and_then(|text| serde_json::from_str(&text).ok())
+        .unwrap_or(Value::Null);
+    Ok(Reference {
+        scene: scene.to_owned(),
+        image,
+        spp: sidecar["spp"].as_u64(),
+        renderer: sidecar["renderer"]
+            .as_str()
+            .unwrap_or("unknown renderer")
+            .to_owned(),
+    })
+}
+
+/// The render time of a sidecar: `timings_ms.total`, else the sum of its numbers.
+fn render_time_ms(sidecar: &Value) -> Option<f64> {
+    let timings = sidecar["timings_ms"].as_object()?;
+    if let Some(total) = timings.get("total").and_then(Value::as_f64) {
+        return Some(total);
+    }
+    let values: Vec<f64> = timings.values().filter_map(Value::as_f64).collect();
+    (!values.is_empty()).then(|| values.iter().sum())
+}
+
+/// Compares one render with its reference.
+fn measure(reference: &Reference, technique: &str, photons: u64, render: &Render) -> Result<Row> {
+    let rel_mse = metrics::relative_mse(&render.image, &reference.image, RELATIVE_MSE_EPSILON)?;
+    let flip = metrics::flip(&render.image, &reference.image, EXPOSURE)?;
+    Ok(Row {
+        scene: reference.scene.clone(),
+        technique: technique.to_owned(),
+        photons,
+        rel_mse,
+        flip_mean: flip.mean,
+        time_ms: render_time_ms(&render.sidecar),
+        adapter: render.adapter().to_owned(),
+    })
+}
+
+/// `12345678` as `12,345,678`.
+fn thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// One table row, in Markdown.
+fn table_row(row: &Row) -> String {
+    format!(
+        "| {} | {} | {:.5} | {:.4} | {} |",
+        row.technique,
+        thousands(row.photons),
+        row.rel_mse,
+        row.flip_mean,
+        row.time_ms.map_or("-".to_owned(), |t| format!("{t:.1}"))
+    )
+}
+
+/// The BENCHMARKS.md section (between its markers) for `rows`.
+fn section(references: &[Reference], rows: &[Row], machine: &str) -> String {
+    let mut adapters: Vec<&str> = rows.iter().map(|r| r.adapter.as_str()).collect();
+    adapters.sort_unstable();
+    adapters.dedup();
+    let mut s = String::new();
+    let _ = writeln!(s, "## Convergence to the path-traced references\n");
+    let _ = writeln!(
+        s,
+        "Written by `cargo xtask converge`; do not edit by hand. Each technique renders the scene \
+         with `lustre render` at the reference's size with `--seed {SEED}`. relMSE = 1/(3N) Σ (t − r)² \
+         / (r² + {RELATIVE_MSE_EPSILON}) over pixels and channels (Rousselle, Knaus & Zwicker 2011); \
+         FLIP is the mean LDR-FLIP of both images tone mapped at exposure {EXPOSURE} \
+         ({PIXELS_PER_DEGREE} pixels per degree). Time is the sidecar's `timings_ms.total` (or the sum of its entries).\n"
+    );
+    let _ = writeln!(
+        s,
+        "Machine: {machine}. GPU adapter: {}.\n",
+        if adapters.is_empty() {
+            "none".to_owned()
+        } else {
+            adapters.join("; ")
+        }
+    );
+    for reference in references {
+        let _ = writeln!(
+            s,
+            "### {} (reference: {}, {} spp, {}x{}, `tests/references/{}.exr`)\n",
+            reference.scene,
+            reference.renderer,
+            reference.spp.map_or("unknown".to_owned(), thousands),
+            reference.image.width(),
+            reference.image.height(),
+            reference.scene
+        );
+        let _ = writeln!(
+            s,
+            "| technique | photons | relMSE | mean FLIP | time (ms) |"
+        );
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+        for row in rows.iter().filter(|r| r.scene == reference.scene) {
+            let _ = writeln!(s, "{}", table_row(row));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Renders and measures every scene × technique × photon count; a failed
+/// render is reported and counted, the others still run.
+fn converge(
+    lustre: &Lustre,
+    references_dir: &Path,
+    args: &Args,
+    scratch: &Path,
+) -> Result<(Vec<Reference>, Vec<Row>, usize)> {
+    let mut references = Vec::new();
+    let mut rows = Vec::new();
+    let mut failures = 0;
+    for scene in &args.scenes {
+        let reference = load_reference(references_dir, scene)?;
+        let size = format!("{}x{}", reference.image.width(), reference.image.height());
+        for technique in &args.techniques {
+            for &photons in &args.photons {
+                let out = scratch.join(format!("{scene}-{technique}-{photons}.exr"));
+                let photons_arg = photons.to_string();
+                let render_args = [
+                    "--technique",
+                    technique.as_str(),
+                    "--photons",
+                    &photons_arg,
+                    "--size",
+                    &size,
+                    "--seed",
+                    SEED,
+                ];
+                let result = lustre
+                    .render(scene, &render_args, &out)
+                    .and_then(|render| measure(&reference, technique, photons, &render));
+                match result {
+                    Ok(row) => {
+                        println!("converge {scene:<10} {}", table_row(&row));
+                        rows.push(row);
+                    }
+                    Err(error) => {
+                        println!("converge {scene:<10} {technique} {photons}: FAILED: {error:#}");
+                        failures += 1;
+                    }
+                }
+            }
+        }
+        references.push(reference);
+    }
+    Ok((references, rows, failures))
+}
+
+/// Runs `cargo xtask converge`.
+pub fn run(args: Args) -> Result<()> {
+    if args.scenes.is_empty() || args.photons.is_empty() || args.techniques.is_empty() {
+        bail!("--scene, --photons and --techniques need at least one value each");
+    }
+    if args.photons.contains(&0) {
+        bail!("--photons must be positive");
+    }
+    let lustre = Lustre::build()?;
+    let scratch = Scratch::new("converge")?;
+    let references_dir = crate::workspace_root().join("tests").join("references");
+    let (references, rows, failures) = converge(&lustre, &references_dir, &args, scratch.path())?;
+    if failures > 0 {
+        bail!("{failures} render(s) failed; BENCHMARKS.md left as it was");
+    }
+    let text = section(&references, &rows, &crate::bench::machine());
+    println!("\n{text}");
+    crate::bench::write_section("converge", &text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::tests::fake_lustre;
+    use lustre_image::{Precision, write_exr};
+
+    #[test]
+    fn committed_references_have_size_and_spp() {
+        let dir = crate::workspace_root().join("tests").join("references");
+        for scene in ["glosbox", "cornell"] {
+            let reference = load_reference(&dir, scene).unwrap();
+            assert_eq!(
+                (reference.image.width(), reference.image.height()),
+                (256, 256)
+            );
+            assert!(reference.spp.is_some_and(|spp| spp > 0));
+            assert_eq!(reference.renderer, "Mitsuba 3");
+        }
+        let error = load_reference(&dir, "no-such-scene").err().unwrap();
+        assert!(
+            format!("{error:#}").contains("cargo xtask reference"),
+            "{error:#}"
+        );
+    }
+
+    #[test]
+    fn times_and_numbers() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(4_000_000), "4,000,000");
+        assert_eq!(thousands(100_000), "100,000");
+        let with_total = serde_json::json!({"timings_ms": {"trace": 2.0, "total": 5.0}});
+        assert_eq!(render_time_ms(&with_total), Some(5.0));
+        let without = serde_json::json!({"timings_ms": {"trace": 2.0, "splat": 1.5}});
+        assert_eq!(render_time_ms(&without), Some(3.5));
+        assert_eq!(render_time_ms(&serde_json::json!({})), None);
+    }
+
+    #[test]
+    fn converges_through_a_fake_renderer() {
+        let scratch = Scratch::new("xtask-converge-fake").unwrap();
+        let dir = scratch.path();
+        let reference = Image::filled(8, 6, [0.5, 0.25, 0.125]).unwrap();
+        write_exr(dir.join("glosbox.exr"), &reference, Precision::F32).unwrap();
+        std::fs::write(
+            dir.join("glosbox.json"),
+            r#"{"spp": 4096, "renderer": "Mitsuba 3"}"#,
+        )
+        .unwrap();
+        // The fake renders the reference itself, so every error is zero.
+        let lustre = fake_lustre(dir, &dir.join("glosbox.exr"), 0);
+        let args = Args {
+            scenes: vec!["glosbox".into()],
+            photons: vec![1000, 2_000_000],
+            techniques: vec!["splat".into(), "splat-direct".into()],
+        };
+        let (references, rows, failures) = converge(&lustre, dir, &args, dir).unwrap();
+        assert_eq!(failures, 0);
+        assert_eq!(rows.len(), 4);
+        assert!(
+            rows.iter()
+                .all(|r| r.rel_mse == 0.0 && r.flip_mean.abs() < 1e-6)
+        );
+        let text = section(&references, &rows, "Test CPU, 2 cores available");
+        assert!(
+            text.contains("Machine: Test CPU, 2 cores available. GPU adapter: fake adapter."),
+            "{text}"
+        );
+        assert!(
+            text.contains("### glosbox (reference: Mitsuba 3, 4,096 spp, 8x6"),
+            "{text}"
+        );
+        assert!(
+            text.contains("| splat-direct | 2,000,000 | 0.00000 | 0.0000 | 12.5 |"),
+            "{text}"
+        );
+        assert!(!text.contains("converge:start"));
+
+        // A failing renderer is counted, not fatal to the other rows.
+        let broken = fake_lustre(dir, &dir.join("glosbox.exr"), 1);
+        let (_, rows, failures) = converge(&broken, dir, &args, dir).unwrap();
+        assert_eq!((rows.len(), failures), (0, 4));
+    }
+}
