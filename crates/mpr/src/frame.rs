@@ -1,10 +1,14 @@
 //! The frame graph (DESIGN.md "Data flow", step 3; Diefenbach & Badler 1997,
 //! section 7): one command encoder per frame runs the passes in order (clear
-//! HDR, depth pre-pass, photon splats, tone map) into any `TextureView`.
+//! HDR, depth pre-pass, emitters, direct light, photon splats, tone map) into
+//! any `TextureView`. Shadow maps are rendered per light pose, not per frame
+//! ([`FrameGraph::update_shadows`]).
 
 use lustre_geometry::Camera;
 
 use crate::passes::depth::DepthPass;
+use crate::passes::direct::{DirectLights, DirectPass};
+use crate::passes::emission::EmissionPass;
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
 use crate::passes::tonemap::{Tonemap, TonemapPass};
 use crate::scene_buffers::SceneBuffers;
@@ -26,6 +30,8 @@ pub struct FrameInputs<'a> {
     pub output: &'a wgpu::TextureView,
     /// Photon splats to add (Stürzlinger & Bastos 1997, section 2.2), if any.
     pub splats: Option<SplatInputs<'a>>,
+    /// Point lights whose direct light to add with shadow maps (section 2.2.1), if any.
+    pub direct: Option<&'a DirectLights>,
 }
 
 /// What the splat pass of a frame reads.
@@ -44,7 +50,11 @@ pub struct SplatInputs<'a> {
 pub struct FrameGraph {
     /// The depth pre-pass.
     pub depth: DepthPass,
-    /// The splat pass, built on first use (it needs the kernel).
+    /// The emitters' own radiance, when the graph was built for a scene ([`FrameGraph::with_emission`]).
+    pub emission: Option<EmissionPass>,
+    /// The direct light pass ([`FrameGraph::with_direct`]).
+    pub direct: Option<DirectPass>,
+    /// The splat pass ([`FrameGraph::with_splats`]).
     pub splat: Option<SplatPass>,
     /// The final tone map.
     pub tonemap: TonemapPass,
@@ -55,8 +65,55 @@ impl FrameGraph {
     pub fn new(ctx: &GpuContext, output_format: wgpu::TextureFormat) -> Result<Self> {
         Ok(Self {
             depth: DepthPass::new(ctx)?,
+            emission: None,
+            direct: None,
             splat: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
+        })
+    }
+
+    /// Adds the emission pass for `scene`'s emitters and HDR targets of `hdr_format`.
+    pub fn with_emission(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &lustre_geometry::Scene,
+    ) -> Result<Self> {
+        self.emission = Some(EmissionPass::new(ctx, hdr_format, scene)?);
+        Ok(self)
+    }
+
+    /// Adds the direct light pass for HDR targets of `hdr_format`.
+    pub fn with_direct(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+    ) -> Result<Self> {
+        self.direct = Some(DirectPass::new(ctx, hdr_format)?);
+        Ok(self)
+    }
+
+    /// Renders the shadow cube maps of `lights` for the scene's current pose (once per light or object move, not per frame).
+    pub fn update_shadows(
+        &self,
+        ctx: &GpuContext,
+        scene: &SceneBuffers,
+        lights: &DirectLights,
+    ) -> Result<()> {
+        let Some(direct) = &self.direct else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "frame",
+                message: "shadow maps need the direct pass (FrameGraph::with_direct)".into(),
+            });
+        };
+        ctx.checked("shadow maps", || {
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("shadows"),
+                });
+            direct.encode_shadows(&mut encoder, scene, lights);
+            ctx.queue.submit([encoder.finish()]);
         })
     }
 
@@ -91,6 +148,24 @@ impl FrameGraph {
             }
             (None, _) => None,
         };
+        let direct = match (frame.direct, &self.direct) {
+            (Some(lights), Some(pass)) => {
+                pass.prepare(&ctx.queue, frame.camera);
+                Some((lights, pass))
+            }
+            (Some(_), None) => {
+                return Err(crate::MprError::InvalidSetting {
+                    what: "frame",
+                    message: "point lights were given but the frame graph has no direct pass \
+                              (FrameGraph::with_direct)"
+                        .into(),
+                });
+            }
+            (None, _) => None,
+        };
+        if let Some(emission) = &self.emission {
+            emission.prepare(&ctx.queue, frame.camera);
+        }
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
@@ -99,6 +174,12 @@ impl FrameGraph {
                 });
             clear_hdr(&mut encoder, frame.targets);
             self.depth.encode(&mut encoder, frame.scene, frame.targets);
+            if let Some(emission) = &self.emission {
+                emission.encode(&mut encoder, frame.scene, frame.targets);
+            }
+            if let Some((lights, pass)) = direct {
+                pass.encode(&mut encoder, frame.scene, frame.targets, lights);
+            }
             if let Some((inputs, pass)) = splat {
                 pass.encode(
                     &ctx.device,

@@ -239,6 +239,7 @@ fn frame_graph_renders_depth_and_black_into_any_view() {
                 targets: &targets,
                 output: &output.create_view(&Default::default()),
                 splats: None,
+                direct: None,
             },
         )
         .unwrap();

@@ -19,6 +19,7 @@ use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
 use lustre_mpr::frame::SplatInputs;
 use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::{
@@ -267,8 +268,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let splats = SplatBuffers::new(&ctx, &scene, &estimator, glossy)
         .with_context(|| format!("scene `{}`", scene.name))?;
     let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let graph =
-        FrameGraph::new(&ctx, output_format)?.with_splats(&ctx, targets.hdr_format(), kernel)?;
+    let mut graph = FrameGraph::new(&ctx, output_format)?
+        .with_emission(&ctx, targets.hdr_format(), &scene)?
+        .with_splats(&ctx, targets.hdr_format(), kernel)?;
+    let direct = if args.technique == Technique::SplatDirect {
+        graph = graph.with_direct(&ctx, targets.hdr_format())?;
+        let pass = graph.direct.as_ref().context("direct pass")?;
+        let lights = DirectLights::new(&ctx, pass, &scene, glossy)
+            .with_context(|| format!("scene `{}`", scene.name))?;
+        graph.update_shadows(&ctx, &scene_buffers, &lights)?;
+        Some(lights)
+    } else {
+        None
+    };
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("lustre-render-output"),
         size: wgpu::Extent3d {
@@ -309,6 +321,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 restriction,
                 filtering,
             }),
+            direct: direct.as_ref(),
         },
     )?;
     ctx.device
@@ -324,6 +337,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     write_outputs(args, &image)?;
     timings.insert("write".into(), json!(ms(start)));
+    let total: f64 = timings.values().filter_map(serde_json::Value::as_f64).sum();
+    timings.insert("total".into(), json!(total));
 
     let sidecar = sidecar_path(&args.out);
     let info = json!({

@@ -2,6 +2,7 @@
 
 pub mod depth;
 pub mod direct;
+pub mod emission;
 pub mod shadow;
 pub mod splat;
 pub mod tonemap;

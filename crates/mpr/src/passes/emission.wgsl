@@ -1,0 +1,52 @@
+// Emitted radiance of light-source surfaces (the area lights' own meshes seen
+// by the camera): the scene redrawn with an equal-depth test against the
+// depth pre-pass, adding Le on the emitting side into the HDR target
+// (DESIGN.md "Data flow": the passes add light into one HDR target).
+//
+// Notation
+// | symbol | meaning                                                    | unit       |
+// |--------|------------------------------------------------------------|------------|
+// | P      | world position of the shaded point                         | m          |
+// | E      | camera position                                            | m          |
+// | n      | interpolated vertex normal: the emitting side              | -          |
+// | Le     | emitted radiance of the triangle's material (zero if none) | W/(m^2 sr) |
+// One-sided like Mitsuba's area emitter: Le is seen only where (E - P) . n > 0.
+
+struct EmissionCamera {
+    view_projection: mat4x4f,
+    position: vec4f,
+}
+
+@group(0) @binding(0) var<uniform> camera: EmissionCamera;
+@group(0) @binding(1) var<storage, read> emission: array<vec4f>;
+
+struct VertexOutput {
+    // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) world: vec3f,
+    @location(1) normal: vec3f,
+    @location(2) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3f,
+    @location(2) normal: vec3f,
+    @location(3) material: u32,
+) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    out.material = material;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    let le = emission[in.material].xyz;
+    if all(le == vec3f(0.0)) || dot(camera.position.xyz - in.world, in.normal) <= 0.0 {
+        discard;
+    }
+    return vec4f(le, 0.0);
+}
