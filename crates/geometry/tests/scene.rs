@@ -422,8 +422,5 @@ fn area_lights_become_cosine_point_lights_of_equal_power_and_stay_so_after_a_mov
     moved
         .set_object_transform(0, Affine3A::from_translation(Vec3::ZERO))
         .unwrap();
-    assert!(matches!(
-        moved.lights()[0],
-        Light::OrientedPoint(_)
-    ));
+    assert!(matches!(moved.lights()[0], Light::OrientedPoint(_)));
 }
