@@ -34,6 +34,9 @@ pub struct Args {
     /// Techniques of `lustre render --technique` (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "splat,splat-direct")]
     techniques: Vec<String>,
+    /// Kernel constants C of equation 3 (`lustre render --kernel-c`, comma-separated).
+    #[arg(long = "kernel-c", value_delimiter = ',', default_value = "16")]
+    kernel_c: Vec<String>,
 }
 
 /// A path-traced reference and what its sidecar says about it.
@@ -57,6 +60,10 @@ struct Row {
     technique: String,
     /// Photons emitted.
     photons: u64,
+    /// Kernel constant C (equation 3).
+    kernel_c: String,
+    /// GPU frame time from the sidecar's `timings_ms.frame`.
+    frame_ms: Option<f64>,
     /// Relative MSE against the reference (ε = 0.01).
     rel_mse: f64,
     /// Mean FLIP against the reference.
@@ -102,13 +109,25 @@ fn render_time_ms(sidecar: &Value) -> Option<f64> {
 }
 
 /// Compares one render with its reference.
-fn measure(reference: &Reference, technique: &str, photons: u64, render: &Render) -> Result<Row> {
+fn measure(
+    reference: &Reference,
+    technique: &str,
+    photons: u64,
+    kernel_c: &str,
+    render: &Render,
+) -> Result<Row> {
     let rel_mse = metrics::relative_mse(&render.image, &reference.image, RELATIVE_MSE_EPSILON)?;
     let flip = metrics::flip(&render.image, &reference.image, EXPOSURE)?;
     Ok(Row {
         scene: reference.scene.clone(),
         technique: technique.to_owned(),
         photons,
+        kernel_c: kernel_c.to_owned(),
+        frame_ms: render
+            .sidecar
+            .get("timings_ms")
+            .and_then(|t| t.get("frame"))
+            .and_then(Value::as_f64),
         rel_mse,
         flip_mean: flip.mean,
         time_ms: render_time_ms(&render.sidecar),
@@ -132,12 +151,14 @@ fn thousands(n: u64) -> String {
 /// One table row, in Markdown.
 fn table_row(row: &Row) -> String {
     format!(
-        "| {} | {} | {:.5} | {:.4} | {} |",
+        "| {} | {} | {} | {:.5} | {:.4} | {} | {} |",
         row.technique,
         thousands(row.photons),
+        row.kernel_c,
         row.rel_mse,
         row.flip_mean,
-        row.time_ms.map_or("-".to_owned(), |t| format!("{t:.1}"))
+        row.frame_ms.map_or("-".to_owned(), |t| format!("{t:.0}")),
+        row.time_ms.map_or("-".to_owned(), |t| format!("{t:.0}"))
     )
 }
 
@@ -151,7 +172,7 @@ fn section(references: &[Reference], rows: &[Row], machine: &str) -> String {
     let _ = writeln!(
         s,
         "Written by `cargo xtask converge`; do not edit by hand. Each technique renders the scene \
-         with `lustre render` at the reference's size with `--seed {SEED}`. relMSE = 1/(3N) Σ (t − r)² \
+         with `lustre render` at the reference's size with `--seed {SEED}` and the kernel constant C of equation 3 shown. relMSE = 1/(3N) Σ (t − r)² \
          / (r² + {RELATIVE_MSE_EPSILON}) over pixels and channels (Rousselle, Knaus & Zwicker 2011); \
          FLIP is the mean LDR-FLIP of both images tone mapped at exposure {EXPOSURE} \
          ({PIXELS_PER_DEGREE} pixels per degree). Time is the sidecar's `timings_ms.total` (or the sum of its entries).\n"
@@ -178,9 +199,9 @@ fn section(references: &[Reference], rows: &[Row], machine: &str) -> String {
         );
         let _ = writeln!(
             s,
-            "| technique | photons | relMSE | mean FLIP | time (ms) |"
+            "| technique | photons | C | relMSE | mean FLIP | GPU frame (ms) | total (ms) |"
         );
-        let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|");
         for row in rows.iter().filter(|r| r.scene == reference.scene) {
             let _ = writeln!(s, "{}", table_row(row));
         }
@@ -204,30 +225,36 @@ fn converge(
         let reference = load_reference(references_dir, scene)?;
         let size = format!("{}x{}", reference.image.width(), reference.image.height());
         for technique in &args.techniques {
-            for &photons in &args.photons {
-                let out = scratch.join(format!("{scene}-{technique}-{photons}.exr"));
-                let photons_arg = photons.to_string();
-                let render_args = [
-                    "--technique",
-                    technique.as_str(),
-                    "--photons",
-                    &photons_arg,
-                    "--size",
-                    &size,
-                    "--seed",
-                    SEED,
-                ];
-                let result = lustre
-                    .render(scene, &render_args, &out)
-                    .and_then(|render| measure(&reference, technique, photons, &render));
-                match result {
-                    Ok(row) => {
-                        println!("converge {scene:<10} {}", table_row(&row));
-                        rows.push(row);
-                    }
-                    Err(error) => {
-                        println!("converge {scene:<10} {technique} {photons}: FAILED: {error:#}");
-                        failures += 1;
+            for kernel_c in &args.kernel_c {
+                for &photons in &args.photons {
+                    let out = scratch.join(format!("{scene}-{technique}-{photons}-{kernel_c}.exr"));
+                    let photons_arg = photons.to_string();
+                    let render_args = [
+                        "--technique",
+                        technique.as_str(),
+                        "--photons",
+                        &photons_arg,
+                        "--kernel-c",
+                        kernel_c.as_str(),
+                        "--size",
+                        &size,
+                        "--seed",
+                        SEED,
+                    ];
+                    let result = lustre.render(scene, &render_args, &out).and_then(|render| {
+                        measure(&reference, technique, photons, kernel_c, &render)
+                    });
+                    match result {
+                        Ok(row) => {
+                            println!("converge {scene:<10} {}", table_row(&row));
+                            rows.push(row);
+                        }
+                        Err(error) => {
+                            println!(
+                                "converge {scene:<10} {technique} {photons} C={kernel_c}: FAILED: {error:#}"
+                            );
+                            failures += 1;
+                        }
                     }
                 }
             }
@@ -312,6 +339,7 @@ mod tests {
             scenes: vec!["glosbox".into()],
             photons: vec![1000, 2_000_000],
             techniques: vec!["splat".into(), "splat-direct".into()],
+            kernel_c: vec!["16".into()],
         };
         let (references, rows, failures) = converge(&lustre, dir, &args, dir).unwrap();
         assert_eq!(failures, 0);
@@ -330,7 +358,7 @@ mod tests {
             "{text}"
         );
         assert!(
-            text.contains("| splat-direct | 2,000,000 | 0.00000 | 0.0000 | 12.5 |"),
+            text.contains("| splat-direct | 2,000,000 | 16 | 0.00000 | 0.0000 | - | 12 |"),
             "{text}"
         );
         assert!(!text.contains("converge:start"));

@@ -136,7 +136,7 @@ pub struct RenderArgs {
 }
 
 /// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
-pub const DEFAULT_KERNEL_C: f32 = 4.0;
+pub const DEFAULT_KERNEL_C: f32 = 16.0;
 
 /// Milliseconds since `start`.
 fn ms(start: Instant) -> f64 {

@@ -79,32 +79,53 @@ fn vs_splat(
     return out;
 }
 
-// K at a kernel-space offset: the texture over [-1, 1]^2, zero outside it;
-// averaged over the pixel's footprint (mip-maps, anisotropic) or read at its centre (level 0).
-fn splat_kernel(k: vec2f) -> f32 {
-    let uv = 0.5 * (k + 1.0);
-    let filtered = textureSample(kernel_texture, kernel_sampler, uv).r;
-    let centre = textureSampleLevel(kernel_texture, kernel_point_sampler, uv, 0.0).r;
-    let value = select(centre, filtered, uniforms.options.x != 0u);
-    let inside = all(uv >= vec2f(0.0)) && all(uv <= vec2f(1.0));
-    return select(0.0, value, inside);
+// Whether a kernel-space offset lies on the texture's square [-1, 1]^2 (K is zero off it).
+fn splat_inside(k: vec2f) -> bool {
+    return all(abs(k) <= vec2f(1.0));
+}
+
+// K averaged over the pixel's footprint: mip-mapped, anisotropic (section 3.2).
+// Must run in uniform control flow (implicit derivatives).
+fn splat_kernel_filtered(k: vec2f) -> f32 {
+    let value = textureSample(kernel_texture, kernel_sampler, 0.5 * (k + 1.0)).r;
+    return select(0.0, value, splat_inside(k));
+}
+
+// K at the pixel centre: bilinear from level 0, as the CPU estimator evaluates it.
+fn splat_kernel_centre(k: vec2f) -> f32 {
+    let value = textureSampleLevel(kernel_texture, kernel_point_sampler, 0.5 * (k + 1.0), 0.0).r;
+    return select(0.0, value, splat_inside(k));
 }
 
 // Surface-id restriction: the splat adds only where its own surface is visible.
+// The filtering choice is uniform, so the mip-mapped branch may use derivatives;
+// the centre branch rejects other surfaces before it reads the texture.
 @fragment
 fn fs_splat_id(in: SplatOut) -> @location(0) vec4f {
-    let value = splat_kernel(in.kernel);
     let visible = textureLoad(surface_ids, vec2i(in.clip.xy), 0).r;
-    if visible != in.surface {
+    if uniforms.options.x != 0u {
+        let value = splat_kernel_filtered(in.kernel);
+        if visible != in.surface {
+            discard;
+        }
+        return vec4f(in.colour * value, 0.0);
+    }
+    if visible != in.surface || !splat_inside(in.kernel) {
         discard;
     }
-    return vec4f(in.colour * value, 0.0);
+    return vec4f(in.colour * splat_kernel_centre(in.kernel), 0.0);
 }
 
 // Stencil restriction: the stencil test has already limited the splat to its surface's mask.
 @fragment
 fn fs_splat_stencil(in: SplatOut) -> @location(0) vec4f {
-    return vec4f(in.colour * splat_kernel(in.kernel), 0.0);
+    if uniforms.options.x != 0u {
+        return vec4f(in.colour * splat_kernel_filtered(in.kernel), 0.0);
+    }
+    if !splat_inside(in.kernel) {
+        discard;
+    }
+    return vec4f(in.colour * splat_kernel_centre(in.kernel), 0.0);
 }
 
 // The per-surface stencil mask: the surface's triangles drawn with an equal-depth
