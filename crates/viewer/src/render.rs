@@ -101,7 +101,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1_000_000)]
     pub photons: u64,
     /// The constant C of the kernel support h = C sqrt(A/n) (equation 3).
-    #[arg(long, default_value_t = DEFAULT_KERNEL_C)]
+    #[arg(long, default_value_t = DEFAULT_KERNEL_C, allow_negative_numbers = true)]
     pub kernel_c: f32,
     /// Reconstruction kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Silverman)]

@@ -169,3 +169,156 @@ fn export_mitsuba_writes_the_scene_or_names_what_mitsuba_lacks() {
     assert!(String::from_utf8(out.stderr).unwrap().contains("warning"));
     assert!(target.exists());
 }
+
+/// `lustre render` with `args`, or `None` when the binary says no adapter exists (exit 77) and the environment allows skipping.
+fn render_or_skip(test: &str, args: &[&str]) -> Option<Output> {
+    let out = lustre(args);
+    if out.status.code() == Some(77) {
+        assert!(
+            std::env::var_os("LUSTRE_REQUIRE_GPU").is_none(),
+            "{test}: LUSTRE_REQUIRE_GPU is set but: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        eprintln!("SKIPPED {test}: no Vulkan adapter");
+        return None;
+    }
+    Some(out)
+}
+
+/// Files in `dir` whose names start with a dot: the temporaries of atomic writes.
+fn temporaries(dir: &std::path::Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect()
+}
+
+#[test]
+fn render_writes_the_image_and_its_sidecar_and_nothing_else() {
+    let dir = scratch("render");
+    for (technique, file) in [("splat", "g.exr"), ("splat-direct", "g.png")] {
+        let out_path = dir.join(file);
+        let Some(out) = render_or_skip(
+            "render_writes_the_image_and_its_sidecar",
+            &[
+                "render",
+                "glosbox",
+                "--technique",
+                technique,
+                "--photons",
+                "5000",
+                "--size",
+                "48x32",
+                "--out",
+                out_path.to_str().unwrap(),
+            ],
+        ) else {
+            return;
+        };
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out_path.exists());
+        let sidecar: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out_path.with_extension("json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(sidecar["photons"], 5000);
+        assert_eq!(sidecar["technique"], technique);
+        assert_eq!(sidecar["size"], serde_json::json!([48, 32]));
+        assert!(sidecar["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+        for phase in ["trace", "splat_setup", "frame", "total"] {
+            assert!(
+                sidecar["timings_ms"][phase]
+                    .as_f64()
+                    .is_some_and(|t| t >= 0.0),
+                "{phase}: {sidecar}"
+            );
+        }
+    }
+    let image = lustre_image::read_exr(dir.join("g.exr")).unwrap();
+    assert_eq!((image.width(), image.height()), (48, 32));
+    // The scene is lit: the mean radiance is positive and finite.
+    let mean = lustre_image::metrics::mean(&image);
+    assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+}
+
+#[test]
+fn render_refuses_bad_options_before_writing_anything() {
+    let dir = scratch("render-bad");
+    let out_exr = dir.join("x.exr");
+    let out = out_exr.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", "glosbox", "--out", "x.jpg"],
+            "must end in .exr or .png",
+        ),
+        (
+            vec!["render", "glosbox", "--photons", "0", "--out", out],
+            "at least one photon",
+        ),
+        (
+            vec!["render", "glosbox", "--kernel-c", "-1", "--out", out],
+            "must be positive",
+        ),
+        (
+            vec!["render", "glosbox", "--size", "0x10", "--out", out],
+            "between 1 and 16384",
+        ),
+        (
+            vec!["render", "nosuchscene", "--out", out],
+            "neither a built-in scene",
+        ),
+    ];
+    for (args, expected) in cases {
+        let result = lustre(&args);
+        assert!(!result.status.success(), "{args:?} succeeded");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    assert!(
+        std::fs::read_dir(&dir).unwrap().next().is_none(),
+        "files were written"
+    );
+}
+
+/// A Phong material with kd + ks > 1 is not energy conserving: the MTL loader
+/// only warns, the renderer refuses it and names the material and the scene.
+#[test]
+fn render_names_a_material_the_brdfs_refuse() {
+    let dir = scratch("render-phong");
+    std::fs::write(
+        dir.join("room.mtl"),
+        "newmtl lamp\nKd 0.5 0.5 0.5\nKe 10 10 10\nnewmtl shiny\nKd 0.8 0.8 0.8\nKs 0.6 0.6 0.6\nNs 20\nillum 2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("room.obj"),
+        "mtllib room.mtl\no lamp\nusemtl lamp\nv 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\nf 1 2 3 4\n\
+         o floor\nusemtl shiny\nv -2 0 -2\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nf 5 6 7 8\n",
+    )
+    .unwrap();
+    let out_path = dir.join("room.png");
+    let result = lustre(&[
+        "render",
+        dir.join("room.obj").to_str().unwrap(),
+        "--photons",
+        "100",
+        "--size",
+        "8x8",
+        "--out",
+        out_path.to_str().unwrap(),
+    ]);
+    assert!(!result.status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(
+        stderr.contains("shiny") && stderr.contains("room"),
+        "{stderr}"
+    );
+    assert!(!out_path.exists());
+}
