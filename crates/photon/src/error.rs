@@ -11,7 +11,7 @@ pub type Result<T, E = PhotonError> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum PhotonError {
     /// A scene material could not become a BRDF.
-    #[error("material `{material}`: {source}")]
+    #[error("material `{material}`")]
     Brdf {
         /// The material's name.
         material: String,
