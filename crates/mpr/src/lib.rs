@@ -8,6 +8,17 @@
 //! ([`readback`]). Every pass has a CPU counterpart computing the same
 //! per-pixel quantity, which the tests hold the GPU to.
 //!
+//! | pass | paper | CPU twin |
+//! |---|---|---|
+//! | [`passes::depth`]: reverse-Z depth and surface ids | Diefenbach & Badler 1997, 7.2 | BVH ray casts |
+//! | [`passes::emission`]: emitters' own radiance | (light sources seen directly) | ray cast + material `Le` |
+//! | [`passes::direct`], [`passes::shadow`]: point lights, cube shadow maps, per-pixel BRDF | Stürzlinger & Bastos 1997, 2.2.1 | ray cast + shadow ray |
+//! | [`passes::splat`]: photon splats, 64² kernel texture with mips, surface-id or stencil restriction | Stürzlinger & Bastos 1997, 2.2, 3.2, equation 2 | `SplatEstimator::radiance_splatted` |
+//! | [`passes::tonemap`]: exposure, clamp or Reinhard, sRGB | — | per-pixel formula |
+//!
+//! Materials reach the GPU as weighted BRDF lobes ([`material`]) evaluated by
+//! the WGSL twins of `lustre-brdf`.
+//!
 //! ```no_run
 //! use lustre_mpr::{AdapterPreference, GpuContext, RenderTargets};
 //!
