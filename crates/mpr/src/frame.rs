@@ -1,12 +1,14 @@
 //! The frame graph (DESIGN.md "Data flow", step 3; Diefenbach & Badler 1997,
 //! section 7): one command encoder per frame runs the passes in order (clear
-//! HDR, depth pre-pass, emitters, direct light, photon splats, tone map) into
+//! HDR, depth pre-pass, emitters, direct light, diffuse textures, photon
+//! splats, tone map) into
 //! any `TextureView`. Shadow maps are rendered per light pose, not per frame
 //! ([`FrameGraph::update_shadows`]).
 
 use lustre_geometry::Camera;
 
 use crate::passes::depth::DepthPass;
+use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
 use crate::passes::direct::{DirectLights, DirectPass};
 use crate::passes::emission::EmissionPass;
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
@@ -32,6 +34,8 @@ pub struct FrameInputs<'a> {
     pub splats: Option<SplatInputs<'a>>,
     /// Point lights whose direct light to add with shadow maps (section 2.2.1), if any.
     pub direct: Option<&'a DirectLights>,
+    /// Diffuse surfaces' precomputed photon radiance (section 2.2.1), if any.
+    pub diffuse: Option<&'a DiffuseTextures>,
 }
 
 /// What the splat pass of a frame reads.
@@ -54,6 +58,8 @@ pub struct FrameGraph {
     pub emission: Option<EmissionPass>,
     /// The direct light pass ([`FrameGraph::with_direct`]).
     pub direct: Option<DirectPass>,
+    /// The precomputed diffuse textures' pass ([`FrameGraph::with_diffuse_textures`]).
+    pub diffuse: Option<DiffuseTexturePass>,
     /// The splat pass ([`FrameGraph::with_splats`]).
     pub splat: Option<SplatPass>,
     /// The final tone map.
@@ -67,6 +73,7 @@ impl FrameGraph {
             depth: DepthPass::new(ctx)?,
             emission: None,
             direct: None,
+            diffuse: None,
             splat: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
         })
@@ -90,6 +97,16 @@ impl FrameGraph {
         hdr_format: wgpu::TextureFormat,
     ) -> Result<Self> {
         self.direct = Some(DirectPass::new(ctx, hdr_format)?);
+        Ok(self)
+    }
+
+    /// Adds the pass drawing precomputed diffuse textures into HDR targets of `hdr_format`.
+    pub fn with_diffuse_textures(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+    ) -> Result<Self> {
+        self.diffuse = Some(DiffuseTexturePass::new(ctx, hdr_format)?);
         Ok(self)
     }
 
@@ -163,6 +180,21 @@ impl FrameGraph {
             }
             (None, _) => None,
         };
+        let diffuse = match (frame.diffuse, &self.diffuse) {
+            (Some(textures), Some(pass)) => {
+                pass.prepare(&ctx.queue, frame.camera);
+                Some((textures, pass))
+            }
+            (Some(_), None) => {
+                return Err(crate::MprError::InvalidSetting {
+                    what: "frame",
+                    message: "diffuse textures were given but the frame graph has no pass for \
+                              them (FrameGraph::with_diffuse_textures)"
+                        .into(),
+                });
+            }
+            (None, _) => None,
+        };
         if let Some(emission) = &self.emission {
             emission.prepare(&ctx.queue, frame.camera);
         }
@@ -179,6 +211,9 @@ impl FrameGraph {
             }
             if let Some((lights, pass)) = direct {
                 pass.encode(&mut encoder, frame.scene, frame.targets, lights);
+            }
+            if let Some((textures, pass)) = diffuse {
+                pass.encode(&mut encoder, frame.scene, frame.targets, textures);
             }
             if let Some((inputs, pass)) = splat {
                 pass.encode(

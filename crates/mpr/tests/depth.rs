@@ -240,6 +240,7 @@ fn frame_graph_renders_depth_and_black_into_any_view() {
                 output: &output.create_view(&Default::default()),
                 splats: None,
                 direct: None,
+                diffuse: None,
             },
         )
         .unwrap();

@@ -19,6 +19,7 @@ use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
 use lustre_mpr::frame::SplatInputs;
 use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
@@ -80,6 +81,15 @@ pub enum EmissionArg {
     Sobol,
 }
 
+/// How purely diffuse planar surfaces receive their photons.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DiffuseArg {
+    /// Splatted like every other surface.
+    Splat,
+    /// Precomputed once into textures, view independent (section 2.2.1).
+    Texture,
+}
+
 /// Glossy lobe model on the GPU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum GlossyArg {
@@ -95,7 +105,7 @@ pub struct RenderArgs {
     /// A built-in scene (cornell, glosbox) or an OBJ file.
     pub scene: String,
     /// Rendering technique.
-    #[arg(long, value_enum, default_value_t = Technique::Splat)]
+    #[arg(long, value_enum, default_value_t = Technique::SplatDirect)]
     pub technique: Technique,
     /// Photons to emit over all lights.
     #[arg(long, default_value_t = 1_000_000)]
@@ -124,6 +134,10 @@ pub struct RenderArgs {
     /// Photon emission sampling.
     #[arg(long, value_enum, default_value_t = EmissionArg::Sobol)]
     pub emission: EmissionArg,
+    /// Diffuse planar surfaces: splatted, or precomputed into textures
+    /// (default: `splat` for `--technique splat`, `texture` for `splat-direct`).
+    #[arg(long, value_enum)]
+    pub diffuse: Option<DiffuseArg>,
     /// Glossy BRDFs on the GPU.
     #[arg(long, value_enum, default_value_t = GlossyArg::Exact)]
     pub glossy: GlossyArg,
@@ -250,6 +264,23 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     .context("cannot build the splats")?;
     timings.insert("splat_setup".into(), json!(ms(start)));
 
+    // Diffuse surfaces precomputed into textures (section 2.2.1).
+    let start = Instant::now();
+    let diffuse = args.diffuse.unwrap_or(match args.technique {
+        Technique::Splat => DiffuseArg::Splat,
+        Technique::SplatDirect => DiffuseArg::Texture,
+    });
+    let atlas = match diffuse {
+        DiffuseArg::Splat => None,
+        DiffuseArg::Texture => Some(
+            DiffuseAtlas::build(&scene, &estimator, DiffuseTextureOptions::default())
+                .context("cannot precompute the diffuse textures")?,
+        ),
+    };
+    if atlas.is_some() {
+        timings.insert("diffuse_textures".into(), json!(ms(start)));
+    }
+
     // GPU frame.
     let start = Instant::now();
     let preference = if args.software {
@@ -265,12 +296,24 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let targets = RenderTargets::new(&ctx, width, height)?;
     let scene_buffers = SceneBuffers::upload(&ctx, &scene)?;
-    let splats = SplatBuffers::new(&ctx, &scene, &estimator, glossy)
+    let exclude = atlas
+        .as_ref()
+        .map(DiffuseAtlas::textured)
+        .unwrap_or_default();
+    let splats = SplatBuffers::new_excluding(&ctx, &scene, &estimator, glossy, &exclude)
         .with_context(|| format!("scene `{}`", scene.name))?;
     let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
     let mut graph = FrameGraph::new(&ctx, output_format)?
         .with_emission(&ctx, targets.hdr_format(), &scene)?
         .with_splats(&ctx, targets.hdr_format(), kernel)?;
+    let diffuse_textures = match &atlas {
+        Some(atlas) => {
+            graph = graph.with_diffuse_textures(&ctx, targets.hdr_format())?;
+            let pass = graph.diffuse.as_ref().context("diffuse texture pass")?;
+            Some(DiffuseTextures::new(&ctx, pass, atlas)?)
+        }
+        None => None,
+    };
     let direct = if args.technique == Technique::SplatDirect {
         graph = graph.with_direct(&ctx, targets.hdr_format())?;
         let pass = graph.direct.as_ref().context("direct pass")?;
@@ -322,6 +365,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 filtering,
             }),
             direct: direct.as_ref(),
+            diffuse: diffuse_textures.as_ref(),
         },
     )?;
     ctx.device
@@ -355,6 +399,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "restriction": format!("{restriction:?}"),
         "filter": format!("{filtering:?}"),
         "glossy": format!("{glossy:?}"),
+        "diffuse": format!("{diffuse:?}"),
+        "diffuse_atlas": atlas.as_ref().map(|a| [a.width, a.height]),
         "exposure": args.exposure,
         "adapter": ctx.adapter().to_string(),
         "hdr_format": format!("{:?}", targets.hdr_format()),

@@ -133,6 +133,19 @@ impl SplatBuffers {
         Self::from_splats(ctx, scene, &splats, glossy)
     }
 
+    /// Uploads the splats of `estimator` except those on surfaces whose `exclude` entry (by `SurfaceId`) is true: surfaces another pass renders, such as the precomputed diffuse textures of section 2.2.1. Surfaces beyond `exclude` are kept.
+    pub fn new_excluding(
+        ctx: &GpuContext,
+        scene: &Scene,
+        estimator: &SplatEstimator,
+        glossy: GlossyModel,
+        exclude: &[bool],
+    ) -> Result<Self> {
+        let mut splats = estimator.splats();
+        splats.retain(|s| !exclude.get(s.surface as usize).copied().unwrap_or(false));
+        Self::from_splats(ctx, scene, &splats, glossy)
+    }
+
     /// Uploads `splats` (any order; they are grouped by surface here).
     pub fn from_splats(
         ctx: &GpuContext,
