@@ -56,6 +56,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             crate::passes::emission::EMISSION_WGSL.to_owned(),
         ),
         ("passes/direct.wgsl", direct_wgsl()),
+        (
+            "passes/gouraud.wgsl",
+            crate::passes::gouraud::GOURAUD_WGSL.to_owned(),
+        ),
     ]
 }
 

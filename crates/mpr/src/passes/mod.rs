@@ -3,6 +3,7 @@
 pub mod depth;
 pub mod direct;
 pub mod emission;
+pub mod gouraud;
 pub mod shadow;
 pub mod splat;
 pub mod tonemap;
