@@ -194,6 +194,35 @@ impl Scene {
         )
     }
 
+    /// The same materials, objects, explicit lights, camera and point-light
+    /// setting with other meshes (same count and order, e.g. each one
+    /// subdivided for per-vertex lighting); surfaces and area lights are derived again.
+    pub fn with_meshes(&self, meshes: Vec<Mesh>) -> Result<Self> {
+        if meshes.len() != self.meshes.len() {
+            return Err(GeometryError::InvalidMesh {
+                mesh: self.name.clone(),
+                message: format!(
+                    "{} meshes given to replace {}",
+                    meshes.len(),
+                    self.meshes.len()
+                ),
+            });
+        }
+        let scene = Self::new(
+            self.name.clone(),
+            meshes,
+            self.materials.clone(),
+            self.objects.clone(),
+            self.explicit_lights.clone(),
+            self.camera,
+        )?;
+        if self.area_lights_as_points {
+            scene.with_area_lights_as_points()
+        } else {
+            Ok(scene)
+        }
+    }
+
     /// The meshes (rest pose).
     pub fn meshes(&self) -> &[Mesh] {
         &self.meshes

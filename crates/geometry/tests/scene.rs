@@ -424,3 +424,31 @@ fn area_lights_become_cosine_point_lights_of_equal_power_and_stay_so_after_a_mov
         .unwrap();
     assert!(matches!(moved.lights()[0], Light::OrientedPoint(_)));
 }
+
+#[test]
+fn with_meshes_replaces_the_geometry_and_keeps_the_rest() {
+    let scene = builtin("cornell")
+        .unwrap()
+        .with_area_lights_as_points()
+        .unwrap();
+    // The floor with unshared vertices: two more vertices, the same triangles and surfaces.
+    let mut meshes = scene.meshes().to_vec();
+    let floor = &meshes[0];
+    let split = Mesh::flat(
+        floor.name.clone(),
+        &floor.positions,
+        &floor.indices,
+        floor.material,
+    );
+    assert_eq!(split.positions.len(), 6);
+    meshes[0] = split;
+    let replaced = scene.with_meshes(meshes).unwrap();
+    assert_eq!(replaced.meshes()[0].positions.len(), 6);
+    assert_eq!(replaced.triangle_count(), scene.triangle_count());
+    assert_eq!(replaced.surfaces().len(), scene.surfaces().len());
+    assert!(replaced.area_lights_as_points());
+    assert_eq!(replaced.materials(), scene.materials());
+    assert_eq!(replaced.camera(), scene.camera());
+    let err = scene.with_meshes(Vec::new()).unwrap_err().to_string();
+    assert!(err.contains("0 meshes given to replace 8"), "{err}");
+}

@@ -1,7 +1,7 @@
 //! The frame graph (DESIGN.md "Data flow", step 3; Diefenbach & Badler 1997,
 //! section 7): one command encoder per frame runs the passes in order (clear
-//! HDR, depth pre-pass, emitters, direct light, diffuse textures, photon
-//! splats, tone map) into
+//! HDR, depth pre-pass, emitters, Gouraud vertex radiance, direct light,
+//! diffuse textures, photon splats, tone map) into
 //! any `TextureView`. Shadow maps are rendered per light pose, not per frame
 //! ([`FrameGraph::update_shadows`]).
 
@@ -11,6 +11,7 @@ use crate::passes::depth::DepthPass;
 use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
 use crate::passes::direct::{DirectLights, DirectPass};
 use crate::passes::emission::EmissionPass;
+use crate::passes::gouraud::GouraudPass;
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
 use crate::passes::tonemap::{Tonemap, TonemapPass};
 use crate::scene_buffers::SceneBuffers;
@@ -56,6 +57,8 @@ pub struct FrameGraph {
     pub depth: DepthPass,
     /// The emitters' own radiance, when the graph was built for a scene ([`FrameGraph::with_emission`]).
     pub emission: Option<EmissionPass>,
+    /// Per-vertex radiance with Gouraud interpolation (García et al. 2003, section 2.4; [`FrameGraph::with_gouraud`]).
+    pub gouraud: Option<GouraudPass>,
     /// The direct light pass ([`FrameGraph::with_direct`]).
     pub direct: Option<DirectPass>,
     /// The precomputed diffuse textures' pass ([`FrameGraph::with_diffuse_textures`]).
@@ -72,6 +75,7 @@ impl FrameGraph {
         Ok(Self {
             depth: DepthPass::new(ctx)?,
             emission: None,
+            gouraud: None,
             direct: None,
             diffuse: None,
             splat: None,
@@ -88,6 +92,28 @@ impl FrameGraph {
     ) -> Result<Self> {
         self.emission = Some(EmissionPass::new(ctx, hdr_format, scene)?);
         Ok(self)
+    }
+
+    /// Adds the Gouraud pass for `scene`'s triangle corners and HDR targets of `hdr_format`; its radiance is zero until [`FrameGraph::set_gouraud_radiance`].
+    pub fn with_gouraud(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &SceneBuffers,
+    ) -> Result<Self> {
+        self.gouraud = Some(GouraudPass::new(ctx, hdr_format, scene)?);
+        Ok(self)
+    }
+
+    /// Replaces the Gouraud pass's per-corner radiance (section 2.4.2: once per frame of the quasi-static method).
+    pub fn set_gouraud_radiance(&self, ctx: &GpuContext, radiance: &[[f32; 3]]) -> Result<()> {
+        let Some(gouraud) = &self.gouraud else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "frame",
+                message: "vertex radiance needs the Gouraud pass (FrameGraph::with_gouraud)".into(),
+            });
+        };
+        gouraud.set_radiance(&ctx.queue, radiance)
     }
 
     /// Adds the direct light pass for HDR targets of `hdr_format`.
@@ -146,7 +172,8 @@ impl FrameGraph {
     }
 
     /// Records and submits one frame in one command encoder: clear HDR to
-    /// black (passes add light into it), depth pre-pass, splats, tone map to `output`.
+    /// black (passes add light into it), depth pre-pass, emitters, Gouraud
+    /// vertex radiance, direct light, splats, tone map to `output`.
     pub fn render(&self, ctx: &GpuContext, frame: &FrameInputs<'_>) -> Result<()> {
         self.depth.prepare(&ctx.queue, frame.camera);
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
@@ -198,6 +225,9 @@ impl FrameGraph {
         if let Some(emission) = &self.emission {
             emission.prepare(&ctx.queue, frame.camera);
         }
+        if let Some(gouraud) = &self.gouraud {
+            gouraud.prepare(&ctx.queue, frame.camera);
+        }
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
@@ -208,6 +238,9 @@ impl FrameGraph {
             self.depth.encode(&mut encoder, frame.scene, frame.targets);
             if let Some(emission) = &self.emission {
                 emission.encode(&mut encoder, frame.scene, frame.targets);
+            }
+            if let Some(gouraud) = &self.gouraud {
+                gouraud.encode(&mut encoder, frame.scene, frame.targets)?;
             }
             if let Some((lights, pass)) = direct {
                 pass.encode(&mut encoder, frame.scene, frame.targets, lights);

@@ -60,6 +60,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             "passes/diffuse_texture.wgsl",
             crate::passes::diffuse_texture::DIFFUSE_TEXTURE_WGSL.to_owned(),
         ),
+        (
+            "passes/gouraud.wgsl",
+            crate::passes::gouraud::GOURAUD_WGSL.to_owned(),
+        ),
     ]
 }
 

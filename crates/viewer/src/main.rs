@@ -2,6 +2,7 @@
 //! rendering (`lustre render`, see [`render`]).
 
 mod render;
+mod render_density;
 mod scene_arg;
 
 use std::path::PathBuf;

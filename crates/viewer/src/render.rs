@@ -8,6 +8,14 @@
 //!   point lights with shadow maps and per-pixel BRDF, plus the splats of
 //!   photons with more than one bounce. Small area lights become cosine point
 //!   lights of equal power in both phases, as in the paper's section 3.
+//!
+//! Techniques (García Hernández, Ureña & Lastra 2003, see [`crate::render_density`]):
+//! per-vertex radiance `ρ/π E` of a density estimator (section 1.2) on the
+//! scene subdivided to `--mesh-edge`, drawn with Gouraud interpolation
+//! (section 2.4) beside the emitters' own radiance:
+//! - `detp`: Density Estimation on the Tangent Plane, disc radius `--radius`.
+//! - `impact`: Impact Count.
+//! - `photonmap`: Photon Maps, `--k` nearest impacts.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -32,6 +40,10 @@ use lustre_photon::{
 };
 use serde_json::json;
 
+use crate::render_density::{
+    DEFAULT_DETP_RADIUS, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K, Estimator, vertex_lit_scene,
+    vertex_radiance,
+};
 use crate::scene_arg;
 
 /// Rendering technique.
@@ -41,6 +53,24 @@ pub enum Technique {
     Splat,
     /// Direct light by shadow maps plus splats of indirect photons (section 2.2.1).
     SplatDirect,
+    /// Per-vertex Density Estimation on the Tangent Plane, Gouraud-shaded (García et al. 2003).
+    Detp,
+    /// Per-vertex Impact Count, Gouraud-shaded (García et al. 2003).
+    Impact,
+    /// Per-vertex Photon Maps, Gouraud-shaded (García et al. 2003).
+    Photonmap,
+}
+
+impl Technique {
+    /// The density estimator of a per-vertex technique, `None` for the splatting ones.
+    fn estimator(self, radius: f32, k: usize) -> Option<Estimator> {
+        match self {
+            Self::Splat | Self::SplatDirect => None,
+            Self::Detp => Some(Estimator::Detp { radius }),
+            Self::Impact => Some(Estimator::ImpactCount),
+            Self::Photonmap => Some(Estimator::PhotonMaps { k }),
+        }
+    }
 }
 
 /// Restriction of splats to their visible surface.
@@ -144,6 +174,15 @@ pub struct RenderArgs {
     /// Exposure in stops applied to the PNG (EXR files are never scaled).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
+    /// DETP disc radius in m (`--technique detp`).
+    #[arg(long, default_value_t = DEFAULT_DETP_RADIUS)]
+    pub radius: f32,
+    /// Nearest impacts of Photon Maps (`--technique photonmap`).
+    #[arg(long, default_value_t = DEFAULT_PHOTONMAP_K)]
+    pub k: usize,
+    /// Longest mesh edge in m after subdivision, for the per-vertex techniques.
+    #[arg(long, default_value_t = DEFAULT_MESH_EDGE)]
+    pub mesh_edge: f32,
     /// Use the software adapter even where a hardware one exists.
     #[arg(long)]
     pub software: bool,
@@ -198,6 +237,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.photons == 0 {
         bail!("--photons 0: at least one photon is needed");
     }
+    let density = args.technique.estimator(args.radius, args.k);
     let mut timings = serde_json::Map::new();
     let start = Instant::now();
     let loaded = scene_arg::load(&args.scene)?;
@@ -208,6 +248,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.technique == Technique::SplatDirect {
         scene = with_point_lights(&scene)?;
     }
+    if density.is_some() {
+        scene = vertex_lit_scene(&scene, args.mesh_edge)?;
+    }
     let (width, height) = args.size;
     scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));
     if scene.lights().is_empty() {
@@ -215,67 +258,53 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     timings.insert("load".into(), json!(ms(start)));
 
-    // Particle tracing (section 2.1).
-    let start = Instant::now();
     let bvh = Bvh::build(&scene);
-    let bar = ProgressBar::new(args.photons).with_style(
-        ProgressStyle::with_template("tracing photons {bar:40} {pos}/{len} ({eta} left)")
-            .context("progress bar template")?,
-    );
-    let options = TraceOptions {
-        photons: args.photons,
-        seed: args.seed,
-        emission: match args.emission {
-            EmissionArg::Random => EmissionSampling::Random,
-            EmissionArg::Halton => EmissionSampling::Halton,
-            EmissionArg::Sobol => EmissionSampling::Sobol,
-        },
-        ..TraceOptions::default()
-    };
-    let map = trace_photons(&scene, &bvh, &options, &TraceBar(bar))
-        .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
-    timings.insert("trace".into(), json!(ms(start)));
-    eprintln!(
-        "traced {} photons: {} hit records ({} indirect)",
-        map.emitted(),
-        map.len(),
-        map.indirect().count()
-    );
-
-    // Preprocessing (section 2.2): one splat per selected hit, sized by equation 3.
-    let start = Instant::now();
-    let selection = match args.technique {
-        Technique::Splat => BounceSelection::All,
-        Technique::SplatDirect => BounceSelection::Indirect,
-    };
     let kernel = match args.kernel {
         KernelArg::Silverman => Kernel::Silverman,
         KernelArg::Gaussian => Kernel::Gaussian,
     };
-    let estimator = SplatEstimator::build(
-        &scene,
-        &map,
-        EstimatorOptions {
-            kernel,
-            support: Support::Scaled(args.kernel_c),
-            selection,
-        },
-    )
-    .context("cannot build the splats")?;
-    timings.insert("splat_setup".into(), json!(ms(start)));
+    let (splatting, vertex) = match density {
+        None => (
+            Some(splat_setup(args, &scene, &bvh, kernel, &mut timings)?),
+            None,
+        ),
+        Some(estimator) => {
+            let v = vertex_radiance(estimator, &scene, &bvh, args.photons, args.seed)?;
+            eprintln!(
+                "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
+                estimator.name(),
+                v.primary_rays,
+                v.segments,
+                v.ray_set_ms,
+                scene
+                    .meshes()
+                    .iter()
+                    .map(|m| m.positions.len())
+                    .sum::<usize>(),
+                v.estimate_ms
+            );
+            timings.insert("ray_set".into(), json!(v.ray_set_ms));
+            timings.insert("estimate".into(), json!(v.estimate_ms));
+            (None, Some(v))
+        }
+    };
 
     // Diffuse surfaces precomputed into textures (section 2.2.1).
     let start = Instant::now();
     let diffuse = args.diffuse.unwrap_or(match args.technique {
-        Technique::Splat => DiffuseArg::Splat,
         Technique::SplatDirect => DiffuseArg::Texture,
+        _ => DiffuseArg::Splat,
     });
-    let atlas = match diffuse {
-        DiffuseArg::Splat => None,
-        DiffuseArg::Texture => Some(
-            DiffuseAtlas::build(&scene, &estimator, DiffuseTextureOptions::default())
-                .context("cannot precompute the diffuse textures")?,
+    let atlas = match (diffuse, &splatting) {
+        (DiffuseArg::Texture, Some(splatting)) => Some(
+            DiffuseAtlas::build(
+                &scene,
+                &splatting.estimator,
+                DiffuseTextureOptions::default(),
+            )
+            .context("cannot precompute the diffuse textures")?,
         ),
+        _ => None,
     };
     if atlas.is_some() {
         timings.insert("diffuse_textures".into(), json!(ms(start)));
@@ -300,12 +329,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .as_ref()
         .map(DiffuseAtlas::textured)
         .unwrap_or_default();
-    let splats = SplatBuffers::new_excluding(&ctx, &scene, &estimator, glossy, &exclude)
+    let splats = splatting
+        .as_ref()
+        .map(|s| SplatBuffers::new_excluding(&ctx, &scene, &s.estimator, glossy, &exclude))
+        .transpose()
         .with_context(|| format!("scene `{}`", scene.name))?;
     let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let mut graph = FrameGraph::new(&ctx, output_format)?
-        .with_emission(&ctx, targets.hdr_format(), &scene)?
-        .with_splats(&ctx, targets.hdr_format(), kernel)?;
+    let mut graph =
+        FrameGraph::new(&ctx, output_format)?.with_emission(&ctx, targets.hdr_format(), &scene)?;
+    if splatting.is_some() {
+        graph = graph.with_splats(&ctx, targets.hdr_format(), kernel)?;
+    }
+    if let Some(v) = &vertex {
+        graph = graph.with_gouraud(&ctx, targets.hdr_format(), &scene_buffers)?;
+        graph.set_gouraud_radiance(&ctx, &v.corners)?;
+    }
     let diffuse_textures = match &atlas {
         Some(atlas) => {
             graph = graph.with_diffuse_textures(&ctx, targets.hdr_format())?;
@@ -359,8 +397,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             tonemap: &Tonemap::default(),
             targets: &targets,
             output: &output_view,
-            splats: Some(SplatInputs {
-                buffers: &splats,
+            splats: splats.as_ref().map(|buffers| SplatInputs {
+                buffers,
                 restriction,
                 filtering,
             }),
@@ -388,12 +426,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let info = json!({
         "scene": scene.name,
         "technique": args.technique.to_possible_value().map(|v| v.get_name().to_owned()),
-        "photons": map.emitted(),
-        "hit_records": map.len(),
-        "splats": splats.count,
+        "photons": splatting.as_ref().map_or(args.photons, |s| s.emitted),
+        "hit_records": splatting.as_ref().map(|s| s.hit_records),
+        "splats": splats.as_ref().map(|s| s.count),
         "kernel": format!("{kernel:?}"),
         "kernel_c": args.kernel_c,
-        "emission": format!("{:?}", options.emission),
+        "emission": splatting.as_ref().map(|s| format!("{:?}", s.emission)),
+        "estimator": density.map(|e| format!("{e:?}")),
+        "mesh_edge": density.map(|_| args.mesh_edge),
+        "triangles": scene.triangle_count(),
+        "ray_segments": vertex.as_ref().map(|v| v.segments),
         "seed": args.seed,
         "size": [width, height],
         "restriction": format!("{restriction:?}"),
@@ -411,6 +453,79 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot write {}", sidecar.display()))?;
     eprintln!("wrote {} and {}", args.out.display(), sidecar.display());
     Ok(())
+}
+
+/// What splatting produced before the GPU frame (Stürzlinger & Bastos 1997, sections 2.1 and 2.2).
+struct Splatting {
+    /// Photons emitted.
+    emitted: u64,
+    /// Hit records of the photon map.
+    hit_records: usize,
+    /// Emission sampling of the photon tracer.
+    emission: EmissionSampling,
+    /// The splats.
+    estimator: SplatEstimator,
+}
+
+/// Particle tracing (section 2.1) and one splat per selected hit, sized by equation 3 (section 2.2).
+fn splat_setup(
+    args: &RenderArgs,
+    scene: &Scene,
+    bvh: &Bvh,
+    kernel: Kernel,
+    timings: &mut serde_json::Map<String, serde_json::Value>,
+) -> anyhow::Result<Splatting> {
+    let start = Instant::now();
+    let bar = ProgressBar::new(args.photons).with_style(
+        ProgressStyle::with_template("tracing photons {bar:40} {pos}/{len} ({eta} left)")
+            .context("progress bar template")?,
+    );
+    let options = TraceOptions {
+        photons: args.photons,
+        seed: args.seed,
+        emission: match args.emission {
+            EmissionArg::Random => EmissionSampling::Random,
+            EmissionArg::Halton => EmissionSampling::Halton,
+            EmissionArg::Sobol => EmissionSampling::Sobol,
+        },
+        ..TraceOptions::default()
+    };
+    let map = trace_photons(scene, bvh, &options, &TraceBar(bar))
+        .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
+    timings.insert("trace".into(), json!(ms(start)));
+    eprintln!(
+        "traced {} photons: {} hit records ({} indirect)",
+        map.emitted(),
+        map.len(),
+        map.indirect().count()
+    );
+
+    // Preprocessing (section 2.2): one splat per selected hit, sized by equation 3.
+    let start = Instant::now();
+    let selection = match args.technique {
+        Technique::Splat => BounceSelection::All,
+        Technique::SplatDirect => BounceSelection::Indirect,
+        Technique::Detp | Technique::Impact | Technique::Photonmap => {
+            bail!("--technique {:?} does not splat", args.technique)
+        }
+    };
+    let estimator = SplatEstimator::build(
+        scene,
+        &map,
+        EstimatorOptions {
+            kernel,
+            support: Support::Scaled(args.kernel_c),
+            selection,
+        },
+    )
+    .context("cannot build the splats")?;
+    timings.insert("splat_setup".into(), json!(ms(start)));
+    Ok(Splatting {
+        emitted: map.emitted(),
+        hit_records: map.len(),
+        emission: options.emission,
+        estimator,
+    })
 }
 
 /// `out` with the extension `.json`.

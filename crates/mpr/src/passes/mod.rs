@@ -4,6 +4,7 @@ pub mod depth;
 pub mod diffuse_texture;
 pub mod direct;
 pub mod emission;
+pub mod gouraud;
 pub mod shadow;
 pub mod splat;
 pub mod tonemap;

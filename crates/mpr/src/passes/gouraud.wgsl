@@ -1,0 +1,52 @@
+// Gouraud pass (García Hernández, Ureña & Lastra 2003, section 2.4): the
+// outgoing radiance computed at mesh vertices, L_r = rho/pi E (equation 2.2),
+// interpolated inside each triangle and added into the HDR target after an
+// equal-depth redraw of the scene against the depth pre-pass.
+//
+// Notation
+// | symbol | meaning                                                       | unit       |
+// |--------|---------------------------------------------------------------|------------|
+// | P      | world position of the shaded point                            | m          |
+// | E      | camera position                                               | m          |
+// | n      | interpolated vertex normal: the side the estimate belongs to  | -          |
+// | Lv     | outgoing radiance at a triangle corner (per-vertex, eq. 2.2)  | W/(m^2 sr) |
+// | L      | Lv interpolated perspective-correctly at the pixel centre     | W/(m^2 sr) |
+// One-sided like the estimators' tangent-plane side: L is seen only where (E - P) . n > 0.
+
+struct GouraudCamera {
+    view_projection: mat4x4f,
+    position: vec4f,
+}
+
+@group(0) @binding(0) var<uniform> camera: GouraudCamera;
+
+struct VertexOutput {
+    // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
+    @builtin(position) @invariant clip: vec4f,
+    @location(0) world: vec3f,
+    @location(1) normal: vec3f,
+    // Perspective-correct (the WGSL default), so L is linear in world space across the triangle.
+    @location(2) @interpolate(perspective, center) radiance: vec3f,
+}
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3f,
+    @location(2) normal: vec3f,
+    @location(4) radiance: vec3f,
+) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    out.radiance = radiance;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    if dot(camera.position.xyz - in.world, in.normal) <= 0.0 {
+        discard;
+    }
+    return vec4f(in.radiance, 0.0);
+}
