@@ -29,10 +29,41 @@ fn gpu_splats(
     restriction: Restriction,
     filtering: KernelFiltering,
 ) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let splats = SplatBuffers::new(ctx, scene, estimator, GlossyModel::Exact).unwrap();
+    render_with(ctx, scene, estimator, &splats, restriction, filtering)
+}
+
+/// Depth pre-pass then the splat pass over `splats` (pixel-centre kernel): HDR rgb.
+fn render_buffers(
+    ctx: &GpuContext,
+    scene: &Scene,
+    estimator: &SplatEstimator,
+    splats: &SplatBuffers,
+    restriction: Restriction,
+) -> Vec<[f32; 3]> {
+    render_with(
+        ctx,
+        scene,
+        estimator,
+        splats,
+        restriction,
+        KernelFiltering::PixelCentre,
+    )
+    .0
+}
+
+/// Depth pre-pass then the splat pass over `splats`: (HDR rgb, surface ids).
+fn render_with(
+    ctx: &GpuContext,
+    scene: &Scene,
+    estimator: &SplatEstimator,
+    splats: &SplatBuffers,
+    restriction: Restriction,
+    filtering: KernelFiltering,
+) -> (Vec<[f32; 3]>, Vec<u32>) {
     let camera = scene.camera().with_aspect(1.0);
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
-    let splats = SplatBuffers::new(ctx, scene, estimator, GlossyModel::Exact).unwrap();
     let depth = DepthPass::new(ctx).unwrap();
     let pass = SplatPass::new(ctx, targets.hdr_format(), estimator.options().kernel).unwrap();
     depth.prepare(&ctx.queue, &camera);
@@ -46,7 +77,7 @@ fn gpu_splats(
         &ctx.device,
         &mut encoder,
         &buffers,
-        &splats,
+        splats,
         &targets,
         restriction,
     )
@@ -223,4 +254,39 @@ fn gpu_splats_match_cpu_glosbox() {
 fn gpu_splats_match_cpu_cornell_indirect() {
     // Lambertian only: the texture's bilinear and f16 error alone.
     check_scene("cornell", BounceSelection::Indirect, 0.005, 0.06);
+}
+
+/// Splats split over many small instance buffers (as millions of photons are)
+/// render the same image as one buffer, with both restrictions.
+#[test]
+fn chunked_instance_buffers_render_the_same_image() {
+    let Some(ctx) = gpu_or_skip("chunked_instance_buffers_render_the_same_image") else {
+        return;
+    };
+    let scene = builtin("cornell").unwrap();
+    let est = estimator(&scene, 5_000, 8.0, BounceSelection::All);
+    let splats = est.splats();
+    let one = SplatBuffers::from_splats(&ctx, &scene, &splats, GlossyModel::Exact).unwrap();
+    let many = SplatBuffers::from_splats_chunked(
+        &ctx,
+        &scene,
+        &splats,
+        GlossyModel::Exact,
+        1000 * size_of::<lustre_mpr::passes::splat::GpuSplat>() as u64,
+    )
+    .unwrap();
+    assert_eq!(one.chunk_count(), 1);
+    assert!(
+        many.chunk_count() >= splats.len() / 1000,
+        "{}",
+        many.chunk_count()
+    );
+    for restriction in [Restriction::SurfaceId, Restriction::Stencil] {
+        if restriction == Restriction::Stencil && !ctx.has_stencil() {
+            continue;
+        }
+        let a = render_buffers(&ctx, &scene, &est, &one, restriction);
+        let b = render_buffers(&ctx, &scene, &est, &many, restriction);
+        assert_eq!(a, b, "{restriction:?}");
+    }
 }

@@ -112,13 +112,21 @@ impl GpuSplat {
 /// The splats of a photon map on the GPU, grouped by surface, with the materials they are shaded with (the precomputed triangles of section 2.2).
 #[derive(Debug)]
 pub struct SplatBuffers {
-    instances: wgpu::Buffer,
+    /// Instance buffers, each with the global instance range it holds (split to stay under the device's buffer size limit).
+    chunks: Vec<(wgpu::Buffer, Range<u32>)>,
     /// Instance range of each surface, by `SurfaceId`.
     pub surface_ranges: Vec<Range<u32>>,
     materials: wgpu::Buffer,
     surface_materials: wgpu::Buffer,
     /// Number of splats.
     pub count: u32,
+}
+
+impl SplatBuffers {
+    /// Number of instance buffers the splats are split into.
+    pub fn chunk_count(&self) -> usize {
+        self.chunks.len()
+    }
 }
 
 impl SplatBuffers {
@@ -146,12 +154,23 @@ impl SplatBuffers {
         Self::from_splats(ctx, scene, &splats, glossy)
     }
 
-    /// Uploads `splats` (any order; they are grouped by surface here).
+    /// Uploads `splats` (any order; they are grouped by surface here) in buffers of at most 128 MiB.
     pub fn from_splats(
         ctx: &GpuContext,
         scene: &Scene,
         splats: &[Splat],
         glossy: GlossyModel,
+    ) -> Result<Self> {
+        Self::from_splats_chunked(ctx, scene, splats, glossy, 1 << 27)
+    }
+
+    /// [`SplatBuffers::from_splats`] with instance buffers of at most `max_chunk_bytes` (and the device's limit).
+    pub fn from_splats_chunked(
+        ctx: &GpuContext,
+        scene: &Scene,
+        splats: &[Splat],
+        glossy: GlossyModel,
+        max_chunk_bytes: u64,
     ) -> Result<Self> {
         let surfaces = scene.surfaces().len();
         let mut by_surface: Vec<Vec<GpuSplat>> = vec![Vec::new(); surfaces];
@@ -197,12 +216,22 @@ impl SplatBuffers {
                     })
             })
         };
+        let limit = ctx.device.limits().max_buffer_size.min(max_chunk_bytes);
+        let per_chunk = (limit / size_of::<GpuSplat>() as u64).max(1) as usize;
+        let mut chunks = Vec::with_capacity(instances.len().div_ceil(per_chunk));
+        for (i, part) in instances.chunks(per_chunk).enumerate() {
+            let start = (i * per_chunk) as u32;
+            chunks.push((
+                buffer(
+                    "splat-instances",
+                    bytemuck::cast_slice(part),
+                    wgpu::BufferUsages::VERTEX,
+                )?,
+                start..start + part.len() as u32,
+            ));
+        }
         Ok(Self {
-            instances: buffer(
-                "splat-instances",
-                bytemuck::cast_slice(&instances),
-                wgpu::BufferUsages::VERTEX,
-            )?,
+            chunks,
             materials: buffer(
                 "splat-materials",
                 bytemuck::cast_slice(&materials),
@@ -570,8 +599,7 @@ impl SplatPass {
                 if splats.count > 0 {
                     pass.set_pipeline(&self.splat_id);
                     pass.set_bind_group(0, &bind_group, &[]);
-                    pass.set_vertex_buffer(0, splats.instances.slice(..));
-                    pass.draw(0..3, 0..splats.count);
+                    draw_instances(&mut pass, splats, 0..splats.count);
                 }
             }
             Restriction::Stencil => {
@@ -606,7 +634,6 @@ impl SplatPass {
                         wgpu::LoadOp::Clear(0)
                     };
                     let mut pass = begin(encoder, targets, Some(stencil_load));
-                    pass.set_vertex_buffer(1, splats.instances.slice(..));
                     for (i, &s) in chunk.iter().enumerate() {
                         pass.set_stencil_reference(i as u32 + 1);
                         pass.set_pipeline(mask);
@@ -619,13 +646,23 @@ impl SplatPass {
                         pass.draw_indexed(scene.surface_ranges[s].clone(), 0, 0..1);
                         pass.set_pipeline(splat_stencil);
                         pass.set_bind_group(0, &bind_group, &[]);
-                        pass.set_vertex_buffer(0, splats.instances.slice(..));
-                        pass.draw(0..3, splats.surface_ranges[s].clone());
+                        draw_instances(&mut pass, splats, splats.surface_ranges[s].clone());
                     }
                 }
             }
         }
         Ok(())
+    }
+}
+
+/// Draws the splats of the global instance range `range`, chunk by chunk.
+fn draw_instances(pass: &mut wgpu::RenderPass<'_>, splats: &SplatBuffers, range: Range<u32>) {
+    for (buffer, held) in &splats.chunks {
+        let (lo, hi) = (range.start.max(held.start), range.end.min(held.end));
+        if lo < hi {
+            pass.set_vertex_buffer(0, buffer.slice(..));
+            pass.draw(0..3, lo - held.start..hi - held.start);
+        }
     }
 }
 
