@@ -113,6 +113,42 @@ pub const CASES: &[Case] = &[
         flip_mean_threshold: 0.01,
         comment: MEASURED,
     },
+    Case {
+        name: "cornell-impact",
+        scene: "cornell",
+        args: &[
+            "--technique",
+            "impact",
+            "--photons",
+            "20000",
+            "--size",
+            "128x128",
+            "--seed",
+            "1",
+        ],
+        flip_mean_threshold: 0.01,
+        comment: MEASURED,
+    },
+    Case {
+        name: "cornell-detp",
+        scene: "cornell",
+        args: &[
+            "--technique",
+            "detp",
+            "--photons",
+            "5000",
+            "--radius",
+            "0.1",
+            "--mesh-edge",
+            "0.2",
+            "--size",
+            "128x128",
+            "--seed",
+            "1",
+        ],
+        flip_mean_threshold: 0.01,
+        comment: MEASURED,
+    },
 ];
 
 /// The exposure (stops) at which renders are tone mapped for FLIP and PNGs.
