@@ -37,6 +37,12 @@ pub struct Args {
     /// Kernel constants C of equation 3 (`lustre render --kernel-c`, comma-separated).
     #[arg(long = "kernel-c", value_delimiter = ',', default_value = "16")]
     kernel_c: Vec<String>,
+    /// Name of the BENCHMARKS.md section to (re)write, between `<!-- NAME:start -->` and `<!-- NAME:end -->`.
+    #[arg(long, default_value = "converge")]
+    section: String,
+    /// Heading of that section.
+    #[arg(long, default_value = "Convergence to the path-traced references")]
+    title: String,
 }
 
 /// A path-traced reference and what its sidecar says about it.
@@ -163,12 +169,12 @@ fn table_row(row: &Row) -> String {
 }
 
 /// The BENCHMARKS.md section (between its markers) for `rows`.
-fn section(references: &[Reference], rows: &[Row], machine: &str) -> String {
+fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -> String {
     let mut adapters: Vec<&str> = rows.iter().map(|r| r.adapter.as_str()).collect();
     adapters.sort_unstable();
     adapters.dedup();
     let mut s = String::new();
-    let _ = writeln!(s, "## Convergence to the path-traced references\n");
+    let _ = writeln!(s, "## {title}\n");
     let _ = writeln!(
         s,
         "Written by `cargo xtask converge`; do not edit by hand. Each technique renders the scene \
@@ -279,9 +285,9 @@ pub fn run(args: Args) -> Result<()> {
     if failures > 0 {
         bail!("{failures} render(s) failed; BENCHMARKS.md left as it was");
     }
-    let text = section(&references, &rows, &crate::bench::machine());
+    let text = section(&references, &rows, &crate::bench::machine(), &args.title);
     println!("\n{text}");
-    crate::bench::write_section("converge", &text)
+    crate::bench::write_section(&args.section, &text)
 }
 
 #[cfg(test)]
@@ -340,6 +346,8 @@ mod tests {
             photons: vec![1000, 2_000_000],
             techniques: vec!["splat".into(), "splat-direct".into()],
             kernel_c: vec!["16".into()],
+            section: "converge".into(),
+            title: "Convergence".into(),
         };
         let (references, rows, failures) = converge(&lustre, dir, &args, dir).unwrap();
         assert_eq!(failures, 0);
@@ -348,7 +356,12 @@ mod tests {
             rows.iter()
                 .all(|r| r.rel_mse == 0.0 && r.flip_mean.abs() < 1e-6)
         );
-        let text = section(&references, &rows, "Test CPU, 2 cores available");
+        let text = section(
+            &references,
+            &rows,
+            "Test CPU, 2 cores available",
+            "Convergence",
+        );
         assert!(
             text.contains("Machine: Test CPU, 2 cores available. GPU adapter: fake adapter."),
             "{text}"
