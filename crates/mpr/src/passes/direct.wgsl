@@ -113,6 +113,19 @@ fn shadow_visibility(to_point: vec3f, d: f32, cos_i: f32) -> f32 {
     return select(0.0, 1.0, d - bias <= stored);
 }
 
+// material_brdf of materials[mi], reading one lobe at a time from storage
+// instead of copying the whole material (lavapipe copies it per invocation).
+fn direct_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
+    var f = vec3f(0.0);
+    for (var i = 0u; i < MAX_LOBES; i++) {
+        let kind = materials[mi].lobes[i].kind;
+        if kind != LOBE_NONE && materials[mi].lobes[i].weight > 0.0 {
+            f += materials[mi].lobes[i].weight * material_lobe(materials[mi].lobes[i], wi, wo);
+        }
+    }
+    return f;
+}
+
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     let wo_world = normalize(camera.position.xyz - in.world);
@@ -133,10 +146,6 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     }
     let v = shadow_visibility(-to_light, d, cos_i);
     let basis = material_basis(n);
-    let f = material_brdf(
-        materials[in.material],
-        material_to_local(basis, wi_world),
-        material_to_local(basis, wo_world),
-    );
+    let f = direct_brdf(in.material, material_to_local(basis, wi_world), material_to_local(basis, wo_world));
     return vec4f(f * intensity * (cos_i * v / (d * d)), 0.0);
 }

@@ -40,7 +40,7 @@ pub enum KernelFiltering {
     /// Trilinear mip-mapping with 16× anisotropic filtering: the kernel averaged over each pixel's footprint, as the paper filters small splats.
     #[default]
     MipMapped,
-    /// Bilinear from level 0 at the pixel centre: the kernel point-sampled as the CPU estimator evaluates it.
+    /// The kernel evaluated exactly at the pixel centre, as the CPU estimator does (the formula, no texture: cheaper than a fetch on a software rasteriser).
     PixelCentre,
 }
 
@@ -256,7 +256,7 @@ pub struct SplatUniforms {
     pub view_projection: [[f32; 4]; 4],
     /// Eye position (w unused).
     pub eye: [f32; 4],
-    /// `x`: 1 for [`KernelFiltering::MipMapped`], 0 for [`KernelFiltering::PixelCentre`].
+    /// `x`: 1 for [`KernelFiltering::MipMapped`], 0 for [`KernelFiltering::PixelCentre`]; `y`: 1 for [`Kernel::Gaussian`], 0 for Silverman's.
     pub options: [u32; 4],
 }
 
@@ -271,7 +271,7 @@ pub struct SplatPass {
     uniforms: wgpu::Buffer,
     kernel_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
-    point_sampler: wgpu::Sampler,
+    kernel: Kernel,
 }
 
 /// Additive blending: `dst + src` on colour and alpha (section 3.2, "hardware blending functions set up to add").
@@ -375,12 +375,6 @@ impl SplatPass {
                     },
                     wgpu::BindGroupLayoutEntry {
                         binding: 4,
-                        visibility: wgpu::ShaderStages::FRAGMENT,
-                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                        count: None,
-                    },
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 6,
                         visibility: wgpu::ShaderStages::FRAGMENT,
                         ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                         count: None,
@@ -512,14 +506,6 @@ impl SplatPass {
                 anisotropy_clamp: 16,
                 ..Default::default()
             });
-            let point_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("splat-kernel-centre"),
-                address_mode_u: wgpu::AddressMode::ClampToEdge,
-                address_mode_v: wgpu::AddressMode::ClampToEdge,
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..Default::default()
-            });
             Self {
                 layout,
                 mask_layout,
@@ -529,7 +515,7 @@ impl SplatPass {
                 uniforms,
                 kernel_view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
                 sampler,
-                point_sampler,
+                kernel,
             }
         })
     }
@@ -544,7 +530,12 @@ impl SplatPass {
         let uniforms = SplatUniforms {
             view_projection: camera.view_projection().to_cols_array_2d(),
             eye: camera.position.extend(1.0).to_array(),
-            options: [u32::from(filtering == KernelFiltering::MipMapped), 0, 0, 0],
+            options: [
+                u32::from(filtering == KernelFiltering::MipMapped),
+                u32::from(self.kernel == Kernel::Gaussian),
+                0,
+                0,
+            ],
         };
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
     }
@@ -582,10 +573,6 @@ impl SplatPass {
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::Sampler(&self.point_sampler),
                 },
                 wgpu::BindGroupEntry {
                     binding: 5,

@@ -27,7 +27,8 @@
 struct SplatUniforms {
     view_projection: mat4x4f,
     eye: vec4f,
-    // x: 1 to filter the kernel with mip-maps and anisotropy (section 3.2), 0 to point-sample level 0.
+    // x: 1 to filter the kernel texture with mip-maps and anisotropy (section 3.2), 0 to evaluate K at the pixel centre.
+    // y: the kernel at the pixel centre: 0 Silverman, 1 truncated Gaussian (lustre-photon's Kernel).
     options: vec4u,
 }
 
@@ -37,7 +38,6 @@ struct SplatUniforms {
 @group(0) @binding(3) var kernel_texture: texture_2d<f32>;
 @group(0) @binding(4) var kernel_sampler: sampler;
 @group(0) @binding(5) var surface_ids: texture_2d<u32>;
-@group(0) @binding(6) var kernel_point_sampler: sampler;
 
 // The enclosing triangle's corners in kernel units (1 + sqrt 2 = 2.41421356).
 const SPLAT_CORNERS = array<vec2f, 3>(
@@ -51,6 +51,19 @@ struct SplatOut {
     @location(0) kernel: vec2f,
     @location(1) @interpolate(flat) colour: vec3f,
     @location(2) @interpolate(flat) surface: u32,
+}
+
+// material_brdf of materials[mi], reading one lobe at a time from storage
+// instead of copying the whole material (lavapipe copies it per invocation).
+fn splat_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
+    var f = vec3f(0.0);
+    for (var i = 0u; i < MAX_LOBES; i++) {
+        let kind = materials[mi].lobes[i].kind;
+        if kind != LOBE_NONE && materials[mi].lobes[i].weight > 0.0 {
+            f += materials[mi].lobes[i].weight * material_lobe(materials[mi].lobes[i], wi, wo);
+        }
+    }
+    return f;
 }
 
 @vertex
@@ -72,8 +85,7 @@ fn vs_splat(
     let world = position + h * (k.x * basis[0] + k.y * basis[1]);
     out.clip = uniforms.view_projection * vec4f(world, 1.0);
     out.kernel = k;
-    let m = materials[surface_materials[surface]];
-    let f = material_brdf(m, material_to_local(basis, incoming), material_to_local(basis, wo));
+    let f = splat_brdf(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
     out.colour = power * f / (h * h);
     out.surface = surface;
     return out;
@@ -91,10 +103,24 @@ fn splat_kernel_filtered(k: vec2f) -> f32 {
     return select(0.0, value, splat_inside(k));
 }
 
-// K at the pixel centre: bilinear from level 0, as the CPU estimator evaluates it.
+// Silverman's K2 = 3/pi (1 - r^2)^2 and the truncated Gaussian of sigma 1/(2 sqrt 2)
+// renormalised on the unit disc (lustre-photon's Kernel::eval_r2), zero outside it.
+const SPLAT_SILVERMAN: f32 = 0.954929658;
+const SPLAT_GAUSSIAN_INV_2S2: f32 = 4.0;
+const SPLAT_GAUSSIAN_NORM: f32 = 1.296994770;
+
+// K evaluated exactly at the pixel centre, as the CPU estimator does (no texture:
+// a texture fetch costs more than the formula on a software rasteriser).
 fn splat_kernel_centre(k: vec2f) -> f32 {
-    let value = textureSampleLevel(kernel_texture, kernel_point_sampler, 0.5 * (k + 1.0), 0.0).r;
-    return select(0.0, value, splat_inside(k));
+    let r2 = dot(k, k);
+    if !(r2 < 1.0) {
+        return 0.0;
+    }
+    if uniforms.options.y == 1u {
+        return SPLAT_GAUSSIAN_NORM * exp(-SPLAT_GAUSSIAN_INV_2S2 * r2);
+    }
+    let t = 1.0 - r2;
+    return SPLAT_SILVERMAN * t * t;
 }
 
 // Surface-id restriction: the splat adds only where its own surface is visible.
