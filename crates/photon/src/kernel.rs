@@ -74,7 +74,47 @@ pub fn kernel_support(c: f32, area: f32, n: usize) -> f32 {
     c * (area / n as f32).sqrt()
 }
 
-/// Side of the triangle that encloses the kernel support in the splat texture (section 3.2, figure 1): `g = (1/2 + √2) h`.
-pub fn splat_triangle_size(h: f32) -> f32 {
-    (0.5 + std::f32::consts::SQRT_2) * h
+/// The splat triangle of section 3.2 (figure 1) in kernel units (multiply by
+/// `h` along two orthonormal in-plane axes): right angle at `(-1, -1)`, legs
+/// of `2 + √2` along the axes, hypotenuse `x + y = √2`. Its three sides touch
+/// the unit support disc, so it encloses the kernel with the least area of
+/// any right isosceles triangle aligned with the kernel texture
+/// (`(2 + √2)²/2 ≈ 5.83 h²`).
+///
+/// The figure is missing from our copy of the paper; its text gives
+/// `g = (1/2 + √2) h`, which cannot be the side of a triangle enclosing a
+/// disc of radius `h` (any such side is at least `2√3 h`), so `g` must
+/// measure something in the figure we cannot see. The GPU pass
+/// (`lustre-mpr`'s `splat.wgsl`) uses these corners.
+pub fn splat_triangle() -> [glam::Vec2; 3] {
+    let far = 1.0 + std::f32::consts::SQRT_2;
+    [
+        glam::Vec2::new(-1.0, -1.0),
+        glam::Vec2::new(far, -1.0),
+        glam::Vec2::new(-1.0, far),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_splat_triangle_touches_the_support_disc_on_all_three_sides() {
+        let [a, b, c] = splat_triangle();
+        // Distance from the origin to the line through p and q, and the side's orientation.
+        let distance = |p: glam::Vec2, q: glam::Vec2| {
+            let d = q - p;
+            (d.x * p.y - d.y * p.x).abs() / d.length()
+        };
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            assert!((distance(p, q) - 1.0).abs() < 1e-6, "{p} {q}");
+        }
+        // The origin is inside: the disc is enclosed, not just tangent from outside.
+        let cross = |p: glam::Vec2, q: glam::Vec2, r: glam::Vec2| (q - p).perp_dot(r - p);
+        let o = glam::Vec2::ZERO;
+        assert!(cross(a, b, o) > 0.0 && cross(b, c, o) > 0.0 && cross(c, a, o) > 0.0);
+        let area = 0.5 * (b - a).perp_dot(c - a);
+        assert!((area - (2.0 + std::f32::consts::SQRT_2).powi(2) / 2.0).abs() < 1e-5);
+    }
 }

@@ -53,7 +53,7 @@ pub use estimator::{BounceSelection, EstimatorOptions, Splat, SplatEstimator, Su
 pub use file::{append_photon_file, read_photon_file, read_photon_file_for, write_photon_file};
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};
-pub use kernel::{Kernel, kernel_support};
+pub use kernel::{Kernel, kernel_support, splat_triangle};
 pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams};
 pub use progress::{NoProgress, Progress};
 pub use quantise::RECORD_BYTES;

@@ -22,7 +22,8 @@
 // | L      | phi f_r(wi, wo) K(k) / h^2, added per pixel                      | W/(m^2 sr) |
 // The triangle has its right angle at k = (-1, -1) and legs of 2 + sqrt(2)
 // along the frame's axes: the smallest such triangle whose sides touch the
-// unit support disc (section 3.2, figure 1). The texture covers k in [-1, 1]^2.
+// unit support disc (section 3.2, figure 1; lustre_photon::splat_triangle).
+// The texture covers k in [-1, 1]^2.
 
 struct SplatUniforms {
     view_projection: mat4x4f,
