@@ -18,7 +18,7 @@
 // | phi    | photon power (equation 1)                                        | W          |
 // | h      | kernel support of the surface (equation 3)                       | m          |
 // | k      | kernel-space offset (x - x_p)/h in the tangent frame of n        | 1          |
-// | K      | unit-volume kernel, sampled from the 64x64 mip-mapped texture    | 1          |
+// | K      | unit-volume kernel: its formula, or the 64x64 mip-mapped texture | 1          |
 // | L      | phi f_r(wi, wo) K(k) / h^2, added per pixel                      | W/(m^2 sr) |
 // The triangle has its right angle at k = (-1, -1) and legs of 2 + sqrt(2)
 // along the frame's axes: the smallest such triangle whose sides touch the
