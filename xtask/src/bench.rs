@@ -398,8 +398,10 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
     );
     let _ = writeln!(
         s,
-        "`glosbox` at {}×{}, C = {} in equation 3 (`lustre render`'s default), Silverman's kernel \
-         read at pixel centres, exact BRDFs, {} HDR target. Machine: {}. Adapter: {}.\n",
+        "`glosbox` at {}×{}, C = {} in equation 3 (`lustre render` defaults to 16, whose splats \
+         cover 16 times the pixels: the fill-bound frames grow about as C²), Silverman's kernel \
+         evaluated at pixel centres, exact BRDFs, diffuse surfaces splatted too (no precomputed \
+         textures), {} HDR target. Machine: {}. Adapter: {}.\n",
         first.width,
         first.height,
         first.kernel_c,
