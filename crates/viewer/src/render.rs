@@ -5,9 +5,10 @@
 //! Techniques (Stürzlinger & Bastos 1997):
 //! - `splat`: section 2.2, every photon hit splatted with the BRDF towards the viewer.
 //! - `splat-direct`: section 2.2.1, the optimised method: direct light from
-//!   point lights with shadow maps and per-pixel BRDF, plus the splats of
-//!   photons with more than one bounce. Small area lights become cosine point
-//!   lights of equal power in both phases, as in the paper's section 3.
+//!   point lights with shadow maps and per-pixel BRDF, diffuse planar surfaces
+//!   from textures precomputed once, and the splats of photons with more than
+//!   one bounce on the others. Small area lights become cosine point lights of
+//!   equal power in both phases, as in the paper's section 3.
 //!
 //! Techniques (García Hernández, Ureña & Lastra 2003, see [`crate::render_density`]):
 //! per-vertex radiance `ρ/π E` of a density estimator (section 1.2) on the
