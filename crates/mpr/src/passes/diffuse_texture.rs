@@ -785,26 +785,7 @@ impl DiffuseTexturePass {
         targets: &RenderTargets,
         textures: &DiffuseTextures,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("diffuse-texture"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &targets.hdr.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &targets.depth.view,
-                depth_ops: None,
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "diffuse-texture");
         let runs = textured_runs(&scene.surface_ranges, &textures.textured);
         if scene.vertex_count == 0 || runs.is_empty() {
             return;

@@ -5,6 +5,7 @@ pub mod diffuse_texture;
 pub mod direct;
 pub mod emission;
 pub mod gouraud;
+pub mod redraw;
 pub mod shadow;
 pub mod splat;
 pub mod tonemap;
