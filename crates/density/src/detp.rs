@@ -1,7 +1,7 @@
 //! Density Estimation on the Tangent Plane (section 1.2, Lastra et al.): a disc of fixed radius on the tangent plane at each vertex; every ray crossing it contributes `φ / (π r²)`.
 
 use glam::Vec3;
-use lustre_geometry::{Rgb, Scene};
+use lustre_geometry::{MeshId, Rgb, Scene};
 use rayon::prelude::*;
 
 use crate::VertexIrradiance;
@@ -17,6 +17,8 @@ pub struct Disc {
     pub normal: Vec3,
     /// Radius `r`.
     pub radius: f32,
+    /// The mesh the vertex belongs to: a segment that ends on this mesh may cross the disc within its artifact-control [`RaySegment::extension`] past its hit (section 1.2.1).
+    pub mesh: Option<MeshId>,
 }
 
 impl Disc {
@@ -27,11 +29,19 @@ impl Disc {
             return false;
         }
         let t = (self.centre - segment.origin).dot(self.normal) / denom;
-        if !(t >= 0.0 && t <= segment.length() + slack) {
+        if !(t >= 0.0 && t <= self.reach(segment) + slack) {
             return false;
         }
         let p = segment.origin + t * segment.direction;
         p.distance_squared(self.centre) <= self.radius * self.radius
+    }
+
+    /// How far along a segment the disc may be crossed: its length, plus its artifact-control extension when it ends on the disc's own mesh (section 1.2.1, concave surfaces).
+    pub fn reach(&self, segment: &RaySegment) -> f32 {
+        match (segment.hit, self.mesh) {
+            (Some(hit), Some(mesh)) if hit.mesh == mesh => hit.distance + segment.extension,
+            _ => segment.length(),
+        }
     }
 
     /// The disc's contribution of one segment, `φ / (π r²)` when it crosses the disc, else zero (section 1.2; additive over rays, equation 2.8).
@@ -76,6 +86,7 @@ pub fn detp(scene: &Scene, rays: &RaySet, radius: f32) -> Result<VertexIrradianc
                         centre,
                         normal,
                         radius,
+                        mesh: Some(m as MeshId),
                     };
                     let sum: glam::DVec3 = segments
                         .iter()

@@ -13,7 +13,7 @@
 use glam::Vec3;
 use lustre_brdf::BoxedBrdf;
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{Bvh, Ray, Rgb, Scene, TriangleId};
+use lustre_geometry::{Bvh, MeshId, Ray, Rgb, Scene, TriangleId};
 use lustre_photon::trace::scene_brdfs;
 use lustre_photon::{allocate_photons, photon_stream};
 use rayon::prelude::*;
@@ -46,6 +46,10 @@ impl Default for RaySetOptions {
 pub struct SegmentHit {
     /// Scene-wide index of the triangle hit.
     pub triangle: TriangleId,
+    /// The mesh that triangle belongs to.
+    pub mesh: MeshId,
+    /// Whether that triangle belongs to a mobile object (section 2.3: each ray keeps "which triangle intersected the ray" and whether it is the mobile object's).
+    pub mobile: bool,
     /// The hit point in world space.
     pub position: Vec3,
     /// Unit geometric normal of the triangle hit.
@@ -65,9 +69,22 @@ pub struct RaySegment {
     pub hit: Option<SegmentHit>,
     /// Power `φ` (W, RGB) carried along the segment and delivered at its hit.
     pub power: Rgb,
+    /// Artifact control on concave surfaces (section 1.2.1): how far the segment may be followed past its hit, through the mesh it hit, before it meets any other part of the scene; zero when artifact control is off.
+    pub extension: f32,
 }
 
 impl RaySegment {
+    /// A segment with no artifact-control extension.
+    pub fn new(origin: Vec3, direction: Vec3, hit: Option<SegmentHit>, power: Rgb) -> Self {
+        Self {
+            origin,
+            direction,
+            hit,
+            power,
+            extension: 0.0,
+        }
+    }
+
     /// Length of the segment: the hit distance, or infinity for a ray that leaves the scene.
     pub fn length(&self) -> f32 {
         self.hit.map_or(f32::INFINITY, |h| h.distance)
@@ -194,25 +211,22 @@ impl Tracer<'_> {
         let mut segments = Vec::new();
         for n in 1..=self.options.max_segments {
             let Some(hit) = self.bvh.closest_hit(&ray) else {
-                segments.push(RaySegment {
-                    origin: ray.origin,
-                    direction: ray.direction,
-                    hit: None,
-                    power,
-                });
+                segments.push(RaySegment::new(ray.origin, ray.direction, None, power));
                 break;
             };
-            segments.push(RaySegment {
-                origin: ray.origin,
-                direction: ray.direction,
-                hit: Some(SegmentHit {
+            segments.push(RaySegment::new(
+                ray.origin,
+                ray.direction,
+                Some(SegmentHit {
                     triangle: hit.triangle,
+                    mesh: self.scene.triangle_source(hit.triangle).0,
+                    mobile: false,
                     position: hit.position,
                     normal: hit.geometric_normal,
                     distance: hit.t,
                 }),
                 power,
-            });
+            ));
             if n == self.options.max_segments {
                 break;
             }

@@ -343,12 +343,13 @@ proptest! {
         let (Some(normal), Some(direction)) = (unit(normal), unit(direction)) else {
             return Ok(());
         };
-        let disc = Disc { centre: Vec3::from(centre), normal, radius };
+        let disc = Disc { centre: Vec3::from(centre), normal, radius, mesh: None };
         let segment = RaySegment {
             origin: Vec3::from(origin),
             direction,
-            hit: Some(SegmentHit { triangle: 0, position: Vec3::from(origin) + length * direction, normal: Vec3::Y, distance: length }),
+            hit: Some(SegmentHit { triangle: 0, mesh: 0, mobile: false, position: Vec3::from(origin) + length * direction, normal: Vec3::Y, distance: length }),
             power: Rgb::ONE,
+            extension: 0.0,
         };
         let steps = 20_000;
         let step = length / steps as f32;
