@@ -13,6 +13,9 @@ pub enum DensityError {
         /// What is wrong with it.
         message: String,
     },
+    /// A scene change was refused (e.g. a non-finite object transform).
+    #[error(transparent)]
+    Geometry(#[from] lustre_geometry::GeometryError),
     /// A material has no valid BRDF, or another particle-tracing failure.
     #[error(transparent)]
     Photon(#[from] PhotonError),

@@ -36,14 +36,24 @@ mod error;
 mod impact_count;
 pub mod kdtree;
 mod photon_maps;
+mod points;
+mod quasi_static;
 mod ray_set;
+mod update;
+mod world;
 
 pub use detp::{Disc, detp};
 pub use error::{DensityError, Result};
 pub use impact_count::{impact_count, triangle_irradiance};
 pub use kdtree::KdTree;
 pub use photon_maps::photon_maps;
-pub use ray_set::{PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set};
+pub use points::{EstimationPoint, EstimationPoints};
+pub use quasi_static::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions};
+pub use ray_set::{
+    PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set, trace_ray_set_in,
+};
+pub use update::{RayUpdate, update_ray_set};
+pub use world::{World, WorldHit};
 
 /// Irradiance `E` (W/m², RGB) at each vertex of each mesh, indexed `[mesh][vertex]` (section 2.4.1, figure 2.3: one value per vertex).
 pub type VertexIrradiance = Vec<Vec<lustre_geometry::Rgb>>;

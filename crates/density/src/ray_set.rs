@@ -19,6 +19,7 @@ use lustre_photon::{allocate_photons, photon_stream};
 use rayon::prelude::*;
 
 use crate::error::{DensityError, Result};
+use crate::world::{World, WorldHit};
 
 /// Settings of the photosimulation that builds a ray set (section 2.3, figure 2.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,6 +97,8 @@ impl RaySegment {
 pub struct PrimaryRay {
     /// Index of the emitting light in [`Scene::lights`].
     pub light: u32,
+    /// Index of the photon among its light's photons (it keys the photon's random streams).
+    pub index: u64,
     /// The primary ray first, then each reflection in order (figure 2.1, `Ray ← REFLECT(Ray)`).
     pub segments: Vec<RaySegment>,
 }
@@ -127,8 +130,32 @@ impl RaySet {
     }
 }
 
-/// Builds the ray set of a static scene (section 2.3, figure 2.1: INITIALPHOTOSIMULATIONCALCULATION).
+/// Builds the ray set of a static scene (section 2.3, figure 2.1: INITIALPHOTOSIMULATIONCALCULATION) with a BVH over the whole scene; no object is mobile.
 pub fn trace_ray_set(scene: &Scene, bvh: &Bvh, options: &RaySetOptions) -> Result<RaySet> {
+    trace_with(
+        scene,
+        &WholeScene { scene, bvh },
+        world_epsilon(scene),
+        options,
+    )
+}
+
+/// Builds the ray set of a scene with mobile objects at their current pose (section 2.3, figure 2.1), so that [`crate::update_ray_set`] can recalculate it (figure 2.2).
+pub fn trace_ray_set_in(scene: &Scene, world: &World, options: &RaySetOptions) -> Result<RaySet> {
+    trace_with(scene, world, world.epsilon(), options)
+}
+
+/// The offset that steps a reflected ray off its surface: 10⁻⁵ of the scene's size.
+fn world_epsilon(scene: &Scene) -> f32 {
+    let scale = scene.bounds().extent().max_element();
+    if scale.is_finite() && scale > 0.0 {
+        scale * 1e-5
+    } else {
+        1e-5
+    }
+}
+
+fn check_options(options: &RaySetOptions) -> Result<()> {
     if options.max_segments == 0 {
         return Err(DensityError::InvalidOption {
             option: "max_segments",
@@ -141,49 +168,98 @@ pub fn trace_ray_set(scene: &Scene, bvh: &Bvh, options: &RaySetOptions) -> Resul
             message: format!("{} is more than 2^32", options.photons),
         });
     }
-    let brdfs = scene_brdfs(scene)?;
-    let scale = scene.bounds().extent().max_element();
-    let epsilon = if scale.is_finite() && scale > 0.0 {
-        scale * 1e-5
-    } else {
-        1e-5
-    };
-    let powers: Vec<Rgb> = scene.lights().iter().map(|l| l.power()).collect();
-    let counts = allocate_photons(&powers, options.photons);
-    let jobs: Vec<(u32, u64)> = counts
+    Ok(())
+}
+
+fn trace_with(
+    scene: &Scene,
+    world: &dyn Intersector,
+    epsilon: f32,
+    options: &RaySetOptions,
+) -> Result<RaySet> {
+    check_options(options)?;
+    let tracer = Tracer::new(scene, world, epsilon, options)?;
+    let jobs: Vec<(u32, u64)> = tracer
+        .counts
         .iter()
         .enumerate()
         .flat_map(|(light, &m)| (0..m).map(move |i| (light as u32, i)))
         .collect();
-    let tracer = Tracer {
-        scene,
-        bvh,
-        brdfs: &brdfs,
-        epsilon,
-        counts: &counts,
-        options,
-    };
     let rays = jobs
         .par_iter()
         .filter_map(|&(light, index)| tracer.primary_ray(light, index))
         .collect();
     Ok(RaySet {
         rays,
-        emitted_per_light: counts,
+        emitted_per_light: tracer.counts,
     })
 }
 
-/// What tracing one photon needs.
-struct Tracer<'a> {
+/// First intersections for the tracer: the whole scene's BVH, or a [`World`] with mobile objects.
+pub(crate) trait Intersector: Sync {
+    /// The first intersection of a ray with the scene.
+    fn first_hit(&self, ray: &Ray) -> Option<WorldHit>;
+}
+
+struct WholeScene<'a> {
     scene: &'a Scene,
     bvh: &'a Bvh,
-    brdfs: &'a [BoxedBrdf],
+}
+
+impl Intersector for WholeScene<'_> {
+    fn first_hit(&self, ray: &Ray) -> Option<WorldHit> {
+        self.bvh.closest_hit(ray).map(|hit| WorldHit {
+            mesh: self.scene.triangle_source(hit.triangle).0,
+            hit,
+            mobile: false,
+        })
+    }
+}
+
+impl Intersector for World {
+    fn first_hit(&self, ray: &Ray) -> Option<WorldHit> {
+        self.closest_hit(ray)
+    }
+}
+
+/// The random stream of bounce `n` (1 = the reflection at the end of the first segment) of a photon: each bounce has its own stream, so a path recalculated from any segment (figure 2.2, FOLLOWRAY) draws the same numbers a full trace of the new pose would.
+fn bounce_stream(seed: u64, light: u32, index: u64, n: u32) -> lustre_geometry::sampling::Pcg32 {
+    photon_stream(
+        seed ^ (n as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        light,
+        index,
+    )
+}
+
+/// What tracing one photon needs.
+pub(crate) struct Tracer<'a> {
+    scene: &'a Scene,
+    world: &'a dyn Intersector,
+    brdfs: Vec<BoxedBrdf>,
     epsilon: f32,
-    counts: &'a [u64],
+    pub(crate) counts: Vec<u64>,
     options: &'a RaySetOptions,
 }
 
-impl Tracer<'_> {
+impl<'a> Tracer<'a> {
+    pub(crate) fn new(
+        scene: &'a Scene,
+        world: &'a dyn Intersector,
+        epsilon: f32,
+        options: &'a RaySetOptions,
+    ) -> Result<Self> {
+        check_options(options)?;
+        let powers: Vec<Rgb> = scene.lights().iter().map(|l| l.power()).collect();
+        Ok(Self {
+            scene,
+            world,
+            brdfs: scene_brdfs(scene)?,
+            epsilon,
+            counts: allocate_photons(&powers, options.photons),
+            options,
+        })
+    }
+
     /// Follows one photon (figure 2.1, inner loop), or `None` when it carries no power.
     fn primary_ray(&self, light: u32, index: u64) -> Option<PrimaryRay> {
         let source = &self.scene.lights()[light as usize];
@@ -193,7 +269,7 @@ impl Tracer<'_> {
         let e = source.sample_emission(u_position, u_direction);
         let m = self.counts[light as usize].max(1) as f32;
         // φ = weight / m: the weight's expectation is the light's power Φ_i.
-        let mut power = e.weight / m;
+        let power = e.weight / m;
         if !power.is_finite() || !(power.max_element() > 0.0) || !e.direction.is_finite() {
             return None;
         }
@@ -207,20 +283,45 @@ impl Tracer<'_> {
             };
             e.position + side * self.epsilon * e.normal
         };
-        let mut ray = Ray::new(origin, e.direction);
         let mut segments = Vec::new();
-        for n in 1..=self.options.max_segments {
-            let Some(hit) = self.bvh.closest_hit(&ray) else {
+        self.follow(
+            light,
+            index,
+            0,
+            Ray::new(origin, e.direction),
+            power,
+            &mut segments,
+        );
+        Some(PrimaryRay {
+            light,
+            index,
+            segments,
+        })
+    }
+
+    /// FOLLOWRAY (figure 2.2): traces the ray that is segment `first` (0-based) of photon `index` of `light` against the scene, then its reflections, appending them to `segments`.
+    pub(crate) fn follow(
+        &self,
+        light: u32,
+        index: u64,
+        first: u32,
+        mut ray: Ray,
+        mut power: Rgb,
+        segments: &mut Vec<RaySegment>,
+    ) {
+        for n in first + 1..=self.options.max_segments {
+            let Some(found) = self.world.first_hit(&ray) else {
                 segments.push(RaySegment::new(ray.origin, ray.direction, None, power));
                 break;
             };
+            let hit = found.hit;
             segments.push(RaySegment::new(
                 ray.origin,
                 ray.direction,
                 Some(SegmentHit {
                     triangle: hit.triangle,
-                    mesh: self.scene.triangle_source(hit.triangle).0,
-                    mobile: false,
+                    mesh: found.mesh,
+                    mobile: found.mobile,
                     position: hit.position,
                     normal: hit.geometric_normal,
                     distance: hit.t,
@@ -233,6 +334,7 @@ impl Tracer<'_> {
             let Some(brdf) = self.brdfs.get(hit.material as usize) else {
                 break;
             };
+            let mut rng = bounce_stream(self.options.seed, light, index, n);
             let incoming = -ray.direction;
             let mut normal = hit.shading_normal;
             let side = if incoming.dot(hit.geometric_normal) >= 0.0 {
@@ -267,6 +369,5 @@ impl Tracer<'_> {
             let offset = if direction.dot(g) >= 0.0 { g } else { -g };
             ray = Ray::new(hit.position + self.epsilon * offset, direction);
         }
-        Some(PrimaryRay { light, segments })
     }
 }

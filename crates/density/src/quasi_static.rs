@@ -1,0 +1,406 @@
+//! The quasi-static loop of section 2: a first frame traced and estimated in full (figures 2.1 and 2.3), then, each time the mobile objects move, the ray set recalculated (figure 2.2) and the irradiance updated incrementally on static vertices (equations 2.4–2.15; figure 2.4 for Impact Count) and in full on the mobile objects' vertices (section 2.5.2).
+
+use std::time::{Duration, Instant};
+
+use glam::{Affine3A, DVec3};
+use lustre_geometry::{MeshId, ObjectId, Rgb, Scene, triangle_area};
+use rayon::prelude::*;
+
+use crate::VertexIrradiance;
+use crate::detp::Disc;
+use crate::error::{DensityError, Result};
+use crate::kdtree::KdTree;
+use crate::points::EstimationPoints;
+use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
+use crate::update::{RayUpdate, update_ray_set};
+use crate::world::World;
+
+/// The density estimator a [`QuasiStatic`] keeps up to date (section 3.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Estimator {
+    /// Impact Count (section 1.2), updated per triangle (figure 2.4).
+    ImpactCount,
+    /// Photon Maps with the `k` nearest impacts (section 1.2), estimated again in full every frame (section 2.5.2).
+    PhotonMaps {
+        /// Nearest impacts per estimate.
+        k: usize,
+    },
+    /// Density Estimation on the Tangent Plane with discs of radius `radius` (section 1.2), incremental on static vertices (equation 2.4).
+    Detp {
+        /// Disc radius in metres.
+        radius: f32,
+    },
+}
+
+/// Settings of a [`QuasiStatic`] simulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuasiStaticOptions {
+    /// The photosimulation (figure 2.1).
+    pub rays: RaySetOptions,
+    /// The density estimator.
+    pub estimator: Estimator,
+}
+
+/// Times and counts of one frame (the paper's "Photosimulation update" and "Illumination"/"Radiosity recalculation" columns).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameStats {
+    /// Ray-set recalculation (figure 2.2).
+    pub photosimulation: Duration,
+    /// Radiosity update (equation 2.4, figure 2.4, or the full estimate on mobile vertices).
+    pub radiosity: Duration,
+    /// Segments in OldRays.
+    pub old_rays: usize,
+    /// Segments in NewRays.
+    pub new_rays: usize,
+    /// Primary rays whose paths were recalculated.
+    pub recalculated: usize,
+}
+
+/// What each estimator keeps between frames.
+#[derive(Debug, Clone)]
+enum State {
+    /// Impact power `Σ φ` and area per scene-wide triangle (figure 2.4's `Add`/`Substract`).
+    ImpactCount { power: Vec<DVec3>, area: Vec<f64> },
+    /// Nothing: Photon Maps is estimated in full each frame.
+    PhotonMaps { k: usize },
+    /// Disc sums `Σ φ` per estimation point (equation 2.8), and the disc radius.
+    Detp { sums: Vec<DVec3>, radius: f32 },
+}
+
+/// A static scene with mobile objects and its view-independent irradiance, kept up to date as the objects move (section 2).
+#[derive(Debug, Clone)]
+pub struct QuasiStatic {
+    scene: Scene,
+    world: World,
+    mobile: Vec<ObjectId>,
+    rays: RaySet,
+    points: EstimationPoints,
+    options: QuasiStaticOptions,
+    slack: f32,
+    state: State,
+    first_frame: FrameStats,
+}
+
+impl QuasiStatic {
+    /// The first frame (figures 2.1 and 2.3): traces the ray set with the objects `mobile` at the scene's current pose and estimates every vertex. Fails on an invalid option, an unknown or emitting mobile object, or a material without a BRDF.
+    pub fn new(scene: Scene, mobile: &[ObjectId], options: QuasiStaticOptions) -> Result<Self> {
+        match options.estimator {
+            Estimator::PhotonMaps { k: 0 } => {
+                return Err(DensityError::InvalidOption {
+                    option: "k",
+                    message: "the number of nearest impacts must be at least 1".into(),
+                });
+            }
+            Estimator::Detp { radius } if !(radius > 0.0 && radius.is_finite()) => {
+                return Err(DensityError::InvalidOption {
+                    option: "radius",
+                    message: format!("{radius} is not a positive finite disc radius"),
+                });
+            }
+            _ => {}
+        }
+        let world = World::new(&scene, mobile)?;
+        let t0 = Instant::now();
+        let rays = trace_ray_set_in(&scene, &world, &options.rays)?;
+        let photosimulation = t0.elapsed();
+        let points = EstimationPoints::new(&scene, &world);
+        let scale = scene.bounds().extent().max_element();
+        let slack = if scale.is_finite() && scale > 0.0 {
+            scale * 1e-4
+        } else {
+            1e-4
+        };
+        let state = match options.estimator {
+            Estimator::ImpactCount => State::ImpactCount {
+                power: Vec::new(),
+                area: Vec::new(),
+            },
+            Estimator::PhotonMaps { k } => State::PhotonMaps { k },
+            Estimator::Detp { radius } => State::Detp {
+                sums: Vec::new(),
+                radius,
+            },
+        };
+        let mut sim = Self {
+            scene,
+            world,
+            mobile: mobile.to_vec(),
+            rays,
+            points,
+            options,
+            slack,
+            state,
+            first_frame: FrameStats::default(),
+        };
+        let t1 = Instant::now();
+        sim.state = sim.full_state();
+        sim.first_frame = FrameStats {
+            photosimulation,
+            radiosity: t1.elapsed(),
+            old_rays: 0,
+            new_rays: sim.rays.segments().count(),
+            recalculated: sim.rays.rays.len(),
+        };
+        Ok(sim)
+    }
+
+    /// Moves mobile objects to new transforms (relative to their rest pose) and updates the ray set and the irradiance (figure 2.2, equation 2.4). Every object named must be one of the mobile objects.
+    pub fn set_pose(&mut self, transforms: &[(ObjectId, Affine3A)]) -> Result<FrameStats> {
+        // Check everything first so that a refused pose leaves the simulation as it was.
+        for &(object, transform) in transforms {
+            if !self.mobile.contains(&object) {
+                return Err(DensityError::InvalidOption {
+                    option: "mobile",
+                    message: format!("object #{object} is not a mobile object of this simulation"),
+                });
+            }
+            if !transform.is_finite() {
+                return Err(DensityError::InvalidOption {
+                    option: "mobile",
+                    message: format!("the transform of object #{object} is not finite"),
+                });
+            }
+        }
+        for &(object, transform) in transforms {
+            self.scene.set_object_transform(object, transform)?;
+        }
+        let t0 = Instant::now();
+        self.world.move_mobile(&self.scene);
+        let update = update_ray_set(&self.scene, &self.world, &mut self.rays, &self.options.rays)?;
+        let photosimulation = t0.elapsed();
+        let t1 = Instant::now();
+        self.points.move_mobile(&self.scene);
+        self.update_state(&update);
+        Ok(FrameStats {
+            photosimulation,
+            radiosity: t1.elapsed(),
+            old_rays: update.old.len(),
+            new_rays: update.new.len(),
+            recalculated: update.recalculated,
+        })
+    }
+
+    /// The first frame's times and counts.
+    pub fn first_frame(&self) -> FrameStats {
+        self.first_frame
+    }
+
+    /// The scene at its current pose.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The current ray set `S^t`.
+    pub fn rays(&self) -> &RaySet {
+        &self.rays
+    }
+
+    /// The world (static BVH and mobile objects).
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The estimation points (section 3.4.2).
+    pub fn points(&self) -> &EstimationPoints {
+        &self.points
+    }
+
+    /// Irradiance `E` at each estimation point, from the kept state.
+    pub fn point_irradiance(&self) -> Vec<DVec3> {
+        self.irradiance_of(&self.state)
+    }
+
+    /// Irradiance `E` at every vertex, `[mesh][vertex]`, from the kept state.
+    pub fn irradiance(&self) -> VertexIrradiance {
+        let e: Vec<Rgb> = self
+            .point_irradiance()
+            .iter()
+            .map(|e| e.as_vec3())
+            .collect();
+        self.points.to_vertices(&e)
+    }
+
+    /// Irradiance at each estimation point computed from scratch over the current ray set (figure 2.3), for checking the incremental update.
+    pub fn recompute_point_irradiance(&self) -> Vec<DVec3> {
+        self.irradiance_of(&self.full_state())
+    }
+
+    /// INITIALRADIOSITYCALCULATION (figure 2.3) over the whole current ray set.
+    fn full_state(&self) -> State {
+        match &self.state {
+            State::ImpactCount { .. } => {
+                let mut power = vec![DVec3::ZERO; self.scene.triangle_count()];
+                add_impacts(&mut power, self.rays.segments(), 1.0);
+                let area = match &self.state {
+                    // Areas are invariant under the rigid motions of section 2.2.2: keep the first pose's.
+                    State::ImpactCount { area, .. } if !area.is_empty() => area.clone(),
+                    _ => self.triangle_areas(),
+                };
+                State::ImpactCount { power, area }
+            }
+            State::PhotonMaps { k } => State::PhotonMaps { k: *k },
+            State::Detp { radius, .. } => {
+                let discs = self.discs(0..self.points.points.len(), *radius);
+                let segments: Vec<RaySegment> = self.rays.segments().copied().collect();
+                let mut sums = vec![DVec3::ZERO; discs.len()];
+                accumulate(&discs, &segments, self.slack, 1.0, &mut sums);
+                State::Detp {
+                    sums,
+                    radius: *radius,
+                }
+            }
+        }
+    }
+
+    /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps).
+    fn update_state(&mut self, update: &RayUpdate) {
+        let first_mobile = self.points.first_mobile;
+        let count = self.points.points.len();
+        let discs_mobile = match &self.state {
+            State::Detp { radius, .. } => self.discs(first_mobile..count, *radius),
+            _ => Vec::new(),
+        };
+        let discs_static = match &self.state {
+            State::Detp { radius, .. } => self.discs(0..first_mobile, *radius),
+            _ => Vec::new(),
+        };
+        let all: Vec<RaySegment> = match &self.state {
+            State::Detp { .. } if !discs_mobile.is_empty() => {
+                self.rays.segments().copied().collect()
+            }
+            _ => Vec::new(),
+        };
+        let slack = self.slack;
+        match &mut self.state {
+            State::ImpactCount { power, .. } => {
+                add_impacts(power, update.old.iter(), -1.0);
+                add_impacts(power, update.new.iter(), 1.0);
+            }
+            State::PhotonMaps { .. } => {}
+            State::Detp { sums, .. } => {
+                let (fixed, moving) = sums.split_at_mut(first_mobile);
+                // E(x, t) = E(x, t-1) + E(x; N^t) - E(x; O^t) (equation 2.4).
+                accumulate(&discs_static, &update.old, slack, -1.0, fixed);
+                accumulate(&discs_static, &update.new, slack, 1.0, fixed);
+                // Mobile vertices: the initial algorithm over every ray (section 2.5.2).
+                moving.fill(DVec3::ZERO);
+                accumulate(&discs_mobile, &all, slack, 1.0, moving);
+            }
+        }
+    }
+
+    /// Discs at the estimation points `range` (degenerate points get a zero radius, which no ray crosses).
+    fn discs(&self, range: std::ops::Range<usize>, radius: f32) -> Vec<Disc> {
+        self.points.points[range]
+            .iter()
+            .map(|p| Disc {
+                centre: p.position,
+                normal: p.normal,
+                radius: if p.normal == glam::Vec3::ZERO {
+                    0.0
+                } else {
+                    radius
+                },
+                mesh: Some(p.mesh),
+            })
+            .collect()
+    }
+
+    /// World area of every scene-wide triangle.
+    fn triangle_areas(&self) -> Vec<f64> {
+        let mut area = vec![0.0; self.scene.triangle_count()];
+        for (m, mesh) in self.scene.meshes().iter().enumerate() {
+            let positions = self.scene.world_positions(m as MeshId);
+            for (t, idx) in mesh.indices.iter().enumerate() {
+                let id = self.scene.triangle_id(m as MeshId, t as u32) as usize;
+                area[id] = triangle_area(idx.map(|i| positions[i as usize])) as f64;
+            }
+        }
+        area
+    }
+
+    /// Irradiance per estimation point from a state.
+    fn irradiance_of(&self, state: &State) -> Vec<DVec3> {
+        match state {
+            State::ImpactCount { power, area } => {
+                // E_v = Σ_t Σφ_t / Σ_t A_t over the triangles meeting at the point (section 1.2).
+                let n = self.points.points.len();
+                let mut p = vec![DVec3::ZERO; n];
+                let mut a = vec![0.0f64; n];
+                for (m, mesh) in self.scene.meshes().iter().enumerate() {
+                    let map = &self.points.vertex_point[m];
+                    for (t, idx) in mesh.indices.iter().enumerate() {
+                        let id = self.scene.triangle_id(m as MeshId, t as u32) as usize;
+                        for &v in idx {
+                            let q = map[v as usize] as usize;
+                            p[q] += power[id];
+                            a[q] += area[id];
+                        }
+                    }
+                }
+                p.iter()
+                    .zip(&a)
+                    .map(|(&p, &a)| if a > 0.0 { p / a } else { DVec3::ZERO })
+                    .collect()
+            }
+            State::PhotonMaps { k } => self.photon_maps(*k),
+            State::Detp { sums, radius } => {
+                let area = std::f64::consts::PI * (*radius as f64).powi(2);
+                sums.iter().map(|&s| s / area).collect()
+            }
+        }
+    }
+
+    /// Photon Maps at every estimation point over the current impacts (section 1.2).
+    fn photon_maps(&self, k: usize) -> Vec<DVec3> {
+        let (positions, powers): (Vec<glam::Vec3>, Vec<Rgb>) = self
+            .rays
+            .impacts()
+            .map(|(s, h)| (h.position, s.power))
+            .unzip();
+        let Ok(tree) = KdTree::build(&positions) else {
+            return vec![DVec3::ZERO; self.points.points.len()];
+        };
+        self.points
+            .points
+            .par_iter()
+            .map(|p| {
+                let found = tree.nearest(p.position, k);
+                let r2 = found.last().map_or(0.0, |n| n.distance_squared);
+                if !(r2 > 0.0) {
+                    return DVec3::ZERO;
+                }
+                let sum: DVec3 = found
+                    .iter()
+                    .map(|n| powers[n.index as usize].as_dvec3())
+                    .sum();
+                sum / (std::f64::consts::PI * r2 as f64)
+            })
+            .collect()
+    }
+}
+
+/// Figure 2.4: adds (`sign` = 1) or subtracts (`sign` = -1) each impact's power on the triangle it hit.
+fn add_impacts<'a>(power: &mut [DVec3], segments: impl Iterator<Item = &'a RaySegment>, sign: f64) {
+    for s in segments {
+        if let Some(h) = s.hit
+            && let Some(p) = power.get_mut(h.triangle as usize)
+        {
+            *p += sign * s.power.as_dvec3();
+        }
+    }
+}
+
+/// `out[i] += sign Σ φ_j` over the segments `j` crossing disc `i` (section 1.2, equation 2.8), testing every pair.
+fn accumulate(discs: &[Disc], segments: &[RaySegment], slack: f32, sign: f64, out: &mut [DVec3]) {
+    out.par_iter_mut()
+        .zip(discs.par_iter())
+        .for_each(|(o, disc)| {
+            let sum: DVec3 = segments
+                .iter()
+                .filter(|s| disc.is_crossed_by(s, slack))
+                .map(|s| s.power.as_dvec3())
+                .sum();
+            *o += sign * sum;
+        });
+}

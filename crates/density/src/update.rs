@@ -1,0 +1,76 @@
+//! PHOTOSIMULATION RECALCULUS (section 2.3, figure 2.2): after the mobile objects move, every ray that hit one of them, or hits one now, is traced again from that ray on; its old path goes to OldRays, the new one to NewRays.
+
+use lustre_geometry::{Ray, Scene};
+use rayon::prelude::*;
+
+use crate::error::Result;
+use crate::ray_set::{RaySegment, RaySet, RaySetOptions, Tracer};
+use crate::world::World;
+
+/// The rays a frame's recalculation replaced (section 2.4.2: `O^t = S^{t-1} - S^t`, equation 2.6) and those that replaced them (`N^t = S^t - S^{t-1}`, equation 2.5).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RayUpdate {
+    /// OldRays: the segments removed from the ray set.
+    pub old: Vec<RaySegment>,
+    /// NewRays: the segments added to it.
+    pub new: Vec<RaySegment>,
+    /// Number of primary rays with a recalculated path.
+    pub recalculated: usize,
+}
+
+/// Updates a ray set traced with [`crate::trace_ray_set_in`] after the world's mobile objects moved (figure 2.2). `world` must already hold the new pose ([`World::move_mobile`]) and `options` must be those of the first trace, so that the result equals a full trace of the new pose.
+pub fn update_ray_set(
+    scene: &Scene,
+    world: &World,
+    rays: &mut RaySet,
+    options: &RaySetOptions,
+) -> Result<RayUpdate> {
+    let tracer = Tracer::new(scene, world, world.epsilon(), options)?;
+    let changed: Vec<(Vec<RaySegment>, Vec<RaySegment>)> = rays
+        .rays
+        .par_iter_mut()
+        .filter_map(|primary| {
+            let k = primary
+                .segments
+                .iter()
+                .position(|s| must_recalculate(world, s))?;
+            let old = primary.segments.split_off(k);
+            let first = old[0];
+            let ray = Ray::new(first.origin, first.direction);
+            tracer.follow(
+                primary.light,
+                primary.index,
+                k as u32,
+                ray,
+                first.power,
+                &mut primary.segments,
+            );
+            let new = primary.segments[k..].to_vec();
+            Some((old, new))
+        })
+        .collect();
+    let mut update = RayUpdate {
+        recalculated: changed.len(),
+        ..Default::default()
+    };
+    for (old, new) in changed {
+        update.old.extend(old);
+        update.new.extend(new);
+    }
+    Ok(update)
+}
+
+/// Figure 2.2's test: the ray intersected the mobile object, or intersects it now before its current end. (The artifact-control extension is measured against the static scene only, so it never changes while the ray is kept.)
+fn must_recalculate(world: &World, segment: &RaySegment) -> bool {
+    if segment.hit.is_some_and(|h| h.mobile) {
+        return true;
+    }
+    world
+        .mobile_hit(&Ray::segment(
+            segment.origin,
+            segment.direction,
+            0.0,
+            segment.length(),
+        ))
+        .is_some()
+}

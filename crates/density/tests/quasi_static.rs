@@ -1,0 +1,166 @@
+//! The incremental recalculation of section 2 against a full recomputation: after random rigid motions of one or several mobile objects, the updated ray set equals a full trace of the new pose (figure 2.2 against figure 2.1), and the incrementally updated irradiance equals the estimate computed from scratch (equations 2.4–2.15, figure 2.4) up to rounding.
+
+use glam::{Affine3A, DVec3, Quat, Vec3};
+use lustre_density::{
+    Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, trace_ray_set_in,
+};
+use lustre_geometry::meshing::subdivide;
+use lustre_geometry::{ObjectId, Scene, builtin};
+use proptest::prelude::*;
+
+/// The Cornell box with every mesh subdivided to edges of at most `edge` metres.
+fn cornell(edge: f32) -> Scene {
+    let scene = builtin("cornell").expect("built-in");
+    let meshes = scene
+        .meshes()
+        .iter()
+        .map(|m| subdivide(m, edge).expect("subdivides"))
+        .collect();
+    scene.with_meshes(meshes).expect("valid")
+}
+
+fn options(estimator: Estimator) -> QuasiStaticOptions {
+    QuasiStaticOptions {
+        rays: RaySetOptions {
+            photons: 4_000,
+            seed: 3,
+            max_segments: 16,
+        },
+        estimator,
+    }
+}
+
+/// A rigid motion on the floor: a translation in x and z and a turn about y, applied after the object's rest transform.
+fn motion(rest: Affine3A, dx: f32, dz: f32, degrees: f32) -> Affine3A {
+    Affine3A::from_rotation_translation(
+        Quat::from_rotation_y(degrees.to_radians()),
+        Vec3::new(dx, 0.0, dz),
+    ) * rest
+}
+
+/// Largest difference between two per-point irradiances, relative to the largest value.
+fn relative_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
+    let scale = b
+        .iter()
+        .map(|e| e.max_element())
+        .fold(0.0, f64::max)
+        .max(1e-30);
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).abs().max_element())
+        .fold(0.0, f64::max)
+        / scale
+}
+
+fn check_frames(estimator: Estimator, objects: &[&str], moves: &[(f32, f32, f32)]) {
+    let scene = cornell(0.25);
+    let ids: Vec<ObjectId> = objects
+        .iter()
+        .map(|n| scene.object_by_name(n).expect("object"))
+        .collect();
+    let rest: Vec<Affine3A> = ids
+        .iter()
+        .map(|&o| scene.objects()[o as usize].transform)
+        .collect();
+    let mut sim = QuasiStatic::new(scene.clone(), &ids, options(estimator)).expect("first frame");
+    // The world a full trace uses: built at the first pose (its ray offset is fixed there), then moved.
+    let mut fresh_world = World::new(&scene, &ids).expect("world");
+    let mut fresh_scene = scene;
+    let mut recalculated = 0;
+    for (frame, &(dx, dz, degrees)) in moves.iter().enumerate() {
+        let pose: Vec<(ObjectId, Affine3A)> = ids
+            .iter()
+            .zip(&rest)
+            .enumerate()
+            .map(|(i, (&o, &r))| {
+                let s = if i % 2 == 0 { 1.0 } else { -0.5 };
+                (o, motion(r, s * dx, s * dz, s * degrees))
+            })
+            .collect();
+        let stats = sim.set_pose(&pose).expect("frame");
+        recalculated += stats.recalculated;
+        for &(o, t) in &pose {
+            fresh_scene.set_object_transform(o, t).expect("pose");
+        }
+        fresh_world.move_mobile(&fresh_scene);
+        let full =
+            trace_ray_set_in(&fresh_scene, &fresh_world, &options(estimator).rays).expect("trace");
+        assert!(
+            sim.rays() == &full,
+            "frame {frame}: the updated ray set differs from a full trace of the new pose"
+        );
+        let incremental = sim.point_irradiance();
+        let scratch = sim.recompute_point_irradiance();
+        let d = relative_difference(&incremental, &scratch);
+        assert!(
+            d < 1e-9,
+            "frame {frame}: incremental and full irradiance differ by {d:e} of the largest value"
+        );
+    }
+    assert!(
+        recalculated > 0,
+        "the motions changed no ray; the test proves nothing"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 4, ..ProptestConfig::default() })]
+
+    #[test]
+    fn detp_incremental_equals_full(moves in prop::collection::vec((-0.4f32..0.4, -0.4f32..0.4, -90.0f32..90.0), 3)) {
+        check_frames(Estimator::Detp { radius: 0.15 }, &["small-box"], &moves);
+    }
+
+    #[test]
+    fn impact_count_incremental_equals_full(moves in prop::collection::vec((-0.4f32..0.4, -0.4f32..0.4, -90.0f32..90.0), 3)) {
+        check_frames(Estimator::ImpactCount, &["small-box"], &moves);
+    }
+
+    #[test]
+    fn several_mobile_objects(moves in prop::collection::vec((-0.2f32..0.2, -0.2f32..0.2, -45.0f32..45.0), 2)) {
+        check_frames(Estimator::Detp { radius: 0.15 }, &["small-box", "large-box"], &moves);
+    }
+}
+
+#[test]
+fn photon_maps_follow_the_motion() {
+    check_frames(
+        Estimator::PhotonMaps { k: 20 },
+        &["small-box"],
+        &[(0.3, 0.1, 30.0), (-0.2, 0.2, -10.0)],
+    );
+}
+
+#[test]
+fn refused_input_leaves_the_simulation_unchanged() {
+    let scene = cornell(0.5);
+    let small = scene.object_by_name("small-box").expect("object");
+    let floor = scene.object_by_name("floor").expect("object");
+    let mut sim =
+        QuasiStatic::new(scene, &[small], options(Estimator::ImpactCount)).expect("first frame");
+    let before = sim.point_irradiance();
+    assert!(
+        sim.set_pose(&[(floor, Affine3A::IDENTITY)]).is_err(),
+        "a static object cannot move"
+    );
+    let nan = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
+    assert!(
+        sim.set_pose(&[(small, Affine3A::IDENTITY), (small, nan)])
+            .is_err()
+    );
+    assert_eq!(sim.point_irradiance(), before);
+    let light = sim.scene().object_by_name("light").expect("light");
+    let err = QuasiStatic::new(
+        sim.scene().clone(),
+        &[light],
+        options(Estimator::ImpactCount),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("emits light"), "{err}");
+    let bad = QuasiStatic::new(
+        sim.scene().clone(),
+        &[small],
+        options(Estimator::Detp { radius: -1.0 }),
+    );
+    assert!(bad.is_err());
+}
