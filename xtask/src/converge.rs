@@ -46,15 +46,15 @@ pub struct Args {
 }
 
 /// A path-traced reference and what its sidecar says about it.
-struct Reference {
+pub(crate) struct Reference {
     /// The scene.
-    scene: String,
+    pub scene: String,
     /// The image.
-    image: Image,
+    pub image: Image,
     /// Samples per pixel, from `tests/references/<scene>.json`.
-    spp: Option<u64>,
+    pub spp: Option<u64>,
     /// The renderer, from the sidecar (e.g. "Mitsuba 3").
-    renderer: String,
+    pub renderer: String,
 }
 
 /// One measured render.
@@ -81,7 +81,7 @@ struct Row {
 }
 
 /// Reads `<dir>/<scene>.exr` and its sidecar `<dir>/<scene>.json`.
-fn load_reference(dir: &Path, scene: &str) -> Result<Reference> {
+pub(crate) fn load_reference(dir: &Path, scene: &str) -> Result<Reference> {
     let exr = dir.join(format!("{scene}.exr"));
     let image = read_exr(&exr).with_context(|| {
         format!(
@@ -142,7 +142,7 @@ fn measure(
 }
 
 /// `12345678` as `12,345,678`.
-fn thousands(n: u64) -> String {
+pub(crate) fn thousands(n: u64) -> String {
     let digits = n.to_string();
     let mut out = String::new();
     for (i, c) in digits.chars().enumerate() {

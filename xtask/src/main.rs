@@ -4,6 +4,7 @@
 mod bench;
 mod ci;
 mod converge;
+mod density_errors;
 mod golden;
 mod reference;
 mod render;
@@ -47,6 +48,8 @@ enum Command {
     },
     /// Measure relative MSE and FLIP against the references per technique and photon count, into BENCHMARKS.md.
     Converge(converge::Args),
+    /// Error (noise, bias, total) and per-frame times of the quasi-static estimators, into BENCHMARKS.md (García et al. tables 2.1, 2.6-2.8).
+    DensityErrors(density_errors::Args),
     /// The README's test command: format check, clippy with warnings denied, all tests, golden images.
     Ci,
 }
@@ -58,6 +61,7 @@ fn main() -> ExitCode {
         Command::Golden { case } => golden::run(case.as_deref()),
         Command::Bless { case } => golden::bless(case.as_deref()),
         Command::Converge(args) => converge::run(args),
+        Command::DensityErrors(args) => density_errors::run(args),
         Command::Ci => ci::run(),
     };
     match result {

@@ -105,6 +105,19 @@ impl Lustre {
     /// Runs `lustre render <scene> <args> --out <out>` (an `.exr` path) and
     /// reads back the image and its sidecar `<out>.json`.
     pub fn render(&self, scene: &str, args: &[&str], out: &Path) -> Result<Render> {
+        let sidecar = self.run(scene, args, out)?;
+        let image = read_exr(out).with_context(|| {
+            format!(
+                "reading the render of {scene} {} into {}",
+                args.join(" "),
+                out.display()
+            )
+        })?;
+        Ok(Render { image, sidecar })
+    }
+
+    /// Runs `lustre render <scene> <args> --out <out>` and reads back only its sidecar `<out>.json` (for `--frames --timing-only`, which writes no image).
+    pub fn run(&self, scene: &str, args: &[&str], out: &Path) -> Result<Value> {
         let mut command = Command::new(&self.path);
         command
             .args(&self.leading)
@@ -131,13 +144,11 @@ impl Lustre {
             }
             bail!("{shown} failed ({}):\n{message}", output.status);
         }
-        let image = read_exr(out).with_context(|| format!("reading the render of {shown}"))?;
         let sidecar_path = out.with_extension("json");
         let text = std::fs::read_to_string(&sidecar_path)
             .with_context(|| format!("reading the sidecar {}", sidecar_path.display()))?;
-        let sidecar = serde_json::from_str(&text)
-            .with_context(|| format!("{} is not JSON", sidecar_path.display()))?;
-        Ok(Render { image, sidecar })
+        serde_json::from_str(&text)
+            .with_context(|| format!("{} is not JSON", sidecar_path.display()))
     }
 }
 

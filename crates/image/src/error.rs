@@ -31,6 +31,9 @@ pub enum ImageError {
         /// Height of the reference image.
         reference_height: u32,
     },
+    /// A metric is undefined for these images (e.g. a relative error against a black reference).
+    #[error("{0}")]
+    Undefined(String),
     /// An EXR file could not be read or decoded.
     #[error("cannot read {}: {source}", path.display())]
     ReadExr {

@@ -24,6 +24,28 @@ pub fn relative_mse(test: &Image, reference: &Image, epsilon: f64) -> Result<f64
     Ok(sum / (3 * test.pixels().len()) as f64)
 }
 
+/// Rec. 709 luminance `Y = 0.2126 R + 0.7152 G + 0.0722 B` of a linear pixel.
+pub fn luminance(p: [f32; 3]) -> f64 {
+    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+}
+
+/// Mean luminance difference relative to the reference's mean luminance, the error of García Hernández et al.'s tables 2.1 and 2.6–2.8 (section 2.5.3): `Σ |Y(t) − Y(r)| / Σ Y(r)`; fails on different sizes or a black reference.
+pub fn mean_luminance_difference(test: &Image, reference: &Image) -> Result<f64, ImageError> {
+    test.check_same_size(reference)?;
+    let (mut diff, mut total) = (0.0f64, 0.0f64);
+    for (t, r) in test.pixels().iter().zip(reference.pixels()) {
+        let yr = luminance(*r);
+        diff += (luminance(*t) - yr).abs();
+        total += yr;
+    }
+    if !(total > 0.0) {
+        return Err(ImageError::Undefined(
+            "the reference of a mean luminance difference is black".into(),
+        ));
+    }
+    Ok(diff / total)
+}
+
 /// Mean squared error per channel: `MSE_c = 1/N Σ_pixels (t_c − r_c)²`.
 pub fn mse(test: &Image, reference: &Image) -> Result<[f64; 3], ImageError> {
     test.check_same_size(reference)?;
@@ -138,6 +160,23 @@ mod tests {
 
     fn two_by_one(a: [f32; 3], b: [f32; 3]) -> Image {
         Image::new(2, 1, vec![a, b]).unwrap()
+    }
+
+    #[test]
+    fn mean_luminance_difference_by_hand() {
+        let reference = two_by_one([1.0, 1.0, 1.0], [0.0, 1.0, 0.0]);
+        let test = two_by_one([2.0, 1.0, 1.0], [0.0, 0.5, 0.0]);
+        // |ΔY| = 0.2126 + 0.5 · 0.7152; ΣY(r) = 1 + 0.7152.
+        let expected = (0.2126 + 0.5 * 0.7152) / (1.0 + 0.7152);
+        let got = mean_luminance_difference(&test, &reference).unwrap();
+        assert!((got - expected).abs() < 1e-12, "{got} vs {expected}");
+        assert_eq!(
+            mean_luminance_difference(&reference, &reference).unwrap(),
+            0.0
+        );
+        let black = two_by_one([0.0; 3], [0.0; 3]);
+        assert!(mean_luminance_difference(&test, &black).is_err());
+        assert!(mean_luminance_difference(&test, &ramp(3, 1)).is_err());
     }
 
     #[test]
