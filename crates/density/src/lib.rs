@@ -1,19 +1,32 @@
 //! # lustre-density
 //!
-//! The CPU estimators of García Hernández, Ureña & Lastra, "Real Time
-//! Global Illumination for Quasi-Static Scenes" (2003), on a static
-//! scene: the two-level ray set of section 2.3 and the three per-vertex
-//! density estimators of section 1.2, computed as in the first frame of
-//! section 2.4.1 (figure 2.3). No GPU dependency.
+//! The CPU side of García Hernández, Ureña & Lastra, "Real Time Global
+//! Illumination for Quasi-Static Scenes" (2003): a static scene with mobile
+//! objects, the two-level ray set of section 2.3, the three per-vertex density
+//! estimators of section 1.2, and the frame-to-frame recalculation of section 2
+//! that keeps them up to date as the mobile objects move. No GPU dependency;
+//! `lustre-mpr`'s Gouraud pass draws the result.
 //!
 //! | paper | item |
 //! |---|---|
-//! | 2.3, figure 2.1: primary rays from the lights, each owning its reflections | [`RaySet`], [`PrimaryRay`], [`RaySegment`], [`trace_ray_set`] |
+//! | 2.2.2: a static scene and mobile objects (several allowed) | [`World`] |
+//! | 2.3, figure 2.1: primary rays from the lights, each owning its reflections | [`RaySet`], [`PrimaryRay`], [`RaySegment`], [`trace_ray_set`], [`trace_ray_set_in`] |
+//! | 2.3, figure 2.2: PHOTOSIMULATION RECALCULUS, OldRays and NewRays | [`update_ray_set`], [`RayUpdate`] |
+//! | 2.4.2, equations 2.4–2.15: `E_t = E_{t-1} + E(N^t) − E(O^t)` on static vertices | [`QuasiStatic::set_pose`] |
+//! | 2.5.1, figure 2.4: Impact Count's per-triangle `Add`/`Substract` | [`Estimator::ImpactCount`] |
+//! | 2.5.2: the full estimate on the mobile objects' vertices | [`QuasiStatic::set_pose`] |
+//! | 3.4.2: vertex-based calculation shared by triangles of different colours | [`EstimationPoints`] |
 //! | 1.2, 2.5.1 Impact Count: impact energy per triangle over its area, vertex mean | [`impact_count`] |
 //! | 1.2 Photon Maps (Jensen): `k` nearest impacts, `Σ φ / (π r_k²)` | [`photon_maps`], [`KdTree`] |
 //! | 1.2 DETP: fixed-radius disc on the tangent plane, rays crossing it | [`detp`], [`Disc`] |
 //! | 2.4, equation 2.2: `L_r = ρ/π E` | [`diffuse_radiance`] |
 //! | 2.4, equation 2.8: contributions of rays are additive | every estimator sums per-ray terms |
+//!
+//! Each photon's bounce `n` draws from its own random stream, so a path
+//! recalculated from any of its rays is the path a full trace of the new pose
+//! would give: the updated ray set equals a fresh trace exactly, and the
+//! incremental irradiance equals the estimate from scratch up to rounding
+//! (`tests/quasi_static.rs` checks both over random motions).
 //!
 //! All estimators return the irradiance `E` (W/m², RGB) at every vertex of
 //! every mesh, indexed `[mesh][vertex]` ([`VertexIrradiance`]).
@@ -29,6 +42,26 @@
 //! let e_ic = impact_count(&scene, &rays);
 //! let e_detp = detp(&scene, &rays, 0.2).unwrap();
 //! assert_eq!(e_ic.len(), e_detp.len());
+//! ```
+//!
+//! The quasi-static loop, with the small box of `cornell` mobile:
+//!
+//! ```
+//! use glam::{Affine3A, Vec3};
+//! use lustre_density::{Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions};
+//! use lustre_geometry::builtin;
+//!
+//! let scene = builtin("cornell").unwrap();
+//! let small = scene.object_by_name("small-box").unwrap();
+//! let options = QuasiStaticOptions {
+//!     rays: RaySetOptions { photons: 2_000, ..Default::default() },
+//!     estimator: Estimator::Detp { radius: 0.2 },
+//! };
+//! let mut sim = QuasiStatic::new(scene, &[small], options).unwrap();
+//! let frame = sim.set_pose(&[(small, Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.0)))]).unwrap();
+//! assert!(frame.recalculated > 0);
+//! let e = sim.irradiance(); // [mesh][vertex], for the Gouraud pass
+//! # assert_eq!(e.len(), sim.scene().meshes().len());
 //! ```
 
 mod detp;

@@ -32,6 +32,17 @@ pub enum Estimator {
     },
 }
 
+impl Estimator {
+    /// The estimator's short name: `detp`, `impact` or `photonmap`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Detp { .. } => "detp",
+            Self::ImpactCount => "impact",
+            Self::PhotonMaps { .. } => "photonmap",
+        }
+    }
+}
+
 /// Settings of a [`QuasiStatic`] simulation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QuasiStaticOptions {
