@@ -21,6 +21,9 @@
 //! | 1.2 DETP: fixed-radius disc on the tangent plane, rays crossing it | [`detp`], [`Disc`] |
 //! | 2.4, equation 2.2: `L_r = ρ/π E` | [`diffuse_radiance`] |
 //! | 2.4, equation 2.8: contributions of rays are additive | every estimator sums per-ray terms |
+//! | 1.2.1 Artifact Control: reachable area near walls and corners, rays followed through concave parts of the own mesh | [`artifact::reachable_areas`], [`artifact::extension`], [`artifact::artifact_controlled_detp`] |
+//! | 2.10, equation 2.1 on the disc: per-vertex ray lists of glossy vertices, `L = Σ f_r φ / (π r²)` | [`glossy::GlossyVertex`], [`glossy::GlossyVertices`] |
+//! | 2.10.1 QuadTree without summarising (exact) and with summarising (mean-direction update) | [`quadtree::QuadTree`], [`quadtree::SummaryTree`], [`quadtree::summary_degradation`] |
 //!
 //! Each photon's bounce `n` draws from its own random stream, so a path
 //! recalculated from any of its rays is the path a full trace of the new pose
@@ -64,12 +67,15 @@
 //! # assert_eq!(e.len(), sim.scene().meshes().len());
 //! ```
 
+pub mod artifact;
 mod detp;
 mod error;
+pub mod glossy;
 mod impact_count;
 pub mod kdtree;
 mod photon_maps;
 mod points;
+pub mod quadtree;
 mod quasi_static;
 mod ray_set;
 mod update;

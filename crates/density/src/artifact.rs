@@ -1,0 +1,387 @@
+//! Artifact Control for DETP (section 1.2.1, after Lastra et al. 2002): the reachable area of discs cut by walls and corners, and the extension of rays through concave parts of the vertex's own mesh.
+//!
+//! **Walls and corners.** "No photon can reach the part of the disc behind
+//! the wall. The solution is using the reachable area of the circle in the
+//! irradiance estimation." [`reachable_area`] takes `n × n` deterministic
+//! stratified points on the disc (the centres of an `n × n` grid of the
+//! square, through Shirley & Chiu's equal-area concentric map, so each
+//! stands for `π r² / n²`); a point `p` is reachable when the path from the
+//! vertex to `p`, lifted `offset · r` above the disc plane, meets no triangle
+//! of another mesh. Triangles of the vertex's own mesh are left to the
+//! concave rule below, so the two rules never count one region twice. The
+//! reachable area is `π r² k / n²` for `k` reachable points. Its error comes
+//! only from the grid cells the boundary of the reachable region crosses: at
+//! most `π r² c / n²` for `c` such cells, `c ≲ 2.5 n` for a chord (a wall),
+//! so at most about `2.5 π r² / n` (8 % at `n = 32`); midpoint sampling makes
+//! the signed errors of neighbouring cells cancel, and the error measured
+//! against the analytic areas is far smaller (`tests/artifact.rs`: one wall
+//! at 25 distances, worst 0.9 %, 0.42 %, 0.41 % of `π r²` at `n` = 16, 32,
+//! 64; two perpendicular walls, worst 0.54 % at `n = 32`). The criterion
+//! also marks as unreachable a point hidden from the vertex by an obstacle
+//! that is not a wall (a pillar between the vertex and `p`).
+//!
+//! Walls through the vertex itself (a floor vertex on the foot of a wall)
+//! are told apart by their orientation: a path leaving such a wall through
+//! its front face is not blocked, one entering it is, so the half in front
+//! of the wall is reachable. Paths of a vertex on its mesh's border start a
+//! little into its own surface ([`inward_directions`]), off the edges of walls
+//! that end at the vertex: a floor corner meeting two walls gets a quarter
+//! of its disc. A vertex on the free edge of a wall that stops there (the
+//! front corners of the open Cornell box) sees partly past that edge.
+//!
+//! **Concave surfaces.** "Taking into account rays which intersect the disc
+//! after intersecting the mesh the vertex is in, but before any other
+//! intersection with the scene." [`extension`] follows a segment past its hit
+//! through triangles of the mesh it hit until it meets any other triangle,
+//! capped at `max`; stored in [`RaySegment::extension`], it lets
+//! [`Disc::reach`] count such crossings for discs of that mesh.
+
+use std::collections::HashMap;
+use std::f32::consts::PI;
+use std::ops::Range;
+
+use glam::Vec3;
+use lustre_geometry::sampling::{Frame, sample_concentric_disk};
+use lustre_geometry::{Bvh, MeshId, Ray, Scene, TriangleId};
+use rayon::prelude::*;
+
+use crate::VertexIrradiance;
+use crate::detp::{Disc, detp};
+use crate::error::{DensityError, Result};
+use crate::ray_set::{RaySegment, RaySet};
+
+/// Most triangles of the own mesh a query steps through before it gives up.
+const MAX_STEPS: usize = 256;
+
+/// Settings of Artifact Control (section 1.2.1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArtifactOptions {
+    /// Points per axis of the stratified grid on the disc (`n²` visibility rays per vertex), at least 1.
+    pub samples_per_axis: u32,
+    /// Height of the visibility paths above the disc plane, in disc radii (positive).
+    pub offset: f32,
+    /// Cap of the concave extension, in disc radii (non-negative; 0 disables the concave rule).
+    pub max_extension: f32,
+}
+
+impl Default for ArtifactOptions {
+    fn default() -> Self {
+        Self {
+            samples_per_axis: 32,
+            offset: 1e-3,
+            max_extension: 4.0,
+        }
+    }
+}
+
+impl ArtifactOptions {
+    /// Checks the options.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples_per_axis == 0 || self.samples_per_axis > 4096 {
+            return Err(DensityError::InvalidOption {
+                option: "samples_per_axis",
+                message: format!("{} is not in 1..=4096", self.samples_per_axis),
+            });
+        }
+        if !(self.offset > 0.0 && self.offset.is_finite()) {
+            return Err(DensityError::InvalidOption {
+                option: "offset",
+                message: format!("{} is not a positive finite height", self.offset),
+            });
+        }
+        if !(self.max_extension >= 0.0 && self.max_extension.is_finite()) {
+            return Err(DensityError::InvalidOption {
+                option: "max_extension",
+                message: format!("{} is not a finite non-negative length", self.max_extension),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The scene-wide triangle ids of a mesh (they are contiguous, section 1.2.1 "the mesh the vertex is in"); empty for a mesh that does not exist.
+pub fn mesh_triangles(scene: &Scene, mesh: MeshId) -> Range<TriangleId> {
+    match scene.meshes().get(mesh as usize) {
+        Some(m) => {
+            let start = scene.triangle_id(mesh, 0);
+            start..start + m.indices.len() as TriangleId
+        }
+        None => 0..0,
+    }
+}
+
+/// The next distance after `t` (one ulp: two surfaces met at distances one ulp apart are both seen).
+fn step_past(t: f32) -> f32 {
+    t.next_up()
+}
+
+/// Whether the path `origin + t dir`, `t ∈ [0, length]`, meets a triangle outside `own`; a hit within `near` of the origin that the path leaves through its front face is ignored (the path starts on that surface).
+fn blocked(
+    bvh: &Bvh,
+    origin: Vec3,
+    dir: Vec3,
+    length: f32,
+    own: &Range<TriangleId>,
+    near: f32,
+) -> bool {
+    if !bvh.any_hit(&Ray::segment(origin, dir, 0.0, length)) {
+        return false;
+    }
+    let mut t = 0.0;
+    for _ in 0..MAX_STEPS {
+        let Some(h) = bvh.closest_hit(&Ray::segment(origin, dir, t, length)) else {
+            return false;
+        };
+        let leaving = h.t <= near && dir.dot(h.geometric_normal) >= 0.0;
+        if !own.contains(&h.triangle) && !leaving {
+            return true;
+        }
+        t = step_past(h.t);
+    }
+    false
+}
+
+/// The reachable area of a disc (section 1.2.1, walls and corners): `π r²` times the fraction of the `n × n` stratified points whose path from the vertex, `offset · r` above the plane, meets no triangle outside `own` (the vertex's mesh). `inward` is a unit tangent direction into the vertex's own surface for a vertex on its mesh's border (zero otherwise, see [`inward_directions`]): the paths start `offset · r` that way, off the edges of walls that end at the vertex (a floor corner). Fails on a bad disc, `inward` or options.
+pub fn reachable_area(
+    bvh: &Bvh,
+    disc: &Disc,
+    own: Range<TriangleId>,
+    inward: Vec3,
+    options: &ArtifactOptions,
+) -> Result<f32> {
+    options.validate()?;
+    check_disc(disc)?;
+    if !inward.is_finite() || inward.length() > 1.0 + 1e-3 {
+        return Err(DensityError::InvalidOption {
+            option: "inward",
+            message: format!("{inward} is not a unit or zero direction"),
+        });
+    }
+    Ok(reachable_area_unchecked(bvh, disc, &own, inward, options))
+}
+
+/// For each vertex of a mesh, the unit direction along its tangent plane into the mesh when the vertex is on the mesh's border (the angles of its triangles, welded by position, sum to less than 2π: the border angle of section 2.9.1), else zero; input to [`reachable_area`].
+pub fn inward_directions(positions: &[Vec3], normals: &[Vec3], indices: &[[u32; 3]]) -> Vec<Vec3> {
+    let key = |p: Vec3| {
+        let p = p + Vec3::ZERO;
+        [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
+    };
+    let mut around: HashMap<[u32; 3], (f32, Vec3)> = HashMap::new();
+    for tri in indices {
+        let Some(corners) = tri
+            .iter()
+            .map(|&i| positions.get(i as usize).copied())
+            .collect::<Option<Vec<Vec3>>>()
+        else {
+            continue;
+        };
+        for k in 0..3 {
+            let p = corners[k];
+            let a = (corners[(k + 1) % 3] - p).normalize_or_zero();
+            let b = (corners[(k + 2) % 3] - p).normalize_or_zero();
+            if a == Vec3::ZERO || b == Vec3::ZERO {
+                continue;
+            }
+            let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+            let entry = around.entry(key(p)).or_insert((0.0, Vec3::ZERO));
+            entry.0 += angle;
+            entry.1 += angle * (a + b).normalize_or_zero();
+        }
+    }
+    positions
+        .iter()
+        .zip(normals)
+        .map(|(&p, &n)| match around.get(&key(p)) {
+            Some(&(angle, toward)) if angle < 2.0 * PI - 1e-3 => {
+                let n = n.normalize_or_zero();
+                (toward - toward.dot(n) * n).normalize_or_zero()
+            }
+            _ => Vec3::ZERO,
+        })
+        .collect()
+}
+
+/// Fails unless the disc has a finite centre, a positive finite radius and a unit normal.
+pub(crate) fn check_disc(disc: &Disc) -> Result<()> {
+    let unit = (disc.normal.length() - 1.0).abs() < 1e-3;
+    if disc.radius > 0.0 && disc.radius.is_finite() && disc.centre.is_finite() && unit {
+        Ok(())
+    } else {
+        Err(DensityError::InvalidOption {
+            option: "disc",
+            message: format!(
+                "{disc:?} needs a finite centre, a positive finite radius and a unit normal"
+            ),
+        })
+    }
+}
+
+fn reachable_area_unchecked(
+    bvh: &Bvh,
+    disc: &Disc,
+    own: &Range<TriangleId>,
+    inward: Vec3,
+    options: &ArtifactOptions,
+) -> f32 {
+    let n = options.samples_per_axis;
+    let r = disc.radius;
+    let frame = Frame::from_normal(disc.normal);
+    let lift = options.offset * r;
+    // Paths start `lift` above the vertex and `lift` into its surface (border vertices), then `lift` behind, so that a wall through the vertex itself is met rather than skipped, and `10⁻³ lift` to the side, so that a path does not run through the line where two such walls meet (both would be met at one distance, and the one skipped first could hide the other).
+    let near = 3.0 * lift;
+    let lifted = disc.centre + lift * (disc.normal + inward);
+    let mut reachable = 0u64;
+    for j in 0..n {
+        for i in 0..n {
+            let u = glam::Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+            let d = sample_concentric_disk(u) * r;
+            let offset = frame.s * d.x + frame.t * d.y;
+            let length = offset.length();
+            if !(length > 0.0) {
+                reachable += 1;
+                continue;
+            }
+            let dir = offset / length;
+            let start = lifted + lift * (1e-3 * disc.normal.cross(dir) - dir);
+            let path = disc.centre + lift * disc.normal + offset - start;
+            let span = path.length();
+            if !blocked(bvh, start, path / span, span, own, near) {
+                reachable += 1;
+            }
+        }
+    }
+    PI * r * r * reachable as f32 / (n as f32 * n as f32)
+}
+
+/// Reachable areas of every vertex (section 1.2.1), `[mesh][vertex]`, with discs of `radius` on the tangent planes of the meshes' world normals as [`detp`] does, in parallel; zero for a vertex without a valid normal. Fails on a bad radius or options, or a BVH of another scene.
+pub fn reachable_areas(
+    scene: &Scene,
+    bvh: &Bvh,
+    radius: f32,
+    options: &ArtifactOptions,
+) -> Result<Vec<Vec<f32>>> {
+    check_common(scene, bvh, radius, options)?;
+    Ok((0..scene.meshes().len() as MeshId)
+        .map(|m| {
+            let own = mesh_triangles(scene, m);
+            let positions = scene.world_positions(m);
+            let normals = scene.world_normals(m);
+            let inward =
+                inward_directions(&positions, &normals, &scene.meshes()[m as usize].indices);
+            positions
+                .par_iter()
+                .zip(normals.par_iter())
+                .zip(inward.par_iter())
+                .map(|((&centre, &normal), &inward)| {
+                    let normal = normal.normalize_or_zero();
+                    if normal == Vec3::ZERO {
+                        return 0.0;
+                    }
+                    let disc = Disc {
+                        centre,
+                        normal,
+                        radius,
+                        mesh: Some(m),
+                    };
+                    reachable_area_unchecked(bvh, &disc, &own, inward, options)
+                })
+                .collect()
+        })
+        .collect())
+}
+
+fn check_common(scene: &Scene, bvh: &Bvh, radius: f32, options: &ArtifactOptions) -> Result<()> {
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(DensityError::InvalidOption {
+            option: "radius",
+            message: format!("{radius} is not a positive finite disc radius"),
+        });
+    }
+    options.validate()?;
+    if bvh.len() != scene.triangle_count() {
+        return Err(DensityError::InvalidOption {
+            option: "bvh",
+            message: format!(
+                "the BVH holds {} triangles, the scene {}",
+                bvh.len(),
+                scene.triangle_count()
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The concave extension of a segment (section 1.2.1): how far past its hit it can be followed through triangles in `own` (the hit triangle's mesh) before it meets any other triangle, at most `max`; zero for a segment that leaves the scene, whose hit is not in `own`, or for a `max` that is not positive and finite.
+pub fn extension(bvh: &Bvh, segment: &RaySegment, own: Range<TriangleId>, max: f32) -> f32 {
+    let Some(hit) = segment.hit else {
+        return 0.0;
+    };
+    if !(max > 0.0 && max.is_finite() && own.contains(&hit.triangle)) {
+        return 0.0;
+    }
+    let end = hit.distance + max;
+    let mut t = hit.distance;
+    for _ in 0..MAX_STEPS {
+        match bvh.closest_hit(&Ray::segment(segment.origin, segment.direction, t, end)) {
+            None => return max,
+            Some(h) if own.contains(&h.triangle) => t = step_past(h.t),
+            Some(h) => return (h.t - hit.distance).clamp(0.0, max),
+        }
+    }
+    (t - hit.distance).clamp(0.0, max)
+}
+
+/// Sets [`RaySegment::extension`] of every segment of a ray set (section 1.2.1, concave surfaces), in parallel, through the mesh each segment hit, capped at `max`. Fails on a `max` that is negative or not finite, or a BVH of another scene.
+pub fn extend_ray_set(scene: &Scene, bvh: &Bvh, rays: &mut RaySet, max: f32) -> Result<()> {
+    if !(max >= 0.0 && max.is_finite()) {
+        return Err(DensityError::InvalidOption {
+            option: "max_extension",
+            message: format!("{max} is not a finite non-negative length"),
+        });
+    }
+    if bvh.len() != scene.triangle_count() {
+        return Err(DensityError::InvalidOption {
+            option: "bvh",
+            message: format!(
+                "the BVH holds {} triangles, the scene {}",
+                bvh.len(),
+                scene.triangle_count()
+            ),
+        });
+    }
+    rays.rays.par_iter_mut().for_each(|r| {
+        for s in &mut r.segments {
+            s.extension = match s.hit {
+                Some(h) => extension(bvh, s, mesh_triangles(scene, h.mesh), max),
+                None => 0.0,
+            };
+        }
+    });
+    Ok(())
+}
+
+/// DETP with Artifact Control (section 1.2.1): the ray set's segments extended through their own meshes (`max_extension · radius`), then `E = Σ φ / A_reach` with each vertex's reachable area instead of `π r²`; zero where nothing is reachable. Fails on a bad radius or options, or a BVH of another scene.
+pub fn artifact_controlled_detp(
+    scene: &Scene,
+    bvh: &Bvh,
+    rays: &RaySet,
+    radius: f32,
+    options: &ArtifactOptions,
+) -> Result<VertexIrradiance> {
+    check_common(scene, bvh, radius, options)?;
+    let mut extended = rays.clone();
+    extend_ray_set(scene, bvh, &mut extended, options.max_extension * radius)?;
+    let mut e = detp(scene, &extended, radius)?;
+    let areas = reachable_areas(scene, bvh, radius, options)?;
+    let full = PI * radius * radius;
+    for (em, am) in e.iter_mut().zip(&areas) {
+        for (ev, &a) in em.iter_mut().zip(am) {
+            *ev = if a > 0.0 {
+                *ev * (full / a)
+            } else {
+                Vec3::ZERO
+            };
+        }
+    }
+    Ok(e)
+}

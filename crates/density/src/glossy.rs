@@ -1,0 +1,592 @@
+//! Glossy surfaces (section 2.10): each glossy vertex keeps the rays crossing its DETP disc, updated every frame with the Old and New Rays, and turns them into the view-dependent radiance of equation 2.1 when the camera moves.
+//!
+//! The DETP discretisation of equation 2.1 is
+//! `L(x, ωo) = Σ_j f_r(x, ω_j, ωo) φ_j / A`, the sum over the rays `j`
+//! crossing the disc (incoming direction `ω_j`, power `φ_j`) and `A = π r²`,
+//! or the disc's reachable area under artifact control (section 1.2.1,
+//! [`crate::artifact`]). The cosine of equation 2.1 is already in the flux
+//! crossing the disc. A diffuse `f_r = ρ/π` gives back `ρ/π E` (equation 2.2).
+//!
+//! The rays of a vertex are kept in one of three stores ([`GlossyMode`]): a
+//! plain list, the QuadTree of section 2.10.1 without summarising (exact,
+//! faster estimates), or with summarising (the variant the paper proposes
+//! but did not implement; approximate, see [`crate::quadtree`]).
+
+use std::cmp::Ordering;
+
+use glam::{DVec3, Vec3};
+use lustre_brdf::{BoxedBrdf, Brdf};
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{MaterialId, MaterialModel, MeshId, Rgb, Scene};
+use rayon::prelude::*;
+
+use crate::detp::Disc;
+use crate::error::{DensityError, Result};
+use crate::quadtree::{QuadTree, QuadTreeOptions, SummaryTree};
+use crate::ray_set::{RaySegment, RaySet};
+
+/// One ray of a glossy vertex's list (section 2.10, "the actual set of rays which affected the point"): its incoming direction in the vertex's shading frame and its power.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IncidentRay {
+    /// Unit direction towards where the ray came from, in the local frame of the vertex (+Z the disc normal): the `ω` of equation 2.1.
+    pub wi: Vec3,
+    /// Power `φ` (W, RGB) the ray carries.
+    pub power: Rgb,
+}
+
+/// The bit pattern that identifies an [`IncidentRay`]: rays are matched by exact equality of direction and power (section 2.3: an Old Ray is a copy of the ray it replaces).
+pub type RayKey = [u32; 6];
+
+impl IncidentRay {
+    /// The incident ray of a segment crossing a disc whose shading frame is `frame` (section 2.10): `ω = −direction` in that frame.
+    pub fn from_segment(frame: &Frame, segment: &RaySegment) -> Self {
+        Self {
+            wi: frame.to_local(-segment.direction),
+            power: segment.power,
+        }
+    }
+
+    /// The exact bit pattern of direction and power, the identity used to remove Old Rays (section 2.10).
+    pub fn key(&self) -> RayKey {
+        [
+            self.wi.x.to_bits(),
+            self.wi.y.to_bits(),
+            self.wi.z.to_bits(),
+            self.power.x.to_bits(),
+            self.power.y.to_bits(),
+            self.power.z.to_bits(),
+        ]
+    }
+
+    /// One term of equation 2.1 before the division by the disc area: `f_r(ω, ωo) φ` (W/sr).
+    pub fn term(&self, brdf: &dyn Brdf, wo: Vec3) -> Rgb {
+        brdf.eval(self.wi, wo) * self.power
+    }
+}
+
+/// Orders incident rays by their key (a total order on the bit patterns).
+pub(crate) fn key_order(a: &IncidentRay, b: &IncidentRay) -> Ordering {
+    a.key().cmp(&b.key())
+}
+
+/// The Old and New Rays between two ray lists as multisets (section 2.4.2, equations 2.5 and 2.6): `O = S^{t−1} − S^t` first, then `N = S^t − S^{t−1}`.
+pub fn ray_difference(
+    previous: &[IncidentRay],
+    current: &[IncidentRay],
+) -> (Vec<IncidentRay>, Vec<IncidentRay>) {
+    let mut a = previous.to_vec();
+    let mut b = current.to_vec();
+    a.sort_by(key_order);
+    b.sort_by(key_order);
+    let (mut old, mut new) = (Vec::new(), Vec::new());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let order = match (a.get(i), b.get(j)) {
+            (Some(x), Some(y)) => key_order(x, y),
+            (Some(_), None) => Ordering::Less,
+            _ => Ordering::Greater,
+        };
+        match order {
+            Ordering::Less => {
+                old.push(a[i]);
+                i += 1;
+            }
+            Ordering::Greater => {
+                new.push(b[j]);
+                j += 1;
+            }
+            Ordering::Equal => {
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    (old, new)
+}
+
+/// A radiance estimate with its error bound (section 2.10.1): `value` and `bound` are both either sums `Σ f_r φ` (W/sr, the QuadTree's) or radiances (W/(m² sr), a vertex's, divided by the disc area).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Estimate {
+    /// The estimate.
+    pub value: Rgb,
+    /// Per channel, a bound on `|value − exact per-ray sum|`: zero for an exact estimate, the QuadTree's bound (under the sampling assumption stated in [`crate::quadtree`]), or infinite for summaries, whose bound [`SummaryTree::error_bound`] computes on request.
+    pub bound: Rgb,
+    /// BRDF evaluations spent, the cost the QuadTree reduces.
+    pub evaluations: usize,
+}
+
+/// The plain per-vertex ray list of section 2.10, kept sorted by [`IncidentRay::key`] so that equal multisets give bit-identical estimates.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RayList {
+    rays: Vec<IncidentRay>,
+}
+
+impl RayList {
+    /// An empty list.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A list holding the given rays (section 2.10, first frame).
+    pub fn from_rays(rays: &[IncidentRay]) -> Self {
+        let mut rays = rays.to_vec();
+        rays.sort_by(key_order);
+        Self { rays }
+    }
+
+    /// Adds a New Ray (section 2.10, "the ray list must be updated").
+    pub fn insert(&mut self, ray: IncidentRay) {
+        let key = ray.key();
+        let at = self.rays.partition_point(|r| r.key() <= key);
+        self.rays.insert(at, ray);
+    }
+
+    /// Removes one copy of an Old Ray (section 2.10); `false` when no ray of that key is in the list.
+    pub fn remove(&mut self, ray: &IncidentRay) -> bool {
+        let key = ray.key();
+        match self.rays.binary_search_by(|r| r.key().cmp(&key)) {
+            Ok(i) => {
+                self.rays.remove(i);
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// The rays, sorted by key.
+    pub fn rays(&self) -> &[IncidentRay] {
+        &self.rays
+    }
+
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.rays.len()
+    }
+
+    /// Whether the list is empty.
+    pub fn is_empty(&self) -> bool {
+        self.rays.is_empty()
+    }
+
+    /// Total power `Σ φ_j` (section 1.2: `E = Σ φ / A`).
+    pub fn power(&self) -> Rgb {
+        self.rays
+            .iter()
+            .map(|r| r.power.as_dvec3())
+            .sum::<DVec3>()
+            .as_vec3()
+    }
+
+    /// `Σ_j f_r(ω_j, ωo) φ_j` over every ray (equation 2.1 discretised, before the division by the disc area), `wo` in the local frame; exact, so the bound is zero.
+    pub fn estimate(&self, brdf: &dyn Brdf, wo: Vec3) -> Estimate {
+        let sum: DVec3 = self.rays.iter().map(|r| r.term(brdf, wo).as_dvec3()).sum();
+        Estimate {
+            value: sum.as_vec3(),
+            bound: Rgb::ZERO,
+            evaluations: self.rays.len(),
+        }
+    }
+}
+
+/// How a glossy vertex stores its rays (sections 2.10 and 2.10.1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GlossyMode {
+    /// The plain list of section 2.10: every ray, every estimate evaluates the BRDF once per ray.
+    List,
+    /// The QuadTree "without summarizing" of section 2.10.1: every ray, exactly removable; the estimate takes a node as a whole when the BRDF's relative variation over its rays' directions is at most `tolerance` (zero: per-ray, equal to the list).
+    QuadTree {
+        /// Leaf capacity and depth limit.
+        options: QuadTreeOptions,
+        /// Largest relative half-range of the BRDF over a node evaluated as a whole (0 disables it).
+        tolerance: f32,
+    },
+    /// The QuadTree "with summarizing" of section 2.10.1: one mean ray per leaf of the first frame's tree, updated with the paper's formula; approximate.
+    Summarised(QuadTreeOptions),
+}
+
+impl GlossyMode {
+    /// Checks the mode's parameters.
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            Self::List => Ok(()),
+            Self::QuadTree { options, tolerance } => {
+                options.validate()?;
+                if !(tolerance.is_finite() && *tolerance >= 0.0) {
+                    return Err(DensityError::InvalidOption {
+                        option: "tolerance",
+                        message: format!("{tolerance} is not a finite non-negative tolerance"),
+                    });
+                }
+                Ok(())
+            }
+            Self::Summarised(options) => options.validate(),
+        }
+    }
+}
+
+/// The store behind a [`GlossyVertex`].
+#[derive(Debug, Clone, PartialEq)]
+enum Store {
+    List(RayList),
+    Tree(QuadTree, f32),
+    Summary(SummaryTree),
+}
+
+/// What one frame's update did to a vertex's list (section 2.10).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct UpdateStats {
+    /// Old Rays crossing the disc, removed.
+    pub removed: usize,
+    /// New Rays crossing the disc, inserted.
+    pub inserted: usize,
+    /// Old Rays crossing the disc that were not in the list (always zero for a consistent update; summaries cannot tell).
+    pub missing: usize,
+}
+
+impl std::ops::AddAssign for UpdateStats {
+    fn add_assign(&mut self, other: Self) {
+        self.removed += other.removed;
+        self.inserted += other.inserted;
+        self.missing += other.missing;
+    }
+}
+
+/// A glossy vertex (section 2.10): its DETP disc, its shading frame, the area that divides the flux, and the rays crossing the disc.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GlossyVertex {
+    disc: Disc,
+    frame: Frame,
+    area: f32,
+    slack: f32,
+    store: Store,
+}
+
+impl GlossyVertex {
+    /// Collects the segments crossing the disc (section 1.2, [`Disc::is_crossed_by`] with `slack`) into the store `mode` asks for; the area is `π r²`. Fails on a disc without a positive finite radius or a unit normal, a negative or non-finite slack, or invalid mode parameters.
+    pub fn build<'a>(
+        disc: Disc,
+        slack: f32,
+        mode: GlossyMode,
+        segments: impl IntoIterator<Item = &'a RaySegment>,
+    ) -> Result<Self> {
+        crate::artifact::check_disc(&disc)?;
+        if !(slack >= 0.0 && slack.is_finite()) {
+            return Err(DensityError::InvalidOption {
+                option: "slack",
+                message: format!("{slack} is not a finite non-negative distance"),
+            });
+        }
+        mode.validate()?;
+        let frame = Frame::from_normal(disc.normal);
+        let rays: Vec<IncidentRay> = segments
+            .into_iter()
+            .filter(|s| disc.is_crossed_by(s, slack))
+            .map(|s| IncidentRay::from_segment(&frame, s))
+            .collect();
+        let store = match mode {
+            GlossyMode::List => Store::List(RayList::from_rays(&rays)),
+            GlossyMode::QuadTree { options, tolerance } => {
+                Store::Tree(QuadTree::from_rays(options, &rays)?, tolerance)
+            }
+            GlossyMode::Summarised(options) => {
+                Store::Summary(SummaryTree::from_rays(options, &rays)?)
+            }
+        };
+        Ok(Self {
+            disc,
+            frame,
+            area: std::f32::consts::PI * disc.radius * disc.radius,
+            slack,
+            store,
+        })
+    }
+
+    /// The vertex's disc.
+    pub fn disc(&self) -> &Disc {
+        &self.disc
+    }
+
+    /// The shading frame the incident directions are expressed in (+Z the disc normal).
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// The area that divides the flux: `π r²`, or the reachable area under artifact control (section 1.2.1).
+    pub fn area(&self) -> f32 {
+        self.area
+    }
+
+    /// Sets the area that divides the flux, e.g. the reachable area of [`crate::artifact::reachable_area`] (section 1.2.1); fails unless it is positive and finite.
+    pub fn set_area(&mut self, area: f32) -> Result<()> {
+        if !(area > 0.0 && area.is_finite()) {
+            return Err(DensityError::InvalidOption {
+                option: "area",
+                message: format!("{area} is not a positive finite area"),
+            });
+        }
+        self.area = area;
+        Ok(())
+    }
+
+    /// Number of rays the vertex holds (for a summarised store, the count the summaries represent).
+    pub fn len(&self) -> usize {
+        match &self.store {
+            Store::List(l) => l.len(),
+            Store::Tree(t, _) => t.len(),
+            Store::Summary(s) => s.len() as usize,
+        }
+    }
+
+    /// Whether no ray crosses the disc.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The exact store's rays (list or QuadTree); `None` for a summarised store, whose rays are lost (section 2.10.1).
+    pub fn rays(&self) -> Option<Vec<IncidentRay>> {
+        match &self.store {
+            Store::List(l) => Some(l.rays().to_vec()),
+            Store::Tree(t, _) => Some(t.rays()),
+            Store::Summary(_) => None,
+        }
+    }
+
+    /// The QuadTree store, if any.
+    pub fn quadtree(&self) -> Option<&QuadTree> {
+        match &self.store {
+            Store::Tree(t, _) => Some(t),
+            _ => None,
+        }
+    }
+
+    /// The summarised store, if any.
+    pub fn summary_tree(&self) -> Option<&SummaryTree> {
+        match &self.store {
+            Store::Summary(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The incident ray of a segment if it crosses the disc.
+    pub fn incident(&self, segment: &RaySegment) -> Option<IncidentRay> {
+        self.disc
+            .is_crossed_by(segment, self.slack)
+            .then(|| IncidentRay::from_segment(&self.frame, segment))
+    }
+
+    /// One frame's update (section 2.10: "the new rays and old rays ... must be checked against the ray list in the vertex"): removes the Old Rays that cross the disc, then inserts the New Rays that cross it. A summarised store applies the formula of section 2.10.1 and fails, unchanged, when more rays leave a summary than it holds.
+    pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
+        let old: Vec<IncidentRay> = old.iter().filter_map(|s| self.incident(s)).collect();
+        let new: Vec<IncidentRay> = new.iter().filter_map(|s| self.incident(s)).collect();
+        let mut stats = UpdateStats {
+            removed: old.len(),
+            inserted: new.len(),
+            missing: 0,
+        };
+        match &mut self.store {
+            Store::List(l) => {
+                stats.missing = old.iter().filter(|r| !l.remove(r)).count();
+                new.into_iter().for_each(|r| l.insert(r));
+            }
+            Store::Tree(t, _) => {
+                stats.missing = old.iter().filter(|r| !t.remove(r)).count();
+                new.into_iter().for_each(|r| t.insert(r));
+            }
+            Store::Summary(s) => s.update(&old, &new)?,
+        }
+        stats.removed -= stats.missing;
+        Ok(stats)
+    }
+
+    /// The view-dependent radiance `L(x, ωo) = Σ f_r(ω_j, ωo) φ_j / A` towards the world direction `wo` (equation 2.1 on the DETP disc), with its error bound; zero when `wo` is below the tangent plane.
+    pub fn estimate(&self, brdf: &dyn Brdf, wo: Vec3) -> Estimate {
+        let wo = self.frame.to_local(wo.normalize_or_zero());
+        let sum = match &self.store {
+            Store::List(l) => l.estimate(brdf, wo),
+            Store::Tree(t, tolerance) => t.estimate(brdf, wo, *tolerance),
+            Store::Summary(s) => s.estimate(brdf, wo),
+        };
+        Estimate {
+            value: sum.value / self.area,
+            bound: sum.bound / self.area,
+            evaluations: sum.evaluations,
+        }
+    }
+
+    /// The radiance of [`GlossyVertex::estimate`] alone (equation 2.1 on the DETP disc).
+    pub fn radiance(&self, brdf: &dyn Brdf, wo: Vec3) -> Rgb {
+        self.estimate(brdf, wo).value
+    }
+
+    /// The DETP irradiance `E = Σ φ_j / A` of the rays held (section 1.2).
+    pub fn irradiance(&self) -> Rgb {
+        let power = match &self.store {
+            Store::List(l) => l.power(),
+            Store::Tree(t, _) => t.power(),
+            Store::Summary(s) => s.power(),
+        };
+        power / self.area
+    }
+}
+
+/// The meshes whose material is not a plain diffuse reflector, the "glossy" ones of section 2.10 that need per-vertex ray lists.
+pub fn glossy_meshes(scene: &Scene) -> Vec<MeshId> {
+    scene
+        .meshes()
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| {
+            scene
+                .materials()
+                .get(m.material as usize)
+                .is_some_and(|mat| !matches!(mat.model, MaterialModel::Diffuse { .. }))
+        })
+        .map(|(i, _)| i as MeshId)
+        .collect()
+}
+
+/// The glossy vertices of a scene (section 2.10), indexed `[mesh][vertex]`; meshes not asked for hold no vertex, and a vertex without a valid normal is `None`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GlossyVertices {
+    meshes: Vec<Vec<Option<GlossyVertex>>>,
+    materials: Vec<MaterialId>,
+}
+
+impl GlossyVertices {
+    /// Builds the ray lists of every vertex of the given meshes from the whole ray set (section 2.10, first frame), with discs of `radius` on the tangent planes of the meshes' world normals as [`crate::detp`] does, in parallel. Fails on a bad radius, mode or mesh id.
+    pub fn build(
+        scene: &Scene,
+        rays: &RaySet,
+        radius: f32,
+        mode: GlossyMode,
+        meshes: &[MeshId],
+    ) -> Result<Self> {
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(DensityError::InvalidOption {
+                option: "radius",
+                message: format!("{radius} is not a positive finite disc radius"),
+            });
+        }
+        mode.validate()?;
+        if let Some(&m) = meshes.iter().find(|&&m| m as usize >= scene.meshes().len()) {
+            return Err(DensityError::InvalidOption {
+                option: "meshes",
+                message: format!("mesh {m} does not exist"),
+            });
+        }
+        let slack = detp_slack(scene);
+        let segments: Vec<RaySegment> = rays.segments().copied().collect();
+        let out = (0..scene.meshes().len() as MeshId)
+            .map(|m| {
+                if !meshes.contains(&m) {
+                    return Ok(Vec::new());
+                }
+                let positions = scene.world_positions(m);
+                let normals = scene.world_normals(m);
+                positions
+                    .par_iter()
+                    .zip(normals.par_iter())
+                    .map(|(&centre, &normal)| {
+                        let normal = normal.normalize_or_zero();
+                        if normal == Vec3::ZERO {
+                            return Ok(None);
+                        }
+                        let disc = Disc {
+                            centre,
+                            normal,
+                            radius,
+                            mesh: Some(m),
+                        };
+                        GlossyVertex::build(disc, slack, mode, &segments).map(Some)
+                    })
+                    .collect::<Result<Vec<_>>>()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self {
+            meshes: out,
+            materials: scene.meshes().iter().map(|m| m.material).collect(),
+        })
+    }
+
+    /// The vertices of a mesh (empty for a mesh that was not built).
+    pub fn vertices(&self, mesh: MeshId) -> &[Option<GlossyVertex>] {
+        self.meshes.get(mesh as usize).map_or(&[], |v| v.as_slice())
+    }
+
+    /// Mutable access to the vertices of a mesh.
+    pub fn vertices_mut(&mut self, mesh: MeshId) -> &mut [Option<GlossyVertex>] {
+        self.meshes
+            .get_mut(mesh as usize)
+            .map_or(&mut [], |v| v.as_mut_slice())
+    }
+
+    /// One frame's update of every vertex's list from the frame's Old and New Rays (section 2.10), in parallel; the statistics are summed over vertices. The Old Rays must be the segments exactly as they were inserted (same direction, power and extension). On an error (a summary losing more rays than it holds) the other vertices keep their update.
+    pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
+        let per_vertex: Vec<UpdateStats> = self
+            .meshes
+            .par_iter_mut()
+            .flat_map(|v| v.par_iter_mut())
+            .filter_map(|v| v.as_mut().map(|v| v.update(old, new)))
+            .collect::<Result<_>>()?;
+        let mut total = UpdateStats::default();
+        per_vertex.into_iter().for_each(|s| total += s);
+        Ok(total)
+    }
+
+    /// Uses per-vertex areas (e.g. [`crate::artifact::reachable_areas`], section 1.2.1) instead of `π r²`; a zero area leaves `π r²`. Fails when the shape does not match or an area is negative or not finite.
+    pub fn set_areas(&mut self, areas: &[Vec<f32>]) -> Result<()> {
+        for (m, vertices) in self.meshes.iter_mut().enumerate() {
+            for (v, vertex) in vertices.iter_mut().enumerate() {
+                let Some(vertex) = vertex else { continue };
+                let area = areas.get(m).and_then(|a| a.get(v)).ok_or_else(|| {
+                    DensityError::InvalidOption {
+                        option: "areas",
+                        message: format!("no area for vertex {v} of mesh {m}"),
+                    }
+                })?;
+                if *area != 0.0 {
+                    vertex.set_area(*area)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The radiance of every vertex towards the eye (equation 2.1 per vertex, recomputed when the camera moves), `[mesh][vertex]`, with `brdfs` one per material (`lustre_photon::trace::scene_brdfs`); empty for meshes not built. Fails when a mesh's material has no BRDF.
+    pub fn radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+        self.meshes
+            .iter()
+            .zip(&self.materials)
+            .map(|(vertices, &material)| {
+                if vertices.is_empty() {
+                    return Ok(Vec::new());
+                }
+                let brdf =
+                    brdfs
+                        .get(material as usize)
+                        .ok_or_else(|| DensityError::InvalidOption {
+                            option: "brdfs",
+                            message: format!("no BRDF for material {material}"),
+                        })?;
+                Ok(vertices
+                    .par_iter()
+                    .map(|v| {
+                        v.as_ref().map_or(Rgb::ZERO, |v| {
+                            v.radiance(brdf.as_ref(), eye - v.disc().centre)
+                        })
+                    })
+                    .collect())
+            })
+            .collect()
+    }
+}
+
+/// The slack [`crate::detp`] gives segments that end on the disc's own surface: `10⁻⁴` of the scene's size.
+pub(crate) fn detp_slack(scene: &Scene) -> f32 {
+    let scale = scene.bounds().extent().max_element();
+    if scale.is_finite() && scale > 0.0 {
+        scale * 1e-4
+    } else {
+        1e-4
+    }
+}
