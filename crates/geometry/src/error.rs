@@ -86,6 +86,9 @@ pub enum GeometryError {
     /// An object id or name does not exist.
     #[error("no object `{0}` in the scene")]
     UnknownObject(String),
+    /// An object path is invalid: no keyframes, non-finite values, or times that do not increase.
+    #[error("invalid object path: {0}")]
+    InvalidPath(String),
     /// Something cannot be expressed in the target format (e.g. a material Mitsuba lacks).
     #[error("cannot export {what}: {why}")]
     Unsupported {

@@ -23,6 +23,7 @@
 //! ```
 
 mod aabb;
+pub mod animation;
 pub mod builtin;
 mod bvh;
 mod camera;
@@ -39,6 +40,7 @@ pub mod sampling;
 mod scene;
 
 pub use aabb::Aabb;
+pub use animation::{Keyframe, MobileObject, ObjectPath, PathEnd};
 pub use builtin::builtin;
 pub use bvh::Bvh;
 pub use camera::Camera;

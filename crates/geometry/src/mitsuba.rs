@@ -1000,7 +1000,7 @@ mod tests {
 
     #[test]
     fn cornell_and_glosbox_xml_is_well_formed() {
-        for name in builtin::BUILTIN_SCENES {
+        for name in ["cornell", "glosbox"] {
             let scene = builtin(name).unwrap();
             let mut warnings = Vec::new();
             let xml = scene_xml(&scene, &ExportOptions::default(), &mut warnings).unwrap();
@@ -1034,6 +1034,25 @@ mod tests {
         ] {
             assert!(xml.contains(needle), "glosbox XML lacks {needle}:\n{xml}");
         }
+    }
+
+    #[test]
+    fn tree_xml_is_well_formed() {
+        let scene = builtin("tree").unwrap();
+        let mut warnings = Vec::new();
+        let xml = scene_xml(&scene, &ExportOptions::default(), &mut warnings).unwrap();
+        let tags = check_well_formed(&xml).unwrap_or_else(|e| panic!("tree: {e}\n{xml}"));
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert_eq!(
+            tags.iter().filter(|t| *t == "shape").count(),
+            scene.meshes().len()
+        );
+        assert_eq!(tags.iter().filter(|t| *t == "emitter").count(), 1);
+        assert_eq!(
+            tags.iter().filter(|t| *t == "bsdf").count(),
+            scene.materials().len()
+        );
+        assert!(xml.contains("<rgb name=\"radiance\" value=\"40, 38, 34\"/>"));
     }
 
     #[test]

@@ -5,6 +5,7 @@ use std::collections::HashMap;
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
+use crate::animation::{MobileObject, ObjectPath};
 use crate::light::{AreaLight, AreaShape, Light};
 use crate::material::{Material, MaterialId};
 use crate::mesh::{Mesh, MeshId, triangle_area};
@@ -79,12 +80,18 @@ pub struct Scene {
     /// Lights given explicitly (point, oriented point, spot, explicit area lights).
     explicit_lights: Vec<Light>,
     camera: Camera,
+    /// The objects that move along paths (García et al. 2003, section 2.2.2).
+    mobile: Vec<MobileObject>,
     // Derived.
     mesh_object: Vec<ObjectId>,
     triangle_offsets: Vec<u32>,
     surfaces: Vec<Surface>,
     triangle_surface: Vec<SurfaceId>,
     lights: Vec<Light>,
+    /// World bounds of each mesh.
+    mesh_bounds: Vec<Aabb>,
+    /// The surfaces of mesh `m` are `mesh_surfaces[m]..mesh_surfaces[m + 1]`.
+    mesh_surfaces: Vec<SurfaceId>,
     /// Whether area lights are replaced by cosine point lights of equal power.
     area_lights_as_points: bool,
 }
@@ -167,11 +174,14 @@ impl Scene {
             objects,
             explicit_lights: lights,
             camera,
+            mobile: Vec::new(),
             mesh_object,
             triangle_offsets,
             surfaces: Vec::new(),
             triangle_surface: Vec::new(),
             lights: Vec::new(),
+            mesh_bounds: Vec::new(),
+            mesh_surfaces: Vec::new(),
             area_lights_as_points: false,
         };
         scene.derive()?;
@@ -181,22 +191,26 @@ impl Scene {
         Ok(scene)
     }
 
-    /// The same geometry, objects, explicit lights and camera with other
-    /// materials (same count and order); emissive materials become area lights.
+    /// The same geometry, objects (and their poses), mobile objects, explicit
+    /// lights and camera with other materials (same count and order);
+    /// emissive materials become area lights.
     pub fn with_materials(&self, materials: Vec<Material>) -> Result<Self> {
-        Self::new(
+        let mut scene = Self::new(
             self.name.clone(),
             self.meshes.clone(),
             materials,
             self.objects.clone(),
             self.explicit_lights.clone(),
             self.camera,
-        )
+        )?;
+        scene.mobile = self.mobile.clone();
+        Ok(scene)
     }
 
-    /// The same materials, objects, explicit lights, camera and point-light
-    /// setting with other meshes (same count and order, e.g. each one
-    /// subdivided for per-vertex lighting); surfaces and area lights are derived again.
+    /// The same materials, objects (and their poses), mobile objects, explicit
+    /// lights, camera and point-light setting with other meshes (same count
+    /// and order, e.g. each one subdivided for per-vertex lighting); surfaces
+    /// and area lights are derived again.
     pub fn with_meshes(&self, meshes: Vec<Mesh>) -> Result<Self> {
         if meshes.len() != self.meshes.len() {
             return Err(GeometryError::InvalidMesh {
@@ -208,7 +222,7 @@ impl Scene {
                 ),
             });
         }
-        let scene = Self::new(
+        let mut scene = Self::new(
             self.name.clone(),
             meshes,
             self.materials.clone(),
@@ -216,6 +230,7 @@ impl Scene {
             self.explicit_lights.clone(),
             self.camera,
         )?;
+        scene.mobile = self.mobile.clone();
         if self.area_lights_as_points {
             scene.with_area_lights_as_points()
         } else {
@@ -273,7 +288,8 @@ impl Scene {
     }
 
     /// Moves an object: sets its transform relative to its rest pose, and
-    /// updates surfaces and area lights. A BVH must be rebuilt or refitted after.
+    /// updates its meshes' surfaces and the area lights (the other meshes'
+    /// are kept). A BVH must be rebuilt or refitted after.
     pub fn set_object_transform(&mut self, object: ObjectId, transform: Affine3A) -> Result<()> {
         let o = self
             .objects
@@ -286,7 +302,43 @@ impl Scene {
             });
         }
         o.transform = transform;
-        self.derive()
+        let meshes = o.meshes.clone();
+        self.derive_meshes(&meshes)
+    }
+
+    /// The scene with the object named `object_name` made mobile along `path`
+    /// and posed at the path's start; a second path for the same object
+    /// replaces the first. Fails when no object has that name (García et al. 2003, section 2.2.2).
+    pub fn with_mobile(mut self, object_name: &str, path: ObjectPath) -> Result<Self> {
+        let object = self.object_by_name(object_name)?;
+        let start = path.at(path.start());
+        match self.mobile.iter_mut().find(|m| m.object == object) {
+            Some(mobile) => mobile.path = path,
+            None => self.mobile.push(MobileObject { object, path }),
+        }
+        self.set_object_transform(object, start)?;
+        Ok(self)
+    }
+
+    /// The objects that move along paths, in the order they were made mobile (García et al. 2003, section 2.2.2).
+    pub fn mobile_objects(&self) -> &[MobileObject] {
+        &self.mobile
+    }
+
+    /// Poses every mobile object where its path is at time `t` (seconds) and
+    /// updates the moved meshes' surfaces and the area lights; a BVH must be
+    /// rebuilt or refitted after (García et al. 2003, section 2.2.2).
+    pub fn pose_at(&mut self, t: f32) -> Result<()> {
+        if self.mobile.is_empty() {
+            return Ok(());
+        }
+        let mut moved = Vec::new();
+        for mobile in &self.mobile {
+            let object = &mut self.objects[mobile.object as usize];
+            object.transform = mobile.path.at(t);
+            moved.extend_from_slice(&object.meshes);
+        }
+        self.derive_meshes(&moved)
     }
 
     /// Number of triangles in the scene.
@@ -357,8 +409,9 @@ impl Scene {
 
     /// World-space bounding box of the scene.
     pub fn bounds(&self) -> Aabb {
-        (0..self.meshes.len() as MeshId)
-            .map(|m| Aabb::from_points(self.world_positions(m)))
+        self.mesh_bounds
+            .iter()
+            .copied()
             .fold(Aabb::EMPTY, Aabb::union)
     }
 
@@ -367,36 +420,114 @@ impl Scene {
         self.lights.iter().map(Light::power).sum()
     }
 
-    /// Recomputes surfaces (with world areas and planes) and area lights.
+    /// The length coplanarity tolerances are relative to: the scene's largest extent.
+    fn scale(&self) -> f32 {
+        self.bounds().extent().max_element().max(1e-6)
+    }
+
+    /// Recomputes every mesh's world bounds and surfaces (with world areas
+    /// and planes), then the area lights.
     fn derive(&mut self) -> Result<()> {
-        let scale = self.bounds().extent().max_element().max(1e-6);
+        self.mesh_bounds = (0..self.meshes.len() as MeshId)
+            .map(|m| Aabb::from_points(self.world_positions(m)))
+            .collect();
+        let scale = self.scale();
         self.surfaces.clear();
+        self.mesh_surfaces = vec![0];
         self.triangle_surface = vec![0; self.triangle_count()];
         for m in 0..self.meshes.len() {
             let positions = self.world_positions(m as MeshId);
             let normals = self.world_normals(m as MeshId);
-            let mesh = &self.meshes[m];
-            for group in group_surfaces(mesh, &positions, &normals, scale * COPLANAR_RELATIVE) {
-                let id = self.surfaces.len() as SurfaceId;
-                let area = group
-                    .triangles
-                    .iter()
-                    .map(|&t| {
-                        triangle_area(mesh.indices[t as usize].map(|i| positions[i as usize]))
-                    })
-                    .sum();
-                for &t in &group.triangles {
-                    self.triangle_surface[(self.triangle_offsets[m] + t) as usize] = id;
-                }
-                self.surfaces.push(Surface {
-                    mesh: m as MeshId,
-                    triangles: group.triangles,
-                    kind: group.kind,
-                    area,
-                    material: mesh.material,
-                });
+            let groups = group_surfaces(
+                &self.meshes[m],
+                &positions,
+                &normals,
+                scale * COPLANAR_RELATIVE,
+            );
+            let first = self.surfaces.len() as SurfaceId;
+            self.surfaces.reserve(groups.len());
+            for (g, group) in groups.into_iter().enumerate() {
+                let surface = self.surface_of(m as MeshId, group, &positions, first + g as u32);
+                self.surfaces.push(surface);
+            }
+            self.mesh_surfaces.push(self.surfaces.len() as SurfaceId);
+        }
+        self.derive_lights()
+    }
+
+    /// Recomputes the bounds and surfaces of the given meshes only, after
+    /// their objects moved (a quasi-static scene: García et al. 2003, section
+    /// 2.2.2), then the area lights; falls back to [`Scene::derive`] when the
+    /// scene's size or a moved mesh's surface count changes, so the result
+    /// always equals a full derivation.
+    fn derive_meshes(&mut self, meshes: &[MeshId]) -> Result<()> {
+        let scale = self.scale();
+        for &m in meshes {
+            self.mesh_bounds[m as usize] = Aabb::from_points(self.world_positions(m));
+        }
+        if self.scale().to_bits() != scale.to_bits() {
+            return self.derive();
+        }
+        let mut updates = Vec::with_capacity(meshes.len());
+        for &m in meshes {
+            let positions = self.world_positions(m);
+            let normals = self.world_normals(m);
+            let groups = group_surfaces(
+                &self.meshes[m as usize],
+                &positions,
+                &normals,
+                scale * COPLANAR_RELATIVE,
+            );
+            let (first, end) = (
+                self.mesh_surfaces[m as usize],
+                self.mesh_surfaces[m as usize + 1],
+            );
+            if groups.len() != (end - first) as usize {
+                return self.derive();
+            }
+            updates.push((m, groups, positions));
+        }
+        for (m, groups, positions) in updates {
+            let first = self.mesh_surfaces[m as usize];
+            for (g, group) in groups.into_iter().enumerate() {
+                let id = first + g as SurfaceId;
+                self.surfaces[id as usize] = self.surface_of(m, group, &positions, id);
             }
         }
+        self.derive_lights()
+    }
+
+    /// The surface `id` of mesh `m` made of `group` (world `positions`), its
+    /// triangles recorded as belonging to it.
+    fn surface_of(
+        &mut self,
+        m: MeshId,
+        group: SurfaceGroup,
+        positions: &[Vec3],
+        id: SurfaceId,
+    ) -> Surface {
+        let mesh = &self.meshes[m as usize];
+        let area = group
+            .triangles
+            .iter()
+            .map(|&t| triangle_area(mesh.indices[t as usize].map(|i| positions[i as usize])))
+            .sum();
+        let offset = self.triangle_offsets[m as usize];
+        for &t in &group.triangles {
+            self.triangle_surface[(offset + t) as usize] = id;
+        }
+        Surface {
+            mesh: m,
+            triangles: group.triangles,
+            kind: group.kind,
+            area,
+            material: mesh.material,
+        }
+    }
+
+    /// Recomputes the lights: the explicit ones, then one area light per
+    /// emissive mesh (as cosine point lights when so asked).
+    fn derive_lights(&mut self) -> Result<()> {
         self.lights = self.explicit_lights.clone();
         for m in 0..self.meshes.len() {
             let mesh = &self.meshes[m];

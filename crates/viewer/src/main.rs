@@ -26,12 +26,12 @@ struct Cli {
 enum Command {
     /// Print a scene's triangles, surfaces, materials, lights and bounds.
     Info {
-        /// A built-in scene (cornell, glosbox) or an OBJ file.
+        /// A built-in scene (cornell, glosbox, tree) or an OBJ file.
         scene: String,
     },
     /// Write a scene as Mitsuba 3 XML, with its meshes as PLY files beside it.
     ExportMitsuba {
-        /// A built-in scene (cornell, glosbox) or an OBJ file.
+        /// A built-in scene (cornell, glosbox, tree) or an OBJ file.
         scene: String,
         /// The XML file to write.
         out: PathBuf,
@@ -107,6 +107,22 @@ fn info(arg: &str) -> anyhow::Result<()> {
         println!("  {kind:<14} power {:.4?} W", light.power().to_array());
     }
     println!("power       {:.4?} W", scene.total_power().to_array());
+    println!("mobile      {}", scene.mobile_objects().len());
+    for mobile in scene.mobile_objects() {
+        let object = &scene.objects()[mobile.object as usize];
+        let triangles: usize = object
+            .meshes
+            .iter()
+            .map(|&m| scene.meshes()[m as usize].indices.len())
+            .sum();
+        println!(
+            "  {:<14} {triangles} triangles, {} keyframes over {} s ({:?})",
+            object.name,
+            mobile.path.keyframes().len(),
+            mobile.path.duration(),
+            mobile.path.end()
+        );
+    }
     println!(
         "bounds      {:.4?} .. {:.4?}",
         bounds.min.to_array(),

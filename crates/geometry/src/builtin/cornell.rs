@@ -3,6 +3,7 @@
 
 use glam::{Affine3A, Mat3, Quat, Vec2, Vec3};
 
+use crate::animation::{Keyframe, ObjectPath, PathEnd};
 use crate::material::{ConductorFresnel, Material, MaterialModel, MicrofacetDistribution};
 use crate::{Camera, Mesh, Object, Rgb, Scene};
 
@@ -18,6 +19,39 @@ pub const LIGHT_RADIANCE: Rgb = Rgb::new(18.387, 13.9873, 6.75357);
 pub const GOLD_ETA: Rgb = Rgb::new(0.143, 0.374, 1.442);
 /// Complex index of refraction of gold (imaginary part) used by `glosbox`.
 pub const GOLD_K: Rgb = Rgb::new(3.983, 2.385, 1.603);
+
+/// Centre of the small box, the mobile object, in its rest pose (García et al. 2003, section 2.2.2).
+pub const SMALL_BOX_CENTRE: Vec3 = Vec3::new(0.335, -0.7, 0.38);
+/// Time the small box takes to go once round its path, in seconds (García et al. 2003, section 2.2.2).
+pub const SMALL_BOX_PATH_DURATION: f32 = 8.0;
+
+/// The small box's path: it slides along the floor to the right wall, to
+/// the front right, to the front middle and back, turning up to 70° about
+/// its vertical axis, looping every 8 s; it stays inside the box and clear of
+/// the large box (García et al. 2003, section 2.2.2).
+pub fn small_box_path() -> ObjectPath {
+    // (time, centre x, centre z, turn in degrees); the centre stays at y = -0.7.
+    const KEYS: [(f32, f32, f32, f32); 5] = [
+        (0.0, 0.335, 0.38, 0.0),
+        (2.0, 0.55, 0.02, 35.0),
+        (4.0, 0.56, 0.5, 70.0),
+        (6.0, 0.0, 0.56, 45.0),
+        (SMALL_BOX_PATH_DURATION, 0.335, 0.38, 0.0),
+    ];
+    let keys = KEYS
+        .iter()
+        .map(|&(t, x, z, degrees)| {
+            Keyframe::new(
+                t,
+                Vec3::new(x, SMALL_BOX_CENTRE.y, z),
+                Quat::from_rotation_y(degrees.to_radians()),
+            )
+        })
+        .collect();
+    ObjectPath::new(keys, PathEnd::Loop)
+        .and_then(|path| path.with_pivot(SMALL_BOX_CENTRE))
+        .expect("the small box's path is valid")
+}
 
 /// Mitsuba's `rectangle`: [-1, 1]² in the z = 0 plane, facing +z, under `xf`.
 fn rectangle(name: &str, xf: Affine3A, material: u32) -> Mesh {
@@ -157,6 +191,7 @@ fn box_scene(
         .collect();
     let camera = Camera::look_at(Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, Vec3::Y, 39.3077);
     Scene::new(name, meshes, materials, objects, Vec::new(), camera)
+        .and_then(|scene| scene.with_mobile("small-box", small_box_path()))
         .expect("the built-in Cornell box is valid")
 }
 
@@ -170,14 +205,16 @@ fn cornell_materials() -> Vec<Material> {
     ]
 }
 
-/// `cornell`: exactly Mitsuba 3's `cornell_box()` (DESIGN.md).
+/// `cornell`: exactly Mitsuba 3's `cornell_box()` (DESIGN.md), with the
+/// small box mobile along [`small_box_path`] (at its rest pose at time 0).
 pub fn cornell() -> Scene {
     box_scene("cornell", cornell_materials(), 0, 0)
 }
 
 /// `glosbox`: `cornell` with a rough gold large box (Beckmann, alpha 0.1) and a
 /// floor blending 0.7 of the white diffuse with 0.3 of a rough mirror
-/// (Beckmann, alpha 0.05, F = 1) — Stürzlinger's "Glosbox" with Bastos' glossy floor.
+/// (Beckmann, alpha 0.05, F = 1) — Stürzlinger's "Glosbox" with Bastos' glossy
+/// floor; the small box is mobile as in `cornell`.
 pub fn glosbox() -> Scene {
     let mut materials = cornell_materials();
     materials.push(Material::new(
