@@ -3,6 +3,7 @@
 
 mod render;
 mod render_density;
+mod render_frames;
 mod scene_arg;
 
 use std::path::PathBuf;

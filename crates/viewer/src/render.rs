@@ -133,7 +133,7 @@ pub enum GlossyArg {
 /// Options of `lustre render`.
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
-    /// A built-in scene (cornell, glosbox) or an OBJ file.
+    /// A built-in scene (cornell, glosbox, tree) or an OBJ file.
     pub scene: String,
     /// Rendering technique.
     #[arg(long, value_enum, default_value_t = Technique::SplatDirect)]
@@ -187,6 +187,12 @@ pub struct RenderArgs {
     /// Use the software adapter even where a hardware one exists.
     #[arg(long)]
     pub software: bool,
+    /// Move the scene's mobile objects along their paths over this many frames, updating the per-vertex irradiance incrementally (García et al. 2003, section 2), and write one image per frame (`NAME-0000.png`, ...) with a timing sidecar.
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// With `--frames`: only simulate and report the times, without the GPU or images.
+    #[arg(long, requires = "frames")]
+    pub timing_only: bool,
 }
 
 /// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
@@ -259,6 +265,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     timings.insert("load".into(), json!(ms(start)));
 
+    if let Some(frames) = args.frames {
+        let Some(estimator) = density else {
+            bail!("--frames: only the per-vertex techniques (detp, impact, photonmap) animate");
+        };
+        return crate::render_frames::run(args, scene, estimator, frames);
+    }
     let bvh = Bvh::build(&scene);
     let kernel = match args.kernel {
         KernelArg::Silverman => Kernel::Silverman,
@@ -270,7 +282,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             None,
         ),
         Some(estimator) => {
-            let v = vertex_radiance(estimator, &scene, &bvh, args.photons, args.seed)?;
+            let v = vertex_radiance(estimator, &scene, args.photons, args.seed)?;
             eprintln!(
                 "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
                 estimator.name(),
@@ -536,14 +548,18 @@ pub fn sidecar_path(out: &Path) -> PathBuf {
 
 /// Writes the image as the extension of `--out` says, atomically.
 fn write_outputs(args: &RenderArgs, image: &Image) -> anyhow::Result<()> {
-    let is_exr = args
-        .out
+    write_image(&args.out, args.exposure, image)
+}
+
+/// Writes an image atomically as the extension of `path` says: linear EXR, or sRGB PNG after `exposure` stops.
+pub fn write_image(path: &Path, exposure: f32, image: &Image) -> anyhow::Result<()> {
+    let is_exr = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     if is_exr {
-        lustre_image::write_exr(&args.out, image, Precision::F32)
+        lustre_image::write_exr(path, image, Precision::F32)
     } else {
-        lustre_image::write_png(&args.out, image, args.exposure)
+        lustre_image::write_png(path, image, exposure)
     }
-    .with_context(|| format!("cannot write {}", args.out.display()))
+    .with_context(|| format!("cannot write {}", path.display()))
 }

@@ -5,12 +5,10 @@
 //! 2.4, equation 2.2) for the Gouraud pass, on a scene meshed finely enough
 //! for per-vertex lighting (section 2.9).
 
-use std::time::Instant;
-
 use anyhow::Context;
-use lustre_density::{RaySetOptions, VertexIrradiance, detp, impact_count, photon_maps};
+use lustre_density::{QuasiStatic, QuasiStaticOptions, RaySetOptions};
+use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
-use lustre_geometry::{Bvh, Scene};
 use lustre_mpr::passes::gouraud::corner_radiance;
 
 /// Default DETP disc radius in m (section 1.2): 2.5 % of the 2 m Cornell box, half the default mesh edge (the paper's reference uses 1 % of the scene with 100 M rays; at 100k photons 0.1 m has less noise and more bias near corners).
@@ -20,33 +18,7 @@ pub const DEFAULT_PHOTONMAP_K: usize = 50;
 /// Default longest edge in m after subdivision for per-vertex lighting (section 2.9 meshes into 0.02 m squares; 0.1 m gives `cornell` about 6,500 vertices, keeping DETP's every-segment-at-every-vertex cost near ten seconds on two cores).
 pub const DEFAULT_MESH_EDGE: f32 = 0.1;
 
-/// A density estimator of section 1.2 with its parameter.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Estimator {
-    /// Density Estimation on the Tangent Plane: disc of this radius in m.
-    Detp {
-        /// Disc radius `r` in m.
-        radius: f32,
-    },
-    /// Impact Count: impact power over triangle area, mean per vertex (section 2.5.1).
-    ImpactCount,
-    /// Photon Maps: the `k` nearest impacts.
-    PhotonMaps {
-        /// Number of nearest impacts.
-        k: usize,
-    },
-}
-
-impl Estimator {
-    /// The estimator's name as the sidecar reports it.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Detp { .. } => "detp",
-            Self::ImpactCount => "impact",
-            Self::PhotonMaps { .. } => "photonmap",
-        }
-    }
-}
+pub use lustre_density::Estimator;
 
 /// Per-corner radiance for the Gouraud pass and what producing it cost.
 #[derive(Debug, Clone)]
@@ -83,43 +55,41 @@ pub fn vertex_lit_scene(scene: &Scene, edge: f32) -> anyhow::Result<Scene> {
         .with_context(|| format!("scene `{}` after subdivision", scene.name))
 }
 
-/// Traces the ray set of `photons` photons (section 2.3, figure 2.1) and runs `estimator` at every vertex (section 2.4.1, figure 2.3), returning `L_r = ρ/π E` per triangle corner with the time of each phase.
+/// Traces the ray set of `photons` photons (section 2.3, figure 2.1) and runs `estimator` at every vertex (section 2.4.1, figure 2.3), returning `L_r = ρ/π E` per triangle corner with the time of each phase. Every object is static here; `--frames` moves the mobile ones ([`crate::render_frames`]).
 pub fn vertex_radiance(
     estimator: Estimator,
     scene: &Scene,
-    bvh: &Bvh,
     photons: u64,
     seed: u64,
 ) -> anyhow::Result<VertexRadiance> {
-    let start = Instant::now();
-    let rays = lustre_density::trace_ray_set(
-        scene,
-        bvh,
-        &RaySetOptions {
+    let sim = QuasiStatic::new(
+        scene.clone(),
+        &[],
+        quasi_static_options(estimator, photons, seed),
+    )
+    .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
+    let first = sim.first_frame();
+    let corners = corner_radiance(scene, &sim.irradiance())
+        .with_context(|| format!("vertex radiance of `{}`", scene.name))?;
+    Ok(VertexRadiance {
+        corners,
+        primary_rays: sim.rays().rays.len(),
+        segments: sim.rays().segments().count(),
+        ray_set_ms: first.photosimulation.as_secs_f64() * 1e3,
+        estimate_ms: first.radiosity.as_secs_f64() * 1e3,
+    })
+}
+
+/// The simulation settings of `lustre render` for an estimator, photon count and seed.
+pub fn quasi_static_options(estimator: Estimator, photons: u64, seed: u64) -> QuasiStaticOptions {
+    QuasiStaticOptions {
+        rays: RaySetOptions {
             photons,
             seed,
             ..RaySetOptions::default()
         },
-    )
-    .with_context(|| format!("cannot trace the ray set of `{}`", scene.name))?;
-    let ray_set_ms = start.elapsed().as_secs_f64() * 1e3;
-
-    let start = Instant::now();
-    let irradiance: VertexIrradiance = match estimator {
-        Estimator::Detp { radius } => detp(scene, &rays, radius).context("--radius")?,
-        Estimator::ImpactCount => impact_count(scene, &rays),
-        Estimator::PhotonMaps { k } => photon_maps(scene, &rays, k).context("--k")?,
-    };
-    let estimate_ms = start.elapsed().as_secs_f64() * 1e3;
-    let corners = corner_radiance(scene, &irradiance)
-        .with_context(|| format!("vertex radiance of `{}`", scene.name))?;
-    Ok(VertexRadiance {
-        corners,
-        primary_rays: rays.rays.len(),
-        segments: rays.segments().count(),
-        ray_set_ms,
-        estimate_ms,
-    })
+        estimator,
+    }
 }
 
 #[cfg(test)]
@@ -140,13 +110,12 @@ mod tests {
     #[test]
     fn every_estimator_gives_one_finite_radiance_per_corner() {
         let scene = vertex_lit_scene(&builtin("cornell").unwrap(), 0.5).unwrap();
-        let bvh = Bvh::build(&scene);
         for estimator in [
             Estimator::Detp { radius: 0.2 },
             Estimator::ImpactCount,
             Estimator::PhotonMaps { k: 10 },
         ] {
-            let r = vertex_radiance(estimator, &scene, &bvh, 2_000, 1).unwrap();
+            let r = vertex_radiance(estimator, &scene, 2_000, 1).unwrap();
             assert_eq!(r.corners.len(), 3 * scene.triangle_count());
             assert!(
                 r.corners
@@ -157,7 +126,7 @@ mod tests {
             assert!(r.corners.iter().any(|c| c[0] > 0.0), "{}", estimator.name());
             assert!(r.segments >= r.primary_rays);
         }
-        let bad = vertex_radiance(Estimator::Detp { radius: 0.0 }, &scene, &bvh, 10, 1);
+        let bad = vertex_radiance(Estimator::Detp { radius: 0.0 }, &scene, 10, 1);
         assert!(format!("{:#}", bad.unwrap_err()).contains("radius"));
     }
 }

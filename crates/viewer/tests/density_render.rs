@@ -153,3 +153,70 @@ fn measure_vertex_techniques_against_the_cornell_reference() {
         );
     }
 }
+
+/// `--frames` moves the small box along its path: one image per frame, each different from the first where the box moved, and a sidecar with every frame's times; `--timing-only` writes the sidecar alone; a scene without a mobile object and a splatting technique are refused before anything is written.
+#[test]
+fn frames_write_one_image_per_frame_and_a_timing_sidecar() {
+    let dir = scratch("frames");
+    let out = dir.join("anim.exr");
+    let quick = [
+        "--photons",
+        "20000",
+        "--size",
+        "48x48",
+        "--mesh-edge",
+        "0.25",
+        "--frames",
+        "3",
+    ];
+    let Some(sidecar) = render("frames_write_one_image_per_frame", "impact", &quick, &out) else {
+        return;
+    };
+    assert_eq!(sidecar["frames"], 3);
+    assert_eq!(sidecar["per_frame"].as_array().unwrap().len(), 3);
+    assert!(sidecar["median_ms"]["radiosity"].as_f64().unwrap() >= 0.0);
+    let images: Vec<_> = (0..3)
+        .map(|i| lustre_image::read_exr(dir.join(format!("anim-{i:04}.exr"))).unwrap())
+        .collect();
+    assert!(!out.exists(), "the frames replace the single image");
+    // The loop's frames 0, 1, 2 are at 0, 8/3 and 16/3 s: the box has moved, so the images differ.
+    let d = relative_mse(&images[1], &images[0], RELATIVE_MSE_EPSILON).unwrap();
+    assert!(d > 1e-4, "frame 1 looks like frame 0 (relMSE {d})");
+    for recalculated in sidecar["per_frame"].as_array().unwrap() {
+        assert!(recalculated["recalculated_paths"].as_u64().unwrap() > 0);
+    }
+
+    let timing = dir.join("timing.png");
+    let mut args = quick.to_vec();
+    args.push("--timing-only");
+    let Some(sidecar) = render("frames_timing_only", "detp", &args, &timing) else {
+        return;
+    };
+    assert_eq!(sidecar["images"].as_array().unwrap().len(), 0);
+    assert!(!dir.join("timing-0000.png").exists());
+
+    for (scene, technique, expected) in [
+        ("cornell", "splat", "per-vertex"),
+        ("missing.obj", "detp", "missing.obj"),
+    ] {
+        let bad = dir.join("bad.png");
+        let result = lustre(&[
+            "render",
+            scene,
+            "--technique",
+            technique,
+            "--frames",
+            "2",
+            "--photons",
+            "100",
+            "--out",
+            bad.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(
+            !result.status.success() && stderr.contains(expected) && !stderr.contains("panicked"),
+            "{stderr}"
+        );
+        assert!(!bad.exists() && !dir.join("bad-0000.png").exists());
+    }
+}
