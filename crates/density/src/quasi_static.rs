@@ -2,11 +2,12 @@
 
 use std::time::{Duration, Instant};
 
-use glam::{Affine3A, DVec3};
+use glam::{Affine3A, DVec3, Vec3};
 use lustre_geometry::{MeshId, ObjectId, Rgb, Scene, triangle_area};
 use rayon::prelude::*;
 
 use crate::VertexIrradiance;
+use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::kdtree::KdTree;
@@ -50,6 +51,8 @@ pub struct QuasiStaticOptions {
     pub rays: RaySetOptions,
     /// The density estimator.
     pub estimator: Estimator,
+    /// Artifact control of DETP (section 1.2.1): reachable disc areas and the concave extension of [`RaySetOptions::extension`] (set to `max_extension · radius`); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
+    pub artifact: Option<ArtifactOptions>,
 }
 
 /// Times and counts of one frame (the paper's "Photosimulation update" and "Illumination"/"Radiosity recalculation" columns).
@@ -74,8 +77,12 @@ enum State {
     ImpactCount { power: Vec<DVec3>, area: Vec<f64> },
     /// Nothing: Photon Maps is estimated in full each frame.
     PhotonMaps { k: usize },
-    /// Disc sums `Σ φ` per estimation point (equation 2.8), and the disc radius.
-    Detp { sums: Vec<DVec3>, radius: f32 },
+    /// Disc sums `Σ φ` per estimation point (equation 2.8), each point's disc area (`π r²`, or its reachable area under artifact control), and the disc radius.
+    Detp {
+        sums: Vec<DVec3>,
+        areas: Vec<f64>,
+        radius: f32,
+    },
 }
 
 /// A static scene with mobile objects and its view-independent irradiance, kept up to date as the objects move (section 2).
@@ -110,6 +117,20 @@ impl QuasiStatic {
             }
             _ => {}
         }
+        let mut options = options;
+        if let Some(artifact) = options.artifact {
+            let Estimator::Detp { radius } = options.estimator else {
+                return Err(DensityError::InvalidOption {
+                    option: "artifact",
+                    message: format!(
+                        "artifact control applies to DETP's discs, not to {}",
+                        options.estimator.name()
+                    ),
+                });
+            };
+            artifact.validate()?;
+            options.rays.extension = artifact.max_extension * radius;
+        }
         let world = World::new(&scene, mobile)?;
         let t0 = Instant::now();
         let rays = trace_ray_set_in(&scene, &world, &options.rays)?;
@@ -129,6 +150,7 @@ impl QuasiStatic {
             Estimator::PhotonMaps { k } => State::PhotonMaps { k },
             Estimator::Detp { radius } => State::Detp {
                 sums: Vec::new(),
+                areas: Vec::new(),
                 radius,
             },
         };
@@ -144,6 +166,15 @@ impl QuasiStatic {
             first_frame: FrameStats::default(),
         };
         let t1 = Instant::now();
+        if let State::Detp { radius, .. } = sim.state {
+            let mut areas = sim.point_areas(false, radius)?;
+            areas.extend(sim.point_areas(true, radius)?);
+            sim.state = State::Detp {
+                sums: Vec::new(),
+                areas,
+                radius,
+            };
+        }
         sim.state = sim.full_state();
         sim.first_frame = FrameStats {
             photosimulation,
@@ -181,7 +212,7 @@ impl QuasiStatic {
         let photosimulation = t0.elapsed();
         let t1 = Instant::now();
         self.points.move_mobile(&self.scene);
-        self.update_state(&update);
+        self.update_state(&update)?;
         Ok(FrameStats {
             photosimulation,
             radiosity: t1.elapsed(),
@@ -250,13 +281,14 @@ impl QuasiStatic {
                 State::ImpactCount { power, area }
             }
             State::PhotonMaps { k } => State::PhotonMaps { k: *k },
-            State::Detp { radius, .. } => {
+            State::Detp { radius, areas, .. } => {
                 let discs = self.discs(0..self.points.points.len(), *radius);
                 let segments: Vec<RaySegment> = self.rays.segments().copied().collect();
                 let mut sums = vec![DVec3::ZERO; discs.len()];
                 accumulate(&discs, &segments, self.slack, 1.0, &mut sums);
                 State::Detp {
                     sums,
+                    areas: areas.clone(),
                     radius: *radius,
                 }
             }
@@ -264,8 +296,14 @@ impl QuasiStatic {
     }
 
     /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps).
-    fn update_state(&mut self, update: &RayUpdate) {
+    fn update_state(&mut self, update: &RayUpdate) -> Result<()> {
         let first_mobile = self.points.first_mobile;
+        let mobile_areas = match &self.state {
+            State::Detp { radius, .. } if self.options.artifact.is_some() => {
+                Some(self.point_areas(true, *radius)?)
+            }
+            _ => None,
+        };
         let count = self.points.points.len();
         let discs_mobile = match &self.state {
             State::Detp { radius, .. } => self.discs(first_mobile..count, *radius),
@@ -288,7 +326,10 @@ impl QuasiStatic {
                 add_impacts(power, update.new.iter(), 1.0);
             }
             State::PhotonMaps { .. } => {}
-            State::Detp { sums, .. } => {
+            State::Detp { sums, areas, .. } => {
+                if let Some(mobile_areas) = mobile_areas {
+                    areas[first_mobile..].copy_from_slice(&mobile_areas);
+                }
                 let (fixed, moving) = sums.split_at_mut(first_mobile);
                 // E(x, t) = E(x, t-1) + E(x; N^t) - E(x; O^t) (equation 2.4).
                 accumulate(&discs_static, &update.old, slack, -1.0, fixed);
@@ -298,6 +339,53 @@ impl QuasiStatic {
                 accumulate(&discs_mobile, &all, slack, 1.0, moving);
             }
         }
+        Ok(())
+    }
+
+    /// Disc areas of the static (`mobile` false) or mobile estimation points: `π r²`, or under artifact control the reachable area against the static scene (section 1.2.1).
+    fn point_areas(&self, mobile: bool, radius: f32) -> Result<Vec<f64>> {
+        let first = self.points.first_mobile;
+        let range = if mobile {
+            first..self.points.points.len()
+        } else {
+            0..first
+        };
+        let full = std::f64::consts::PI * (radius as f64).powi(2);
+        let Some(options) = self.options.artifact else {
+            return Ok(vec![full; range.len()]);
+        };
+        let bvh = self.world.static_scene_bvh(&self.scene);
+        // Each point's inward direction (border vertices), from the first vertex that maps to it.
+        let mut inward: Vec<Option<Vec3>> = vec![None; range.len()];
+        for (m, mesh) in self.scene.meshes().iter().enumerate() {
+            if self.world.is_mobile_mesh(m as MeshId) != mobile {
+                continue;
+            }
+            let positions = self.scene.world_positions(m as MeshId);
+            let normals = self.scene.world_normals(m as MeshId);
+            let dirs = inward_directions(&positions, &normals, &mesh.indices);
+            for (&p, &d) in self.points.vertex_point[m].iter().zip(&dirs) {
+                inward[p as usize - range.start].get_or_insert(d);
+            }
+        }
+        self.points.points[range.clone()]
+            .par_iter()
+            .zip(inward.par_iter())
+            .map(|(p, inward)| {
+                if p.normal == Vec3::ZERO {
+                    return Ok(0.0);
+                }
+                let disc = Disc {
+                    centre: p.position,
+                    normal: p.normal,
+                    radius,
+                    mesh: Some(p.mesh),
+                };
+                let own = mesh_triangles(&self.scene, p.mesh);
+                let area = reachable_area(bvh, &disc, own, inward.unwrap_or(Vec3::ZERO), &options)?;
+                Ok(area as f64)
+            })
+            .collect()
     }
 
     /// Discs at the estimation points `range` (degenerate points get a zero radius, which no ray crosses).
@@ -307,11 +395,7 @@ impl QuasiStatic {
             .map(|p| Disc {
                 centre: p.position,
                 normal: p.normal,
-                radius: if p.normal == glam::Vec3::ZERO {
-                    0.0
-                } else {
-                    radius
-                },
+                radius: if p.normal == Vec3::ZERO { 0.0 } else { radius },
                 mesh: Some(p.mesh),
             })
             .collect()
@@ -355,16 +439,17 @@ impl QuasiStatic {
                     .collect()
             }
             State::PhotonMaps { k } => self.photon_maps(*k),
-            State::Detp { sums, radius } => {
-                let area = std::f64::consts::PI * (*radius as f64).powi(2);
-                sums.iter().map(|&s| s / area).collect()
-            }
+            State::Detp { sums, areas, .. } => sums
+                .iter()
+                .zip(areas)
+                .map(|(&s, &a)| if a > 0.0 { s / a } else { DVec3::ZERO })
+                .collect(),
         }
     }
 
     /// Photon Maps at every estimation point over the current impacts (section 1.2).
     fn photon_maps(&self, k: usize) -> Vec<DVec3> {
-        let (positions, powers): (Vec<glam::Vec3>, Vec<Rgb>) = self
+        let (positions, powers): (Vec<Vec3>, Vec<Rgb>) = self
             .rays
             .impacts()
             .map(|(s, h)| (h.position, s.power))

@@ -18,6 +18,7 @@ use lustre_photon::trace::scene_brdfs;
 use lustre_photon::{allocate_photons, photon_stream};
 use rayon::prelude::*;
 
+use crate::artifact::{extension, mesh_triangles};
 use crate::error::{DensityError, Result};
 use crate::world::{World, WorldHit};
 
@@ -30,6 +31,8 @@ pub struct RaySetOptions {
     pub seed: u64,
     /// Largest number of segments per primary ray (1 or more).
     pub max_segments: u32,
+    /// Artifact control on concave surfaces (section 1.2.1): the longest [`RaySegment::extension`] in metres measured for each segment through the mesh it hit, against the static scene; 0 turns it off.
+    pub extension: f32,
 }
 
 impl Default for RaySetOptions {
@@ -38,6 +41,7 @@ impl Default for RaySetOptions {
             photons: 100_000,
             seed: 0,
             max_segments: 64,
+            extension: 0.0,
         }
     }
 }
@@ -135,6 +139,7 @@ pub fn trace_ray_set(scene: &Scene, bvh: &Bvh, options: &RaySetOptions) -> Resul
     trace_with(
         scene,
         &WholeScene { scene, bvh },
+        Some(bvh),
         world_epsilon(scene),
         options,
     )
@@ -142,7 +147,8 @@ pub fn trace_ray_set(scene: &Scene, bvh: &Bvh, options: &RaySetOptions) -> Resul
 
 /// Builds the ray set of a scene with mobile objects at their current pose (section 2.3, figure 2.1), so that [`crate::update_ray_set`] can recalculate it (figure 2.2).
 pub fn trace_ray_set_in(scene: &Scene, world: &World, options: &RaySetOptions) -> Result<RaySet> {
-    trace_with(scene, world, world.epsilon(), options)
+    let statics = (options.extension > 0.0).then(|| world.static_scene_bvh(scene));
+    trace_with(scene, world, statics, world.epsilon(), options)
 }
 
 /// The offset that steps a reflected ray off its surface: 10⁻⁵ of the scene's size.
@@ -162,6 +168,12 @@ fn check_options(options: &RaySetOptions) -> Result<()> {
             message: "must be at least 1".into(),
         });
     }
+    if !(options.extension >= 0.0 && options.extension.is_finite()) {
+        return Err(DensityError::InvalidOption {
+            option: "extension",
+            message: format!("{} is not a finite non-negative length", options.extension),
+        });
+    }
     if options.photons > u32::MAX as u64 {
         return Err(DensityError::InvalidOption {
             option: "photons",
@@ -174,11 +186,12 @@ fn check_options(options: &RaySetOptions) -> Result<()> {
 fn trace_with(
     scene: &Scene,
     world: &dyn Intersector,
+    statics: Option<&Bvh>,
     epsilon: f32,
     options: &RaySetOptions,
 ) -> Result<RaySet> {
     check_options(options)?;
-    let tracer = Tracer::new(scene, world, epsilon, options)?;
+    let tracer = Tracer::new(scene, world, statics, epsilon, options)?;
     let jobs: Vec<(u32, u64)> = tracer
         .counts
         .iter()
@@ -235,6 +248,8 @@ fn bounce_stream(seed: u64, light: u32, index: u64, n: u32) -> lustre_geometry::
 pub(crate) struct Tracer<'a> {
     scene: &'a Scene,
     world: &'a dyn Intersector,
+    /// The static scene with scene-wide triangle ids, for the concave extension (section 1.2.1).
+    statics: Option<&'a Bvh>,
     brdfs: Vec<BoxedBrdf>,
     epsilon: f32,
     pub(crate) counts: Vec<u64>,
@@ -245,6 +260,7 @@ impl<'a> Tracer<'a> {
     pub(crate) fn new(
         scene: &'a Scene,
         world: &'a dyn Intersector,
+        statics: Option<&'a Bvh>,
         epsilon: f32,
         options: &'a RaySetOptions,
     ) -> Result<Self> {
@@ -253,6 +269,7 @@ impl<'a> Tracer<'a> {
         Ok(Self {
             scene,
             world,
+            statics,
             brdfs: scene_brdfs(scene)?,
             epsilon,
             counts: allocate_photons(&powers, options.photons),
@@ -315,7 +332,7 @@ impl<'a> Tracer<'a> {
                 break;
             };
             let hit = found.hit;
-            segments.push(RaySegment::new(
+            let mut segment = RaySegment::new(
                 ray.origin,
                 ray.direction,
                 Some(SegmentHit {
@@ -327,7 +344,12 @@ impl<'a> Tracer<'a> {
                     distance: hit.t,
                 }),
                 power,
-            ));
+            );
+            if let Some(statics) = self.statics.filter(|_| self.options.extension > 0.0) {
+                let own = mesh_triangles(self.scene, found.mesh);
+                segment.extension = extension(statics, &segment, own, self.options.extension);
+            }
+            segments.push(segment);
             if n == self.options.max_segments {
                 break;
             }

@@ -25,7 +25,13 @@ pub fn update_ray_set(
     rays: &mut RaySet,
     options: &RaySetOptions,
 ) -> Result<RayUpdate> {
-    let tracer = Tracer::new(scene, world, world.epsilon(), options)?;
+    let tracer = Tracer::new(
+        scene,
+        world,
+        (options.extension > 0.0).then(|| world.static_scene_bvh(scene)),
+        world.epsilon(),
+        options,
+    )?;
     let changed: Vec<(Vec<RaySegment>, Vec<RaySegment>)> = rays
         .rays
         .par_iter_mut()

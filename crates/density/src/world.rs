@@ -85,6 +85,8 @@ pub struct World {
     mobile_mesh: Vec<bool>,
     mesh_of: Vec<MeshId>,
     epsilon: f32,
+    /// The static scene with scene-wide ids (mobile triangles collapsed to points), built on first use.
+    statics: std::sync::OnceLock<Bvh>,
 }
 
 impl World {
@@ -129,6 +131,7 @@ impl World {
             mobile_mesh,
             mesh_of,
             epsilon,
+            statics: std::sync::OnceLock::new(),
         })
     }
 
@@ -205,6 +208,19 @@ impl World {
     /// The static part's BVH, answering with scene-wide ids through [`World::static_hit`].
     pub fn static_hit(&self, ray: &Ray) -> Option<Hit> {
         self.static_part.closest_hit(ray)
+    }
+
+    /// A BVH of the static scene answering with scene-wide triangle ids, as artifact control needs (section 1.2.1): every mobile triangle is collapsed to a point, which no ray meets. Built on first use from `scene`, which must be the scene this world was made from.
+    pub fn static_scene_bvh(&self, scene: &Scene) -> &Bvh {
+        self.statics.get_or_init(|| {
+            let mut all = scene.world_triangles();
+            for (id, tri) in all.iter_mut().enumerate() {
+                if self.mobile_mesh[self.mesh_of[id] as usize] {
+                    tri.positions = [tri.positions[0]; 3];
+                }
+            }
+            Bvh::from_triangles(all)
+        })
     }
 
     /// Bounds of the static part.

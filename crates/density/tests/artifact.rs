@@ -399,6 +399,7 @@ fn trace(scene: &Scene, bvh: &Bvh) -> RaySet {
             photons: PHOTONS,
             seed: 11,
             max_segments: 4,
+            extension: 0.0,
         },
     )
     .unwrap()

@@ -66,6 +66,7 @@ fn shared() -> &'static (Scene, RaySet) {
                 photons: PHOTONS,
                 seed: 7,
                 max_segments: 16,
+                extension: 0.0,
             },
         )
         .expect("traces");

@@ -48,6 +48,7 @@ fn shared() -> &'static (Scene, Vec<BoxedBrdf>, RaySet) {
                 photons: 100_000,
                 seed: 3,
                 max_segments: 16,
+                extension: 0.0,
             },
         )
         .unwrap();
@@ -303,6 +304,7 @@ fn vertex_updates_equal_a_rebuild() {
             photons: 10_000,
             seed: 99,
             max_segments: 16,
+            extension: 0.0,
         },
     )
     .unwrap();
@@ -560,6 +562,7 @@ fn glosbox_frame(offset: Vec3, photons: u64) -> Vec<IncidentRay> {
             photons,
             seed: 17,
             max_segments: 16,
+            extension: 0.0,
         },
     )
     .unwrap();

@@ -1,6 +1,7 @@
 //! The incremental recalculation of section 2 against a full recomputation: after random rigid motions of one or several mobile objects, the updated ray set equals a full trace of the new pose (figure 2.2 against figure 2.1), and the incrementally updated irradiance equals the estimate computed from scratch (equations 2.4–2.15, figure 2.4) up to rounding.
 
 use glam::{Affine3A, DVec3, Quat, Vec3};
+use lustre_density::artifact::ArtifactOptions;
 use lustre_density::{
     Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, trace_ray_set_in,
 };
@@ -20,11 +21,17 @@ fn cornell(edge: f32) -> Scene {
 }
 
 fn options(estimator: Estimator) -> QuasiStaticOptions {
+    with_artifact(estimator, None)
+}
+
+fn with_artifact(estimator: Estimator, artifact: Option<ArtifactOptions>) -> QuasiStaticOptions {
     QuasiStaticOptions {
+        artifact,
         rays: RaySetOptions {
             photons: 4_000,
             seed: 3,
             max_segments: 16,
+            extension: 0.0,
         },
         estimator,
     }
@@ -53,6 +60,10 @@ fn relative_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
 }
 
 fn check_frames(estimator: Estimator, objects: &[&str], moves: &[(f32, f32, f32)]) {
+    check_frames_with(options(estimator), objects, moves);
+}
+
+fn check_frames_with(options: QuasiStaticOptions, objects: &[&str], moves: &[(f32, f32, f32)]) {
     let scene = cornell(0.25);
     let ids: Vec<ObjectId> = objects
         .iter()
@@ -62,7 +73,7 @@ fn check_frames(estimator: Estimator, objects: &[&str], moves: &[(f32, f32, f32)
         .iter()
         .map(|&o| scene.objects()[o as usize].transform)
         .collect();
-    let mut sim = QuasiStatic::new(scene.clone(), &ids, options(estimator)).expect("first frame");
+    let mut sim = QuasiStatic::new(scene.clone(), &ids, options).expect("first frame");
     // The world a full trace uses: built at the first pose (its ray offset is fixed there), then moved.
     let mut fresh_world = World::new(&scene, &ids).expect("world");
     let mut fresh_scene = scene;
@@ -84,7 +95,7 @@ fn check_frames(estimator: Estimator, objects: &[&str], moves: &[(f32, f32, f32)
         }
         fresh_world.move_mobile(&fresh_scene);
         let full =
-            trace_ray_set_in(&fresh_scene, &fresh_world, &options(estimator).rays).expect("trace");
+            trace_ray_set_in(&fresh_scene, &fresh_world, &sim_rays(&options)).expect("trace");
         assert!(
             sim.rays() == &full,
             "frame {frame}: the updated ray set differs from a full trace of the new pose"
@@ -120,6 +131,28 @@ proptest! {
     fn several_mobile_objects(moves in prop::collection::vec((-0.2f32..0.2, -0.2f32..0.2, -45.0f32..45.0), 2)) {
         check_frames(Estimator::Detp { radius: 0.15 }, &["small-box", "large-box"], &moves);
     }
+}
+
+/// The ray options a simulation traces with: artifact control sets the concave extension to `max_extension · r`.
+fn sim_rays(options: &QuasiStaticOptions) -> RaySetOptions {
+    let mut rays = options.rays;
+    if let (Some(a), Estimator::Detp { radius }) = (options.artifact, options.estimator) {
+        rays.extension = a.max_extension * radius;
+    }
+    rays
+}
+
+#[test]
+fn artifact_controlled_detp_incremental_equals_full() {
+    let artifact = ArtifactOptions {
+        samples_per_axis: 8,
+        ..ArtifactOptions::default()
+    };
+    check_frames_with(
+        with_artifact(Estimator::Detp { radius: 0.15 }, Some(artifact)),
+        &["small-box"],
+        &[(0.3, 0.1, 30.0), (-0.2, 0.2, -10.0)],
+    );
 }
 
 #[test]

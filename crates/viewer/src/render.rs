@@ -181,6 +181,9 @@ pub struct RenderArgs {
     /// Nearest impacts of Photon Maps (`--technique photonmap`).
     #[arg(long, default_value_t = DEFAULT_PHOTONMAP_K)]
     pub k: usize,
+    /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh.
+    #[arg(long)]
+    pub artifact_control: bool,
     /// Longest mesh edge in m after subdivision, for the per-vertex techniques.
     #[arg(long, default_value_t = DEFAULT_MESH_EDGE)]
     pub mesh_edge: f32,
@@ -282,7 +285,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             None,
         ),
         Some(estimator) => {
-            let v = vertex_radiance(estimator, &scene, args.photons, args.seed)?;
+            let v = vertex_radiance(
+                estimator,
+                &scene,
+                args.photons,
+                args.seed,
+                args.artifact_control,
+            )?;
             eprintln!(
                 "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
                 estimator.name(),
@@ -447,6 +456,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "emission": splatting.as_ref().map(|s| format!("{:?}", s.emission)),
         "estimator": density.map(|e| format!("{e:?}")),
         "mesh_edge": density.map(|_| args.mesh_edge),
+        "artifact_control": density.map(|_| args.artifact_control),
         "triangles": scene.triangle_count(),
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "seed": args.seed,

@@ -6,6 +6,7 @@
 //! for per-vertex lighting (section 2.9).
 
 use anyhow::Context;
+use lustre_density::artifact::ArtifactOptions;
 use lustre_density::{QuasiStatic, QuasiStaticOptions, RaySetOptions};
 use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
@@ -61,11 +62,12 @@ pub fn vertex_radiance(
     scene: &Scene,
     photons: u64,
     seed: u64,
+    artifact_control: bool,
 ) -> anyhow::Result<VertexRadiance> {
     let sim = QuasiStatic::new(
         scene.clone(),
         &[],
-        quasi_static_options(estimator, photons, seed),
+        quasi_static_options(estimator, photons, seed, artifact_control),
     )
     .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
     let first = sim.first_frame();
@@ -80,9 +82,16 @@ pub fn vertex_radiance(
     })
 }
 
-/// The simulation settings of `lustre render` for an estimator, photon count and seed.
-pub fn quasi_static_options(estimator: Estimator, photons: u64, seed: u64) -> QuasiStaticOptions {
+/// The simulation settings of `lustre render` for an estimator, photon count, seed and DETP artifact control (section 1.2.1).
+pub fn quasi_static_options(
+    estimator: Estimator,
+    photons: u64,
+    seed: u64,
+    artifact_control: bool,
+) -> QuasiStaticOptions {
     QuasiStaticOptions {
+        artifact: (artifact_control && matches!(estimator, Estimator::Detp { .. }))
+            .then(ArtifactOptions::default),
         rays: RaySetOptions {
             photons,
             seed,
@@ -115,7 +124,7 @@ mod tests {
             Estimator::ImpactCount,
             Estimator::PhotonMaps { k: 10 },
         ] {
-            let r = vertex_radiance(estimator, &scene, 2_000, 1).unwrap();
+            let r = vertex_radiance(estimator, &scene, 2_000, 1, false).unwrap();
             assert_eq!(r.corners.len(), 3 * scene.triangle_count());
             assert!(
                 r.corners
@@ -126,7 +135,7 @@ mod tests {
             assert!(r.corners.iter().any(|c| c[0] > 0.0), "{}", estimator.name());
             assert!(r.segments >= r.primary_rays);
         }
-        let bad = vertex_radiance(Estimator::Detp { radius: 0.0 }, &scene, 10, 1);
+        let bad = vertex_radiance(Estimator::Detp { radius: 0.0 }, &scene, 10, 1, false);
         assert!(format!("{:#}", bad.unwrap_err()).contains("radius"));
     }
 }

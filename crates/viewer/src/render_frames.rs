@@ -143,7 +143,7 @@ pub fn run(
     let mut sim = QuasiStatic::new(
         scene,
         &ids,
-        quasi_static_options(estimator, args.photons, args.seed),
+        quasi_static_options(estimator, args.photons, args.seed, args.artifact_control),
     )
     .with_context(|| format!("{} first frame", estimator.name()))?;
     let setup_ms = ms(start.elapsed());
@@ -210,6 +210,7 @@ pub fn run(
         "seed": args.seed,
         "frames": frames,
         "mesh_edge": args.mesh_edge,
+        "artifact_control": args.artifact_control,
         "triangles": sim.scene().triangle_count(),
         "estimation_points": sim.points().points.len(),
         "ray_segments": sim.rays().segments().count(),
