@@ -15,6 +15,7 @@
 //! | 2.4.2, equations 2.4–2.15: `E_t = E_{t-1} + E(N^t) − E(O^t)` on static vertices | [`QuasiStatic::set_pose`] |
 //! | 2.5.1, figure 2.4: Impact Count's per-triangle `Add`/`Substract` | [`Estimator::ImpactCount`] |
 //! | 2.5.2: the full estimate on the mobile objects' vertices | [`QuasiStatic::set_pose`] |
+//! | 2.10: glossy vertices' ray lists updated with OldRays/NewRays, view-dependent radiance | [`QuasiStatic::glossy_radiance`] |
 //! | 3.4.2: vertex-based calculation shared by triangles of different colours | [`EstimationPoints`] |
 //! | 1.2, 2.5.1 Impact Count: impact energy per triangle over its area, vertex mean | [`impact_count`] |
 //! | 1.2 Photon Maps (Jensen): `k` nearest impacts, `Σ φ / (π r_k²)` | [`photon_maps`], [`KdTree`] |
@@ -59,6 +60,8 @@
 //! let options = QuasiStaticOptions {
 //!     rays: RaySetOptions { photons: 2_000, ..Default::default() },
 //!     estimator: Estimator::Detp { radius: 0.2 },
+//!     artifact: None,
+//!     glossy: None,
 //! };
 //! let mut sim = QuasiStatic::new(scene, &[small], options).unwrap();
 //! let frame = sim.set_pose(&[(small, Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.0)))]).unwrap();

@@ -4,12 +4,14 @@ use std::time::{Duration, Instant};
 
 use glam::{Affine3A, DVec3, Vec3};
 use lustre_geometry::{MeshId, ObjectId, Rgb, Scene, triangle_area};
+use lustre_photon::trace::scene_brdfs;
 use rayon::prelude::*;
 
 use crate::VertexIrradiance;
 use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
+use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
 use crate::kdtree::KdTree;
 use crate::points::EstimationPoints;
 use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
@@ -53,6 +55,8 @@ pub struct QuasiStaticOptions {
     pub estimator: Estimator,
     /// Artifact control of DETP (section 1.2.1): reachable disc areas and the concave extension of [`RaySetOptions::extension`] (set to `max_extension · radius`); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
     pub artifact: Option<ArtifactOptions>,
+    /// View-dependent estimate of DETP's glossy vertices (section 2.10): per-vertex ray lists, updated with OldRays and NewRays on static vertices and rebuilt on mobile ones; `None` keeps only the irradiance.
+    pub glossy: Option<GlossyMode>,
 }
 
 /// Times and counts of one frame (the paper's "Photosimulation update" and "Illumination"/"Radiosity recalculation" columns).
@@ -97,6 +101,8 @@ pub struct QuasiStatic {
     slack: f32,
     state: State,
     first_frame: FrameStats,
+    /// Glossy vertices of static meshes (updated) and of mobile meshes (rebuilt each frame), section 2.10.
+    glossy: Option<(GlossyVertices, GlossyVertices)>,
 }
 
 impl QuasiStatic {
@@ -118,6 +124,15 @@ impl QuasiStatic {
             _ => {}
         }
         let mut options = options;
+        if options.glossy.is_some() && !matches!(options.estimator, Estimator::Detp { .. }) {
+            return Err(DensityError::InvalidOption {
+                option: "glossy",
+                message: format!(
+                    "the view-dependent glossy estimate uses DETP's discs, not {}",
+                    options.estimator.name()
+                ),
+            });
+        }
         if let Some(artifact) = options.artifact {
             let Estimator::Detp { radius } = options.estimator else {
                 return Err(DensityError::InvalidOption {
@@ -164,6 +179,7 @@ impl QuasiStatic {
             slack,
             state,
             first_frame: FrameStats::default(),
+            glossy: None,
         };
         let t1 = Instant::now();
         if let State::Detp { radius, .. } = sim.state {
@@ -176,6 +192,11 @@ impl QuasiStatic {
             };
         }
         sim.state = sim.full_state();
+        if options.glossy.is_some() {
+            let fixed = sim.build_glossy(false)?;
+            let moving = sim.build_glossy(true)?;
+            sim.glossy = Some((fixed, moving));
+        }
         sim.first_frame = FrameStats {
             photosimulation,
             radiosity: t1.elapsed(),
@@ -213,6 +234,13 @@ impl QuasiStatic {
         let t1 = Instant::now();
         self.points.move_mobile(&self.scene);
         self.update_state(&update)?;
+        if self.glossy.is_some() {
+            let moving = self.build_glossy(true)?;
+            if let Some((fixed, mobile)) = &mut self.glossy {
+                fixed.update(&update.old, &update.new)?;
+                *mobile = moving;
+            }
+        }
         Ok(FrameStats {
             photosimulation,
             radiosity: t1.elapsed(),
@@ -340,6 +368,46 @@ impl QuasiStatic {
             }
         }
         Ok(())
+    }
+
+    /// The glossy vertices of the static (`mobile` false) or mobile glossy meshes from the whole current ray set (section 2.10), with the points' disc areas.
+    fn build_glossy(&self, mobile: bool) -> Result<GlossyVertices> {
+        let (Some(mode), State::Detp { radius, areas, .. }) = (self.options.glossy, &self.state)
+        else {
+            return Err(DensityError::InvalidOption {
+                option: "glossy",
+                message: "the view-dependent glossy estimate needs DETP".into(),
+            });
+        };
+        let meshes: Vec<MeshId> = glossy_meshes(&self.scene)
+            .into_iter()
+            .filter(|&m| self.world.is_mobile_mesh(m) == mobile)
+            .collect();
+        let mut vertices = GlossyVertices::build(&self.scene, &self.rays, *radius, mode, &meshes)?;
+        let per_vertex: Vec<Vec<f32>> = self
+            .points
+            .vertex_point
+            .iter()
+            .map(|map| map.iter().map(|&p| areas[p as usize] as f32).collect())
+            .collect();
+        vertices.set_areas(&per_vertex)?;
+        Ok(vertices)
+    }
+
+    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1 on the disc), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
+    pub fn glossy_radiance(&self, eye: Vec3) -> Result<Option<Vec<Vec<Rgb>>>> {
+        let Some((fixed, moving)) = &self.glossy else {
+            return Ok(None);
+        };
+        let brdfs = scene_brdfs(&self.scene)?;
+        let a = fixed.radiance(&brdfs, eye)?;
+        let b = moving.radiance(&brdfs, eye)?;
+        Ok(Some(
+            a.into_iter()
+                .zip(b)
+                .map(|(a, b)| if a.is_empty() { b } else { a })
+                .collect(),
+        ))
     }
 
     /// Disc areas of the static (`mobile` false) or mobile estimation points: `π r²`, or under artifact control the reachable area against the static scene (section 1.2.1).

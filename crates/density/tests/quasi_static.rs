@@ -2,6 +2,7 @@
 
 use glam::{Affine3A, DVec3, Quat, Vec3};
 use lustre_density::artifact::ArtifactOptions;
+use lustre_density::glossy::GlossyMode;
 use lustre_density::{
     Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, trace_ray_set_in,
 };
@@ -27,6 +28,7 @@ fn options(estimator: Estimator) -> QuasiStaticOptions {
 fn with_artifact(estimator: Estimator, artifact: Option<ArtifactOptions>) -> QuasiStaticOptions {
     QuasiStaticOptions {
         artifact,
+        glossy: None,
         rays: RaySetOptions {
             photons: 4_000,
             seed: 3,
@@ -196,4 +198,60 @@ fn refused_input_leaves_the_simulation_unchanged() {
         options(Estimator::Detp { radius: -1.0 }),
     );
     assert!(bad.is_err());
+}
+
+/// Glossy vertices (section 2.10): the ray lists of static glossy vertices updated with OldRays and NewRays give the radiance that lists built from scratch at the new pose give.
+#[test]
+fn glossy_lists_follow_the_motion() {
+    let scene = {
+        let s = builtin("glosbox").expect("built-in");
+        let meshes = s
+            .meshes()
+            .iter()
+            .map(|m| subdivide(m, 0.4).expect("subdivides"))
+            .collect();
+        s.with_meshes(meshes).expect("valid")
+    };
+    let small = scene.object_by_name("small-box").expect("object");
+    let mut options = options(Estimator::Detp { radius: 0.2 });
+    options.glossy = Some(GlossyMode::List);
+    let mut sim = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let eye = scene.camera().position;
+    let pose = [(small, Affine3A::from_translation(Vec3::new(-0.3, 0.0, 0.1)))];
+    sim.set_pose(&pose).expect("frame");
+    let incremental = sim
+        .glossy_radiance(eye)
+        .expect("radiance")
+        .expect("glossy on");
+    let mut moved = scene;
+    moved.set_object_transform(small, pose[0].1).expect("pose");
+    let fresh = QuasiStatic::new(moved, &[small], options).expect("fresh");
+    assert!(
+        sim.rays() == fresh.rays(),
+        "the scene bounds changed, so the ray offsets differ"
+    );
+    let scratch = fresh
+        .glossy_radiance(eye)
+        .expect("radiance")
+        .expect("glossy on");
+    let (mut compared, mut worst) = (0, 0.0f32);
+    for (a, b) in incremental.iter().flatten().zip(scratch.iter().flatten()) {
+        let scale = b.max_element().max(1e-6);
+        worst = worst.max((*a - *b).abs().max_element() / scale);
+        compared += 1;
+    }
+    assert!(compared > 100, "only {compared} glossy vertices");
+    assert!(
+        worst < 1e-4,
+        "incremental and rebuilt glossy radiance differ by {worst}"
+    );
+    let lit = incremental
+        .iter()
+        .flatten()
+        .filter(|l| l.max_element() > 0.0)
+        .count();
+    assert!(
+        lit > compared / 2,
+        "{lit} of {compared} glossy vertices are lit"
+    );
 }

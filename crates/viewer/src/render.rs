@@ -42,8 +42,8 @@ use lustre_photon::{
 use serde_json::json;
 
 use crate::render_density::{
-    DEFAULT_DETP_RADIUS, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K, Estimator, vertex_lit_scene,
-    vertex_radiance,
+    DEFAULT_DETP_RADIUS, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K, Estimator, GlossyEstimate,
+    vertex_lit_scene, vertex_radiance,
 };
 use crate::scene_arg;
 
@@ -184,6 +184,9 @@ pub struct RenderArgs {
     /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh.
     #[arg(long)]
     pub artifact_control: bool,
+    /// DETP's estimate on glossy surfaces (García et al. section 2.10): view-dependent from per-vertex ray lists, or only the diffuse part.
+    #[arg(long, value_enum, default_value_t = GlossyEstimate::Quadtree)]
+    pub glossy_estimate: GlossyEstimate,
     /// Longest mesh edge in m after subdivision, for the per-vertex techniques.
     #[arg(long, default_value_t = DEFAULT_MESH_EDGE)]
     pub mesh_edge: f32,
@@ -291,6 +294,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 args.photons,
                 args.seed,
                 args.artifact_control,
+                args.glossy_estimate,
             )?;
             eprintln!(
                 "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
@@ -457,6 +461,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "estimator": density.map(|e| format!("{e:?}")),
         "mesh_edge": density.map(|_| args.mesh_edge),
         "artifact_control": density.map(|_| args.artifact_control),
+        "glossy_estimate": density.map(|_| format!("{:?}", args.glossy_estimate)),
         "triangles": scene.triangle_count(),
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "seed": args.seed,

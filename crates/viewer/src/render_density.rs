@@ -7,6 +7,8 @@
 
 use anyhow::Context;
 use lustre_density::artifact::ArtifactOptions;
+use lustre_density::glossy::GlossyMode;
+use lustre_density::quadtree::QuadTreeOptions;
 use lustre_density::{QuasiStatic, QuasiStaticOptions, RaySetOptions};
 use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
@@ -63,16 +65,16 @@ pub fn vertex_radiance(
     photons: u64,
     seed: u64,
     artifact_control: bool,
+    glossy: GlossyEstimate,
 ) -> anyhow::Result<VertexRadiance> {
     let sim = QuasiStatic::new(
         scene.clone(),
         &[],
-        quasi_static_options(estimator, photons, seed, artifact_control),
+        quasi_static_options(estimator, photons, seed, artifact_control, glossy),
     )
     .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
     let first = sim.first_frame();
-    let corners = corner_radiance(scene, &sim.irradiance())
-        .with_context(|| format!("vertex radiance of `{}`", scene.name))?;
+    let corners = corners(&sim)?;
     Ok(VertexRadiance {
         corners,
         primary_rays: sim.rays().rays.len(),
@@ -82,16 +84,69 @@ pub fn vertex_radiance(
     })
 }
 
-/// The simulation settings of `lustre render` for an estimator, photon count, seed and DETP artifact control (section 1.2.1).
+/// How `lustre render` estimates DETP's glossy vertices (section 2.10).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GlossyEstimate {
+    /// Only the diffuse part `ρ/π E` of every material.
+    None,
+    /// Every ray crossing the disc, the BRDF evaluated for each (section 2.10).
+    List,
+    /// The direction QuadTree without summarising, nodes taken whole where the BRDF varies by at most 1 % (section 2.10.1).
+    Quadtree,
+    /// The QuadTree with the summarising update of section 2.10.1 (approximate, degrades over frames).
+    Summarised,
+}
+
+impl GlossyEstimate {
+    /// The density crate's mode, `None` for the diffuse part only.
+    pub fn mode(self) -> Option<GlossyMode> {
+        match self {
+            Self::None => None,
+            Self::List => Some(GlossyMode::List),
+            Self::Quadtree => Some(GlossyMode::QuadTree {
+                options: QuadTreeOptions::default(),
+                tolerance: 0.01,
+            }),
+            Self::Summarised => Some(GlossyMode::Summarised(QuadTreeOptions::default())),
+        }
+    }
+}
+
+/// Outgoing radiance per triangle corner for the Gouraud pass: `ρ/π E` (equation 2.2), or on glossy meshes under the glossy option the view-dependent estimate towards the camera (section 2.10).
+pub fn corners(sim: &QuasiStatic) -> anyhow::Result<Vec<[f32; 3]>> {
+    let scene = sim.scene();
+    let mut corners = corner_radiance(scene, &sim.irradiance())
+        .with_context(|| format!("vertex radiance of `{}`", scene.name))?;
+    let glossy = sim
+        .glossy_radiance(scene.camera().position)
+        .with_context(|| format!("glossy radiance of `{}`", scene.name))?;
+    for (m, radiance) in glossy.iter().flatten().enumerate() {
+        if radiance.is_empty() {
+            continue;
+        }
+        let first = 3 * scene.triangle_id(m as u32, 0) as usize;
+        let mesh = &scene.meshes()[m];
+        for (t, tri) in mesh.indices.iter().enumerate() {
+            for (k, &v) in tri.iter().enumerate() {
+                corners[first + 3 * t + k] = radiance[v as usize].to_array();
+            }
+        }
+    }
+    Ok(corners)
+}
+
+/// The simulation settings of `lustre render` for an estimator, photon count, seed, DETP artifact control (section 1.2.1) and glossy estimate (section 2.10, DETP only).
 pub fn quasi_static_options(
     estimator: Estimator,
     photons: u64,
     seed: u64,
     artifact_control: bool,
+    glossy: GlossyEstimate,
 ) -> QuasiStaticOptions {
+    let detp = matches!(estimator, Estimator::Detp { .. });
     QuasiStaticOptions {
-        artifact: (artifact_control && matches!(estimator, Estimator::Detp { .. }))
-            .then(ArtifactOptions::default),
+        artifact: (artifact_control && detp).then(ArtifactOptions::default),
+        glossy: if detp { glossy.mode() } else { None },
         rays: RaySetOptions {
             photons,
             seed,
@@ -124,7 +179,8 @@ mod tests {
             Estimator::ImpactCount,
             Estimator::PhotonMaps { k: 10 },
         ] {
-            let r = vertex_radiance(estimator, &scene, 2_000, 1, false).unwrap();
+            let r = vertex_radiance(estimator, &scene, 2_000, 1, false, GlossyEstimate::Quadtree)
+                .unwrap();
             assert_eq!(r.corners.len(), 3 * scene.triangle_count());
             assert!(
                 r.corners
@@ -135,7 +191,14 @@ mod tests {
             assert!(r.corners.iter().any(|c| c[0] > 0.0), "{}", estimator.name());
             assert!(r.segments >= r.primary_rays);
         }
-        let bad = vertex_radiance(Estimator::Detp { radius: 0.0 }, &scene, 10, 1, false);
+        let bad = vertex_radiance(
+            Estimator::Detp { radius: 0.0 },
+            &scene,
+            10,
+            1,
+            false,
+            GlossyEstimate::None,
+        );
         assert!(format!("{:#}", bad.unwrap_err()).contains("radius"));
     }
 }

@@ -7,7 +7,6 @@ use anyhow::{Context, bail};
 use lustre_density::{Estimator, FrameStats, QuasiStatic};
 use lustre_geometry::{ObjectId, Scene};
 use lustre_image::Image;
-use lustre_mpr::passes::gouraud::corner_radiance;
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
@@ -15,7 +14,7 @@ use lustre_mpr::{
 use serde_json::json;
 
 use crate::render::{RenderArgs, sidecar_path, write_image};
-use crate::render_density::quasi_static_options;
+use crate::render_density::{corners, quasi_static_options};
 
 /// The path of frame `index` of `out`: `render.png` becomes `render-0003.png`.
 pub fn frame_path(out: &Path, index: usize) -> PathBuf {
@@ -143,7 +142,13 @@ pub fn run(
     let mut sim = QuasiStatic::new(
         scene,
         &ids,
-        quasi_static_options(estimator, args.photons, args.seed, args.artifact_control),
+        quasi_static_options(
+            estimator,
+            args.photons,
+            args.seed,
+            args.artifact_control,
+            args.glossy_estimate,
+        ),
     )
     .with_context(|| format!("{} first frame", estimator.name()))?;
     let setup_ms = ms(start.elapsed());
@@ -174,8 +179,7 @@ pub fn run(
             .with_context(|| format!("frame {frame}"))?;
         stats.push(s);
         if let Some(gpu) = &gpu {
-            let corners = corner_radiance(sim.scene(), &sim.irradiance())
-                .with_context(|| format!("vertex radiance of frame {frame}"))?;
+            let corners = corners(&sim).with_context(|| format!("frame {frame}"))?;
             let image = gpu.frame(sim.scene(), &corners)?;
             let path = frame_path(&args.out, frame);
             write_image(&path, args.exposure, &image)?;
@@ -211,6 +215,7 @@ pub fn run(
         "frames": frames,
         "mesh_edge": args.mesh_edge,
         "artifact_control": args.artifact_control,
+        "glossy_estimate": format!("{:?}", args.glossy_estimate),
         "triangles": sim.scene().triangle_count(),
         "estimation_points": sim.points().points.len(),
         "ray_segments": sim.rays().segments().count(),
