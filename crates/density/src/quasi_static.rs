@@ -103,6 +103,8 @@ pub struct QuasiStatic {
     first_frame: FrameStats,
     /// Glossy vertices of static meshes (updated) and of mobile meshes (rebuilt each frame), section 2.10.
     glossy: Option<(GlossyVertices, GlossyVertices)>,
+    /// Irradiance per estimation point of the current frame (computed within the frame's radiosity time).
+    irradiance: Vec<DVec3>,
 }
 
 impl QuasiStatic {
@@ -180,6 +182,7 @@ impl QuasiStatic {
             state,
             first_frame: FrameStats::default(),
             glossy: None,
+            irradiance: Vec::new(),
         };
         let t1 = Instant::now();
         if let State::Detp { radius, .. } = sim.state {
@@ -192,6 +195,7 @@ impl QuasiStatic {
             };
         }
         sim.state = sim.full_state();
+        sim.irradiance = sim.irradiance_of(&sim.state);
         if options.glossy.is_some() {
             let fixed = sim.build_glossy(false)?;
             let moving = sim.build_glossy(true)?;
@@ -234,6 +238,7 @@ impl QuasiStatic {
         let t1 = Instant::now();
         self.points.move_mobile(&self.scene);
         self.update_state(&update)?;
+        self.irradiance = self.irradiance_of(&self.state);
         if self.glossy.is_some() {
             let moving = self.build_glossy(true)?;
             if let Some((fixed, mobile)) = &mut self.glossy {
@@ -275,9 +280,9 @@ impl QuasiStatic {
         &self.points
     }
 
-    /// Irradiance `E` at each estimation point, from the kept state.
+    /// Irradiance `E` at each estimation point in the current frame, from the kept state.
     pub fn point_irradiance(&self) -> Vec<DVec3> {
-        self.irradiance_of(&self.state)
+        self.irradiance.clone()
     }
 
     /// Irradiance `E` at every vertex, `[mesh][vertex]`, from the kept state.
