@@ -255,6 +255,28 @@ impl QuasiStatic {
         })
     }
 
+    /// Bytes held by the ray set (primary rays and their segments, section 2.3) and by everything else kept between frames (estimator state, points, glossy lists are not counted); the ray set's share per emitted photon is the paper's memory per photon.
+    pub fn memory_bytes(&self) -> (usize, usize) {
+        let rays = self.rays.rays.capacity() * size_of::<crate::PrimaryRay>()
+            + self
+                .rays
+                .rays
+                .iter()
+                .map(|r| r.segments.capacity() * size_of::<RaySegment>())
+                .sum::<usize>();
+        let state = match &self.state {
+            State::ImpactCount { power, area } => {
+                power.capacity() * size_of::<DVec3>() + area.capacity() * size_of::<f64>()
+            }
+            State::PhotonMaps { .. } => 0,
+            State::Detp { sums, areas, .. } => {
+                sums.capacity() * size_of::<DVec3>() + areas.capacity() * size_of::<f64>()
+            }
+        } + self.points.points.capacity() * size_of::<crate::EstimationPoint>()
+            + self.irradiance.capacity() * size_of::<DVec3>();
+        (rays, state)
+    }
+
     /// The first frame's times and counts.
     pub fn first_frame(&self) -> FrameStats {
         self.first_frame
