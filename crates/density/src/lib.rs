@@ -31,6 +31,7 @@
 //! assert_eq!(e_ic.len(), e_detp.len());
 //! ```
 
+pub mod accel;
 mod detp;
 mod error;
 mod impact_count;
@@ -38,6 +39,7 @@ pub mod kdtree;
 mod photon_maps;
 mod ray_set;
 
+pub use accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, SegmentGrid};
 pub use detp::{Disc, detp};
 pub use error::{DensityError, Result};
 pub use impact_count::{impact_count, triangle_irradiance};
