@@ -52,17 +52,12 @@
 //!
 //! ```
 //! use glam::{Affine3A, Vec3};
-//! use lustre_density::{Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions};
+//! use lustre_density::{Estimator, QuasiStatic, QuasiStaticOptions};
 //! use lustre_geometry::builtin;
 //!
 //! let scene = builtin("cornell").unwrap();
 //! let small = scene.object_by_name("small-box").unwrap();
-//! let options = QuasiStaticOptions {
-//!     rays: RaySetOptions { photons: 2_000, ..Default::default() },
-//!     estimator: Estimator::Detp { radius: 0.2 },
-//!     artifact: None,
-//!     glossy: None,
-//! };
+//! let options = QuasiStaticOptions::new(Estimator::Detp { radius: 0.2 }, 2_000);
 //! let mut sim = QuasiStatic::new(scene, &[small], options).unwrap();
 //! let frame = sim.set_pose(&[(small, Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.0)))]).unwrap();
 //! assert!(frame.recalculated > 0);
@@ -70,6 +65,7 @@
 //! # assert_eq!(e.len(), sim.scene().meshes().len());
 //! ```
 
+pub mod accel;
 pub mod artifact;
 mod detp;
 mod error;
@@ -84,6 +80,7 @@ mod ray_set;
 mod update;
 mod world;
 
+pub use accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, SegmentGrid};
 pub use detp::{Disc, detp};
 pub use error::{DensityError, Result};
 pub use impact_count::{impact_count, triangle_irradiance};

@@ -8,12 +8,13 @@ use lustre_photon::trace::scene_brdfs;
 use rayon::prelude::*;
 
 use crate::VertexIrradiance;
+use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
 use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
 use crate::kdtree::KdTree;
-use crate::points::EstimationPoints;
+use crate::points::{EstimationPoint, EstimationPoints};
 use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
 use crate::update::{RayUpdate, update_ray_set};
 use crate::world::World;
@@ -57,6 +58,27 @@ pub struct QuasiStaticOptions {
     pub artifact: Option<ArtifactOptions>,
     /// View-dependent estimate of DETP's glossy vertices (section 2.10): per-vertex ray lists, updated with OldRays and NewRays on static vertices and rebuilt on mobile ones; `None` keeps only the irradiance.
     pub glossy: Option<GlossyMode>,
+    /// How DETP finds the rays crossing each disc (sections 2.6–2.7, and the segment grid beyond the paper); `None` picks disc indexing tuned by the radius and the scene's mean edge ([`Acceleration::tuned_disc_index`]), which suits both the frame's few changed rays against every static disc and every ray against the mobile object's discs.
+    pub acceleration: Option<Acceleration>,
+    /// DETP's pre-intersection test (section 2.8).
+    pub pretest: PreTest,
+}
+
+impl QuasiStaticOptions {
+    /// DETP, Impact Count or Photon Maps over `photons` photons with the default settings: no artifact control, no glossy estimate, tuned disc indexing, no pre-test.
+    pub fn new(estimator: Estimator, photons: u64) -> Self {
+        Self {
+            rays: RaySetOptions {
+                photons,
+                ..RaySetOptions::default()
+            },
+            estimator,
+            artifact: None,
+            glossy: None,
+            acceleration: None,
+            pretest: PreTest::None,
+        }
+    }
 }
 
 /// Times and counts of one frame (the paper's "Photosimulation update" and "Illumination"/"Radiosity recalculation" columns).
@@ -105,6 +127,8 @@ pub struct QuasiStatic {
     glossy: Option<(GlossyVertices, GlossyVertices)>,
     /// Irradiance per estimation point of the current frame (computed within the frame's radiosity time).
     irradiance: Vec<DVec3>,
+    /// DETP's discs at the static points (fixed) and at the mobile points (moved each frame), with their acceleration structures.
+    disc_sets: Option<(DiscSet, DiscSet)>,
 }
 
 impl QuasiStatic {
@@ -183,9 +207,24 @@ impl QuasiStatic {
             first_frame: FrameStats::default(),
             glossy: None,
             irradiance: Vec::new(),
+            disc_sets: None,
         };
         let t1 = Instant::now();
         if let State::Detp { radius, .. } = sim.state {
+            let acceleration = options
+                .acceleration
+                .unwrap_or_else(|| Acceleration::tuned_disc_index(radius, mean_edge(&sim.scene)));
+            let set_options = DiscSetOptions {
+                slack: sim.slack,
+                acceleration,
+                pretest: options.pretest,
+            };
+            let first = sim.points.first_mobile;
+            let count = sim.points.points.len();
+            sim.disc_sets = Some((
+                DiscSet::new(sim.discs(0..first, radius), set_options)?,
+                DiscSet::new(sim.discs(first..count, radius), set_options)?,
+            ));
             let mut areas = sim.point_areas(false, radius)?;
             areas.extend(sim.point_areas(true, radius)?);
             sim.state = State::Detp {
@@ -272,7 +311,7 @@ impl QuasiStatic {
             State::Detp { sums, areas, .. } => {
                 sums.capacity() * size_of::<DVec3>() + areas.capacity() * size_of::<f64>()
             }
-        } + self.points.points.capacity() * size_of::<crate::EstimationPoint>()
+        } + self.points.points.capacity() * size_of::<EstimationPoint>()
             + self.irradiance.capacity() * size_of::<DVec3>();
         (rays, state)
     }
@@ -337,10 +376,14 @@ impl QuasiStatic {
             }
             State::PhotonMaps { k } => State::PhotonMaps { k: *k },
             State::Detp { radius, areas, .. } => {
-                let discs = self.discs(0..self.points.points.len(), *radius);
                 let segments: Vec<RaySegment> = self.rays.segments().copied().collect();
-                let mut sums = vec![DVec3::ZERO; discs.len()];
-                accumulate(&discs, &segments, self.slack, 1.0, &mut sums);
+                let mut sums = vec![DVec3::ZERO; self.points.points.len()];
+                if let Some((fixed, moving)) = &self.disc_sets {
+                    let (a, b) = sums.split_at_mut(self.points.first_mobile);
+                    // Built from valid discs, so only a mismatched length could fail, which the split rules out.
+                    let _ = fixed.accumulate(&segments, 1.0, a);
+                    let _ = moving.accumulate(&segments, 1.0, b);
+                }
                 State::Detp {
                     sums,
                     areas: areas.clone(),
@@ -360,21 +403,18 @@ impl QuasiStatic {
             _ => None,
         };
         let count = self.points.points.len();
-        let discs_mobile = match &self.state {
-            State::Detp { radius, .. } => self.discs(first_mobile..count, *radius),
-            _ => Vec::new(),
-        };
-        let discs_static = match &self.state {
-            State::Detp { radius, .. } => self.discs(0..first_mobile, *radius),
-            _ => Vec::new(),
-        };
+        if let (State::Detp { radius, .. }, Some((_, moving))) = (&self.state, &mut self.disc_sets)
+        {
+            let discs = self.points.points[first_mobile..count]
+                .iter()
+                .map(|p| point_disc(p, *radius))
+                .collect::<Vec<_>>();
+            moving.update_discs(&discs)?;
+        }
         let all: Vec<RaySegment> = match &self.state {
-            State::Detp { .. } if !discs_mobile.is_empty() => {
-                self.rays.segments().copied().collect()
-            }
+            State::Detp { .. } if count > first_mobile => self.rays.segments().copied().collect(),
             _ => Vec::new(),
         };
-        let slack = self.slack;
         match &mut self.state {
             State::ImpactCount { power, .. } => {
                 add_impacts(power, update.old.iter(), -1.0);
@@ -385,13 +425,16 @@ impl QuasiStatic {
                 if let Some(mobile_areas) = mobile_areas {
                     areas[first_mobile..].copy_from_slice(&mobile_areas);
                 }
+                let Some((fixed_set, moving_set)) = &self.disc_sets else {
+                    return Ok(());
+                };
                 let (fixed, moving) = sums.split_at_mut(first_mobile);
                 // E(x, t) = E(x, t-1) + E(x; N^t) - E(x; O^t) (equation 2.4).
-                accumulate(&discs_static, &update.old, slack, -1.0, fixed);
-                accumulate(&discs_static, &update.new, slack, 1.0, fixed);
+                fixed_set.accumulate(&update.old, -1.0, fixed)?;
+                fixed_set.accumulate(&update.new, 1.0, fixed)?;
                 // Mobile vertices: the initial algorithm over every ray (section 2.5.2).
                 moving.fill(DVec3::ZERO);
-                accumulate(&discs_mobile, &all, slack, 1.0, moving);
+                moving_set.accumulate(&all, 1.0, moving)?;
             }
         }
         Ok(())
@@ -483,16 +526,11 @@ impl QuasiStatic {
             .collect()
     }
 
-    /// Discs at the estimation points `range` (degenerate points get a zero radius, which no ray crosses).
+    /// Discs at the estimation points `range`.
     fn discs(&self, range: std::ops::Range<usize>, radius: f32) -> Vec<Disc> {
         self.points.points[range]
             .iter()
-            .map(|p| Disc {
-                centre: p.position,
-                normal: p.normal,
-                radius: if p.normal == Vec3::ZERO { 0.0 } else { radius },
-                mesh: Some(p.mesh),
-            })
+            .map(|p| point_disc(p, radius))
             .collect()
     }
 
@@ -582,16 +620,29 @@ fn add_impacts<'a>(power: &mut [DVec3], segments: impl Iterator<Item = &'a RaySe
     }
 }
 
-/// `out[i] += sign Σ φ_j` over the segments `j` crossing disc `i` (section 1.2, equation 2.8), testing every pair.
-fn accumulate(discs: &[Disc], segments: &[RaySegment], slack: f32, sign: f64, out: &mut [DVec3]) {
-    out.par_iter_mut()
-        .zip(discs.par_iter())
-        .for_each(|(o, disc)| {
-            let sum: DVec3 = segments
-                .iter()
-                .filter(|s| disc.is_crossed_by(s, slack))
-                .map(|s| s.power.as_dvec3())
-                .sum();
-            *o += sign * sum;
-        });
+/// The DETP disc of an estimation point (section 1.2); a degenerate point gets a zero radius, which no ray crosses.
+fn point_disc(p: &EstimationPoint, radius: f32) -> Disc {
+    Disc {
+        centre: p.position,
+        normal: p.normal,
+        radius: if p.normal == Vec3::ZERO { 0.0 } else { radius },
+        mesh: Some(p.mesh),
+    }
+}
+
+/// Mean edge length of the scene's triangles, the `typical_edge` of [`Acceleration::tuned_disc_index`] (section 2.7).
+fn mean_edge(scene: &Scene) -> f32 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for (m, mesh) in scene.meshes().iter().enumerate() {
+        let positions = scene.world_positions(m as MeshId);
+        for idx in &mesh.indices {
+            for k in 0..3 {
+                let a = positions[idx[k] as usize];
+                let b = positions[idx[(k + 1) % 3] as usize];
+                sum += a.distance(b) as f64;
+                n += 1;
+            }
+        }
+    }
+    if n == 0 { 1.0 } else { (sum / n as f64) as f32 }
 }

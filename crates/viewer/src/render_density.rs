@@ -9,7 +9,7 @@ use anyhow::Context;
 use lustre_density::artifact::ArtifactOptions;
 use lustre_density::glossy::GlossyMode;
 use lustre_density::quadtree::QuadTreeOptions;
-use lustre_density::{QuasiStatic, QuasiStaticOptions, RaySetOptions};
+use lustre_density::{PreTest, QuasiStatic, QuasiStaticOptions, RaySetOptions};
 use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
 use lustre_mpr::passes::gouraud::corner_radiance;
@@ -147,6 +147,8 @@ pub fn quasi_static_options(
     QuasiStaticOptions {
         artifact: (artifact_control && detp).then(ArtifactOptions::default),
         glossy: if detp { glossy.mode() } else { None },
+        acceleration: None,
+        pretest: PreTest::None,
         rays: RaySetOptions {
             photons,
             seed,
