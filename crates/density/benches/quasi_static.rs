@@ -1,0 +1,104 @@
+//! Per-frame cost of the quasi-static loop on García et al.'s tree scene (section 2.9): the ball rolls along its path, each iteration is one frame (photosimulation update, figure 2.2, plus radiosity recalculation, equation 2.4 / figure 2.4 / full Photon Maps). Criterion measures the whole frame; the split, the first frame and the memory per photon go to `target/criterion/quasi_static_tree/<config>.json` for `cargo xtask bench`.
+//!
+//! `LUSTRE_BENCH_DENSITY_MAX` (default 100000) caps the photon counts 10k, 100k, 1M.
+
+// criterion_group! generates an undocumented function.
+#![allow(missing_docs)]
+
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::Affine3A;
+use lustre_density::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions};
+use lustre_geometry::{ObjectId, builtin};
+
+/// Frames per loop of the ball's path.
+const FRAMES: usize = 32;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+fn bench(c: &mut Criterion) {
+    let max: u64 = std::env::var("LUSTRE_BENCH_DENSITY_MAX")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(100_000);
+    let scene = builtin("tree").expect("built-in tree");
+    let mobile = scene.mobile_objects()[0].clone();
+    let poses: Vec<Affine3A> = mobile.path.frames(FRAMES);
+    let ids: Vec<ObjectId> = vec![mobile.object];
+    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../target/criterion/quasi_static_tree");
+    let _ = std::fs::create_dir_all(&out);
+    let mut group = c.benchmark_group("quasi_static_tree");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
+    for photons in [10_000u64, 100_000, 1_000_000]
+        .into_iter()
+        .filter(|&p| p <= max)
+    {
+        for (name, estimator) in ESTIMATORS {
+            let mut options = QuasiStaticOptions::new(*estimator, photons);
+            options.rays.seed = 1;
+            let mut sim = QuasiStatic::new(scene.clone(), &ids, options).expect("first frame");
+            let first = sim.first_frame();
+            let mut frame = 0usize;
+            let mut stats: Vec<FrameStats> = Vec::new();
+            let config = format!("{name}-{photons}");
+            group.bench_function(&config, |b| {
+                b.iter_custom(|iters| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        frame = (frame + 1) % FRAMES;
+                        let s = sim
+                            .set_pose(&[(mobile.object, poses[frame])])
+                            .expect("frame");
+                        total += s.photosimulation + s.radiosity;
+                        stats.push(s);
+                    }
+                    total
+                })
+            });
+            let (ray_bytes, state_bytes) = sim.memory_bytes();
+            let emitted = sim.rays().emitted().max(1);
+            let info = serde_json::json!({
+                "estimator": name,
+                "photons": photons,
+                "triangles": sim.scene().triangle_count(),
+                "estimation_points": sim.points().points.len(),
+                "segments": sim.rays().segments().count(),
+                "first_frame_photosimulation_ms": ms(first.photosimulation),
+                "first_frame_radiosity_ms": ms(first.radiosity),
+                "median_photosimulation_update_ms": median(stats.iter().map(|s| ms(s.photosimulation)).collect()),
+                "median_radiosity_ms": median(stats.iter().map(|s| ms(s.radiosity)).collect()),
+                "median_recalculated_paths": median(stats.iter().map(|s| s.recalculated as f64).collect()),
+                "frames_measured": stats.len(),
+                "ray_set_bytes_per_photon": ray_bytes as f64 / emitted as f64,
+                "state_bytes": state_bytes,
+            });
+            let _ = std::fs::write(
+                out.join(format!("{config}.json")),
+                serde_json::to_string_pretty(&info).unwrap_or_default(),
+            );
+        }
+    }
+    group.finish();
+}
+
+/// The estimators measured: DETP with the paper's radius (1 % of the scene, section 2.9), Impact Count, Photon Maps.
+const ESTIMATORS: &[(&str, Estimator)] = &[
+    ("detp", Estimator::Detp { radius: 0.02 }),
+    ("impact", Estimator::ImpactCount),
+    ("photonmap", Estimator::PhotonMaps { k: 50 }),
+];
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
