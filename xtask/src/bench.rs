@@ -13,6 +13,8 @@ const BENCHES: &[(&str, &str)] = &[
     ("lustre-brdf", "brdf"),
     ("lustre-photon", "trace"),
     ("lustre-mpr", "splat"),
+    ("lustre-density", "detp"),
+    ("lustre-density", "quasi_static"),
 ];
 
 /// One criterion result.
@@ -44,7 +46,7 @@ pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     let previous = std::fs::read_to_string(&path).unwrap_or_default();
     let cpu_ran = BENCHES
         .iter()
-        .any(|(_, bench)| *bench != "splat" && selected(bench));
+        .any(|(_, bench)| !matches!(*bench, "splat" | "detp" | "quasi_static") && selected(bench));
     let mut text = if cpu_ran || previous.is_empty() {
         let mut text = render(&results);
         // Keep the marker-delimited sections other subcommands own (`converge`).
@@ -62,6 +64,10 @@ pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
         let mut body = String::new();
         splat_tables(&mut body, &results, &splat_setups);
         text = replace_section(&text, SPLAT_SECTION, body.trim_start_matches('\n'));
+    }
+    let density = density_tables(&results, &criterion.join(QUASI_STATIC_GROUP))?;
+    if !density.is_empty() {
+        text = replace_section(&text, DENSITY_SECTION, density.trim_start_matches('\n'));
     }
     let tmp = path.with_extension("md.tmp");
     std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
@@ -765,4 +771,142 @@ mod tests {
         let once = replace_section("# B\n", "converge", "t\n");
         assert_eq!(replace_section(&once, "converge", "t\n"), once);
     }
+}
+
+/// The marker-delimited section of BENCHMARKS.md that holds lustre-density's benches.
+const DENSITY_SECTION: &str = "density";
+
+/// Criterion group of lustre-density's quasi_static bench; its folder also holds one `<estimator>-<photons>.json` per configuration.
+const QUASI_STATIC_GROUP: &str = "quasi_static_tree";
+
+/// The paper's per-frame figures on its tree scene (García et al. 2003, tables 2.6 and 2.7): photons, seconds per frame.
+const PAPER_FRAMES: &[(u64, f64)] = &[(1_000, 0.11), (10_000, 0.46)];
+
+/// The issue's target: a full frame within 40 ms at 100,000 photons on the tree scene.
+const TARGET_FRAME_MS: f64 = 40.0;
+
+/// "Quasi-static recalculation" (the quasi_static bench) and "DETP speed-ups" (the detp bench), empty when neither ran.
+fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String> {
+    let mut s = String::new();
+    let mut setups: Vec<(String, Value)> = Vec::new();
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for entry in entries.flatten() {
+            let path = entry.path();
+            if path.extension().is_some_and(|e| e == "json") {
+                let text = std::fs::read_to_string(&path)
+                    .with_context(|| format!("cannot read {}", path.display()))?;
+                let value: Value = serde_json::from_str(&text)
+                    .with_context(|| format!("{} is not JSON", path.display()))?;
+                let name = path
+                    .file_stem()
+                    .and_then(|n| n.to_str())
+                    .unwrap_or("")
+                    .to_owned();
+                setups.push((name, value));
+            }
+        }
+    }
+    setups.sort_by_key(|(_, v)| {
+        (
+            v["photons"].as_u64().unwrap_or(0),
+            v["estimator"].as_str().unwrap_or("").to_owned(),
+        )
+    });
+    if !setups.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Quasi-static recalculation (lustre-density, García et al. 2003, section 2)\n"
+        );
+        let _ = writeln!(
+            s,
+            "The `tree` scene (71,966 static triangles, section 2.9) with its 500-triangle ball rolling \
+             along its path; one iteration is one frame: the photosimulation update (figure 2.2) and the \
+             radiosity recalculation (equation 2.4 on static vertices, the full estimate on the ball's, \
+             figure 2.4 for Impact Count, a full estimate for Photon Maps), including each point's \
+             irradiance. DETP uses the paper's radius, 1 % of the scene (0.02 m), and the tuned disc \
+             index; Photon Maps k = 50. Median over the frames criterion ran, on the machine above \
+             (CPU only, rayon over all cores). Memory per photon is the ray set's bytes (primary rays \
+             and their segments) over the photons emitted. Written by `cargo xtask bench quasi_static` \
+             (`LUSTRE_BENCH_DENSITY_MAX=1000000` adds 1M photons).\n"
+        );
+        let _ = writeln!(
+            s,
+            "| estimator | photons | segments | points | first frame: photosimulation / radiosity (ms) | frame (criterion median, ms) | photosimulation update (ms) | radiosity (ms) | recalculated paths | ray set bytes per photon |"
+        );
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+        for (name, v) in &setups {
+            let frame = results
+                .iter()
+                .find(|r| r.id == format!("{QUASI_STATIC_GROUP}/{name}"))
+                .map(|r| r.median_ns / 1e6);
+            let num = |key: &str| v[key].as_f64();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {} | {} |",
+                v["estimator"].as_str().unwrap_or("?"),
+                count(v["photons"].as_u64().unwrap_or(0)),
+                count(v["segments"].as_u64().unwrap_or(0)),
+                count(v["estimation_points"].as_u64().unwrap_or(0)),
+                millis(num("first_frame_photosimulation_ms").unwrap_or(f64::NAN)),
+                millis(num("first_frame_radiosity_ms").unwrap_or(f64::NAN)),
+                frame.map_or("–".into(), millis),
+                millis(num("median_photosimulation_update_ms").unwrap_or(f64::NAN)),
+                millis(num("median_radiosity_ms").unwrap_or(f64::NAN)),
+                num("median_recalculated_paths").map_or("–".into(), |n| format!("{n:.0}")),
+                num("ray_set_bytes_per_photon").map_or("–".into(), |b| format!("{b:.0}")),
+            );
+        }
+        let detp_100k = setups
+            .iter()
+            .find(|(_, v)| v["estimator"] == "detp" && v["photons"] == 100_000)
+            .and_then(|(name, _)| {
+                results
+                    .iter()
+                    .find(|r| r.id == format!("{QUASI_STATIC_GROUP}/{name}"))
+            })
+            .map(|r| r.median_ns / 1e6);
+        let paper: Vec<String> = PAPER_FRAMES
+            .iter()
+            .map(|(p, t)| format!("{} photons {:.2} s", count(*p), t))
+            .collect();
+        let _ = writeln!(
+            s,
+            "\nThe paper, DETP with ray cache and sorted queries on its tree scene: {} per frame (tables 2.6, 2.7; a 2003 PC). Target: a DETP frame at 100,000 photons within {TARGET_FRAME_MS:.0} ms{}.",
+            paper.join(", "),
+            detp_100k.map_or(String::new(), |ms| format!(
+                ": measured {ms:.1} ms, {}",
+                if ms <= TARGET_FRAME_MS {
+                    format!("met with {:.1}× to spare", TARGET_FRAME_MS / ms)
+                } else {
+                    format!("missed by {:.1}×", ms / TARGET_FRAME_MS)
+                }
+            ))
+        );
+    }
+    let detp: Vec<&Measurement> = results
+        .iter()
+        .filter(|r| {
+            r.id.starts_with("detp_r") || r.id.starts_with("leaf_r") || r.id.starts_with("mobile_")
+        })
+        .collect();
+    if !detp.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## DETP speed-ups (lustre-density, sections 2.6–2.8)\n"
+        );
+        let _ = writeln!(
+            s,
+            "The full DETP estimate (`DiscSet::accumulate` over every segment) on the Cornell box \
+             subdivided as the `detp` bench's documentation says, for each acceleration and \
+             pre-intersection test (`detp_r<radius>/<acceleration>/<pre-test>`), the disc-index leaf \
+             sweep per radius in the form of table 2.2 (`leaf_r<radius>/leaf_<n>`), and the mobile \
+             object's discs moved each frame (`mobile_<n>discs/...`). Written by `cargo xtask bench detp`.\n"
+        );
+        let _ = writeln!(s, "| benchmark | median |");
+        let _ = writeln!(s, "|---|---:|");
+        for r in detp {
+            let _ = writeln!(s, "| {} | {} |", r.id, millis(r.median_ns / 1e6));
+        }
+    }
+    Ok(s)
 }
