@@ -684,95 +684,6 @@ fn brdf_table(s: &mut String, results: &[Measurement]) {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sections_are_found_with_their_markers() {
-        let doc = "# B\n<!-- note -->\n<!-- a:start -->\nA\n<!-- a:end -->\nx\n<!-- b:start -->B<!-- b:end -->\n<!-- c:start --> unterminated";
-        assert_eq!(
-            sections(doc),
-            vec![
-                "<!-- a:start -->\nA\n<!-- a:end -->",
-                "<!-- b:start -->B<!-- b:end -->"
-            ]
-        );
-        assert!(sections("").is_empty());
-    }
-
-    #[test]
-    fn splat_tables_name_the_adapter_rows_and_target() {
-        let setup = |name: &str, splats: u64| SplatSetup {
-            name: name.to_owned(),
-            adapter: "llvmpipe".to_owned(),
-            software: true,
-            hdr_format: "Rgba32Float".to_owned(),
-            width: 640,
-            height: 480,
-            kernel_c: 4.0,
-            emitted: 250_000,
-            hit_records: splats,
-            splats,
-            cpu_busy: Some((0.5, 0.5)),
-        };
-        let measurement = |id: &str, ms: f64| Measurement {
-            id: format!("{SPLAT_GROUP}/{id}"),
-            median_ns: ms * 1e6,
-            elements: None,
-        };
-        let results = [
-            measurement("full-250k/surface-id/frame", 2000.0),
-            measurement("full-250k/splats", 1000.0),
-        ];
-        let mut s = String::new();
-        splat_tables(&mut s, &results, &[setup("full-250k", 500_000)]);
-        assert!(s.contains("Adapter: llvmpipe."), "{s}");
-        // No stencil result: a dash; 500k splats in 1 s.
-        assert!(
-            s.contains("| full-250k | 250k | 500k | 2000 ms | – | 1000 ms | 500 k | 50% / 50% |"),
-            "{s}"
-        );
-        assert!(
-            s.contains("Not measured: full-1M, optimised-250k, optimised-1M."),
-            "{s}"
-        );
-        assert!(
-            s.contains("| Simple | 3 | 0.5M | 2.15 | no such scene in Lustre |"),
-            "{s}"
-        );
-        assert!(
-            s.contains("Software driver: 2000 ms per 1M splats") && s.contains("missed by 8.0×"),
-            "{s}"
-        );
-        let mut empty = String::new();
-        splat_tables(&mut empty, &results, &[]);
-        assert!(empty.is_empty());
-    }
-
-    #[test]
-    fn replace_section_keeps_the_rest() {
-        let doc =
-            "# Benchmarks\n\ntext\n<!-- converge:start -->\nold\n<!-- converge:end -->\ntail\n";
-        assert_eq!(
-            replace_section(doc, "converge", "new\n"),
-            "# Benchmarks\n\ntext\n<!-- converge:start -->\nnew\n<!-- converge:end -->\ntail\n"
-        );
-        // Missing markers: appended after a blank line.
-        assert_eq!(
-            replace_section("# B\ntext", "converge", "t"),
-            "# B\ntext\n\n<!-- converge:start -->\nt\n<!-- converge:end -->\n"
-        );
-        assert_eq!(
-            replace_section("", "converge", "t\n"),
-            "<!-- converge:start -->\nt\n<!-- converge:end -->\n"
-        );
-        // Replacing twice is the same as once.
-        let once = replace_section("# B\n", "converge", "t\n");
-        assert_eq!(replace_section(&once, "converge", "t\n"), once);
-    }
-}
-
 /// The marker-delimited section of BENCHMARKS.md that holds lustre-density's benches.
 const DENSITY_SECTION: &str = "density";
 
@@ -909,4 +820,93 @@ fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String>
         }
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sections_are_found_with_their_markers() {
+        let doc = "# B\n<!-- note -->\n<!-- a:start -->\nA\n<!-- a:end -->\nx\n<!-- b:start -->B<!-- b:end -->\n<!-- c:start --> unterminated";
+        assert_eq!(
+            sections(doc),
+            vec![
+                "<!-- a:start -->\nA\n<!-- a:end -->",
+                "<!-- b:start -->B<!-- b:end -->"
+            ]
+        );
+        assert!(sections("").is_empty());
+    }
+
+    #[test]
+    fn splat_tables_name_the_adapter_rows_and_target() {
+        let setup = |name: &str, splats: u64| SplatSetup {
+            name: name.to_owned(),
+            adapter: "llvmpipe".to_owned(),
+            software: true,
+            hdr_format: "Rgba32Float".to_owned(),
+            width: 640,
+            height: 480,
+            kernel_c: 4.0,
+            emitted: 250_000,
+            hit_records: splats,
+            splats,
+            cpu_busy: Some((0.5, 0.5)),
+        };
+        let measurement = |id: &str, ms: f64| Measurement {
+            id: format!("{SPLAT_GROUP}/{id}"),
+            median_ns: ms * 1e6,
+            elements: None,
+        };
+        let results = [
+            measurement("full-250k/surface-id/frame", 2000.0),
+            measurement("full-250k/splats", 1000.0),
+        ];
+        let mut s = String::new();
+        splat_tables(&mut s, &results, &[setup("full-250k", 500_000)]);
+        assert!(s.contains("Adapter: llvmpipe."), "{s}");
+        // No stencil result: a dash; 500k splats in 1 s.
+        assert!(
+            s.contains("| full-250k | 250k | 500k | 2000 ms | – | 1000 ms | 500 k | 50% / 50% |"),
+            "{s}"
+        );
+        assert!(
+            s.contains("Not measured: full-1M, optimised-250k, optimised-1M."),
+            "{s}"
+        );
+        assert!(
+            s.contains("| Simple | 3 | 0.5M | 2.15 | no such scene in Lustre |"),
+            "{s}"
+        );
+        assert!(
+            s.contains("Software driver: 2000 ms per 1M splats") && s.contains("missed by 8.0×"),
+            "{s}"
+        );
+        let mut empty = String::new();
+        splat_tables(&mut empty, &results, &[]);
+        assert!(empty.is_empty());
+    }
+
+    #[test]
+    fn replace_section_keeps_the_rest() {
+        let doc =
+            "# Benchmarks\n\ntext\n<!-- converge:start -->\nold\n<!-- converge:end -->\ntail\n";
+        assert_eq!(
+            replace_section(doc, "converge", "new\n"),
+            "# Benchmarks\n\ntext\n<!-- converge:start -->\nnew\n<!-- converge:end -->\ntail\n"
+        );
+        // Missing markers: appended after a blank line.
+        assert_eq!(
+            replace_section("# B\ntext", "converge", "t"),
+            "# B\ntext\n\n<!-- converge:start -->\nt\n<!-- converge:end -->\n"
+        );
+        assert_eq!(
+            replace_section("", "converge", "t\n"),
+            "<!-- converge:start -->\nt\n<!-- converge:end -->\n"
+        );
+        // Replacing twice is the same as once.
+        let once = replace_section("# B\n", "converge", "t\n");
+        assert_eq!(replace_section(&once, "converge", "t\n"), once);
+    }
 }
