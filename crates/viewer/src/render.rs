@@ -42,8 +42,8 @@ use lustre_photon::{
 use serde_json::json;
 
 use crate::render_density::{
-    DEFAULT_DETP_RADIUS, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K, Estimator, GlossyEstimate,
-    vertex_lit_scene, vertex_radiance,
+    DEFAULT_DETP_RADIUS, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K, DensitySettings, DetpAcceleration,
+    Estimator, GlossyEstimate, PreTestArg, vertex_lit_scene, vertex_radiance,
 };
 use crate::scene_arg;
 
@@ -187,6 +187,12 @@ pub struct RenderArgs {
     /// DETP's estimate on glossy surfaces (García et al. section 2.10): view-dependent from per-vertex ray lists, or only the diffuse part.
     #[arg(long, value_enum, default_value_t = GlossyEstimate::Quadtree)]
     pub glossy_estimate: GlossyEstimate,
+    /// How DETP finds the rays crossing each disc (García et al. sections 2.6–2.7).
+    #[arg(long, value_enum, default_value_t = DetpAcceleration::DiscIndex)]
+    pub detp_acceleration: DetpAcceleration,
+    /// DETP's pre-intersection test against the disc's tangent triangle (García et al. section 2.8).
+    #[arg(long, value_enum, default_value_t = PreTestArg::None)]
+    pub pretest: PreTestArg,
     /// Longest mesh edge in m after subdivision, for the per-vertex techniques.
     #[arg(long, default_value_t = DEFAULT_MESH_EDGE)]
     pub mesh_edge: f32,
@@ -199,6 +205,20 @@ pub struct RenderArgs {
     /// With `--frames`: only simulate and report the times, without the GPU or images.
     #[arg(long, requires = "frames")]
     pub timing_only: bool,
+}
+
+impl RenderArgs {
+    /// The per-vertex techniques' settings from these options.
+    pub fn density_settings(&self) -> DensitySettings {
+        DensitySettings {
+            photons: self.photons,
+            seed: self.seed,
+            artifact_control: self.artifact_control,
+            glossy: self.glossy_estimate,
+            acceleration: self.detp_acceleration,
+            pretest: self.pretest,
+        }
+    }
 }
 
 /// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
@@ -288,14 +308,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             None,
         ),
         Some(estimator) => {
-            let v = vertex_radiance(
-                estimator,
-                &scene,
-                args.photons,
-                args.seed,
-                args.artifact_control,
-                args.glossy_estimate,
-            )?;
+            let v = vertex_radiance(estimator, &scene, &args.density_settings())?;
             eprintln!(
                 "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
                 estimator.name(),
@@ -462,6 +475,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "mesh_edge": density.map(|_| args.mesh_edge),
         "artifact_control": density.map(|_| args.artifact_control),
         "glossy_estimate": density.map(|_| format!("{:?}", args.glossy_estimate)),
+        "detp_acceleration": density.map(|_| format!("{:?}", args.detp_acceleration)),
+        "pretest": density.map(|_| format!("{:?}", args.pretest)),
         "triangles": scene.triangle_count(),
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "seed": args.seed,

@@ -9,7 +9,7 @@ use anyhow::Context;
 use lustre_density::artifact::ArtifactOptions;
 use lustre_density::glossy::GlossyMode;
 use lustre_density::quadtree::QuadTreeOptions;
-use lustre_density::{PreTest, QuasiStatic, QuasiStaticOptions, RaySetOptions};
+use lustre_density::{Acceleration, PreTest, QuasiStatic, QuasiStaticOptions};
 use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
 use lustre_mpr::passes::gouraud::corner_radiance;
@@ -62,17 +62,10 @@ pub fn vertex_lit_scene(scene: &Scene, edge: f32) -> anyhow::Result<Scene> {
 pub fn vertex_radiance(
     estimator: Estimator,
     scene: &Scene,
-    photons: u64,
-    seed: u64,
-    artifact_control: bool,
-    glossy: GlossyEstimate,
+    settings: &DensitySettings,
 ) -> anyhow::Result<VertexRadiance> {
-    let sim = QuasiStatic::new(
-        scene.clone(),
-        &[],
-        quasi_static_options(estimator, photons, seed, artifact_control, glossy),
-    )
-    .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
+    let sim = QuasiStatic::new(scene.clone(), &[], settings.options(estimator))
+        .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
     let first = sim.first_frame();
     let corners = corners(&sim)?;
     Ok(VertexRadiance {
@@ -135,26 +128,99 @@ pub fn corners(sim: &QuasiStatic) -> anyhow::Result<Vec<[f32; 3]>> {
     Ok(corners)
 }
 
-/// The simulation settings of `lustre render` for an estimator, photon count, seed, DETP artifact control (section 1.2.1) and glossy estimate (section 2.10, DETP only).
-pub fn quasi_static_options(
-    estimator: Estimator,
-    photons: u64,
-    seed: u64,
-    artifact_control: bool,
-    glossy: GlossyEstimate,
-) -> QuasiStaticOptions {
-    let detp = matches!(estimator, Estimator::Detp { .. });
-    QuasiStaticOptions {
-        artifact: (artifact_control && detp).then(ArtifactOptions::default),
-        glossy: if detp { glossy.mode() } else { None },
-        acceleration: None,
-        pretest: PreTest::None,
-        rays: RaySetOptions {
+/// How `lustre render` finds the rays crossing each DETP disc (García et al. sections 2.6–2.7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DetpAcceleration {
+    /// Disc indexing, leaf size tuned by the radius and the mean edge (section 2.7).
+    DiscIndex,
+    /// The ray cache with the sorted query order reused across frames (sections 1.2.1, 2.6).
+    RayCache,
+    /// The ray cache in the vertices' own order.
+    RayCacheUnsorted,
+    /// A uniform grid over the ray segments, cells the size of a disc (beyond the paper).
+    SegmentGrid,
+    /// Every segment against every disc.
+    BruteForce,
+}
+
+/// DETP's pre-intersection test (García et al. section 2.8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PreTestArg {
+    /// None.
+    None,
+    /// Badouel's projection test against the tangent triangle.
+    Badouel,
+    /// Plücker coordinates against the tangent triangle.
+    Plucker,
+    /// Möller–Trumbore against the tangent triangle.
+    Moller,
+}
+
+/// The density crate's acceleration for a disc radius; `None` lets it tune disc indexing to the scene.
+pub fn acceleration(arg: DetpAcceleration, radius: f32) -> Option<Acceleration> {
+    match arg {
+        DetpAcceleration::DiscIndex => None,
+        DetpAcceleration::RayCache => Some(Acceleration::RayCache { sorted: true }),
+        DetpAcceleration::RayCacheUnsorted => Some(Acceleration::RayCache { sorted: false }),
+        DetpAcceleration::SegmentGrid => Some(Acceleration::SegmentGrid {
+            cell_size: 2.0 * radius,
+        }),
+        DetpAcceleration::BruteForce => Some(Acceleration::BruteForce),
+    }
+}
+
+/// The density crate's pre-test.
+pub fn pretest(arg: PreTestArg) -> PreTest {
+    match arg {
+        PreTestArg::None => PreTest::None,
+        PreTestArg::Badouel => PreTest::Badouel,
+        PreTestArg::Plucker => PreTest::Plucker,
+        PreTestArg::Moller => PreTest::MollerTrumbore,
+    }
+}
+
+/// What `lustre render` sets of a quasi-static simulation besides the estimator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DensitySettings {
+    /// Photons over all lights.
+    pub photons: u64,
+    /// Seed of the photon paths.
+    pub seed: u64,
+    /// DETP artifact control (section 1.2.1).
+    pub artifact_control: bool,
+    /// DETP's estimate on glossy meshes (section 2.10).
+    pub glossy: GlossyEstimate,
+    /// How DETP finds crossing rays (sections 2.6–2.7).
+    pub acceleration: DetpAcceleration,
+    /// DETP's pre-intersection test (section 2.8).
+    pub pretest: PreTestArg,
+}
+
+impl DensitySettings {
+    /// Plain settings: no artifact control, the QuadTree glossy estimate, tuned disc indexing, no pre-test.
+    #[cfg(test)]
+    pub fn new(photons: u64, seed: u64) -> Self {
+        Self {
             photons,
             seed,
-            ..RaySetOptions::default()
-        },
-        estimator,
+            artifact_control: false,
+            glossy: GlossyEstimate::Quadtree,
+            acceleration: DetpAcceleration::DiscIndex,
+            pretest: PreTestArg::None,
+        }
+    }
+
+    /// The simulation options for an estimator; artifact control, the glossy estimate and the DETP speed-ups apply to DETP only.
+    pub fn options(&self, estimator: Estimator) -> QuasiStaticOptions {
+        let mut options = QuasiStaticOptions::new(estimator, self.photons);
+        options.rays.seed = self.seed;
+        if let Estimator::Detp { radius } = estimator {
+            options.artifact = self.artifact_control.then(ArtifactOptions::default);
+            options.glossy = self.glossy.mode();
+            options.acceleration = acceleration(self.acceleration, radius);
+            options.pretest = pretest(self.pretest);
+        }
+        options
     }
 }
 
@@ -181,8 +247,7 @@ mod tests {
             Estimator::ImpactCount,
             Estimator::PhotonMaps { k: 10 },
         ] {
-            let r = vertex_radiance(estimator, &scene, 2_000, 1, false, GlossyEstimate::Quadtree)
-                .unwrap();
+            let r = vertex_radiance(estimator, &scene, &DensitySettings::new(2_000, 1)).unwrap();
             assert_eq!(r.corners.len(), 3 * scene.triangle_count());
             assert!(
                 r.corners

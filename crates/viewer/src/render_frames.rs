@@ -14,7 +14,7 @@ use lustre_mpr::{
 use serde_json::json;
 
 use crate::render::{RenderArgs, sidecar_path, write_image};
-use crate::render_density::{corners, quasi_static_options};
+use crate::render_density::corners;
 
 /// The path of frame `index` of `out`: `render.png` becomes `render-0003.png`.
 pub fn frame_path(out: &Path, index: usize) -> PathBuf {
@@ -139,18 +139,8 @@ pub fn run(
     let ids: Vec<ObjectId> = paths.iter().map(|m| m.object).collect();
     let times: Vec<Vec<f32>> = paths.iter().map(|m| m.path.frame_times(frames)).collect();
     let start = Instant::now();
-    let mut sim = QuasiStatic::new(
-        scene,
-        &ids,
-        quasi_static_options(
-            estimator,
-            args.photons,
-            args.seed,
-            args.artifact_control,
-            args.glossy_estimate,
-        ),
-    )
-    .with_context(|| format!("{} first frame", estimator.name()))?;
+    let mut sim = QuasiStatic::new(scene, &ids, args.density_settings().options(estimator))
+        .with_context(|| format!("{} first frame", estimator.name()))?;
     let setup_ms = ms(start.elapsed());
     let first = sim.first_frame();
     eprintln!(
@@ -216,6 +206,8 @@ pub fn run(
         "mesh_edge": args.mesh_edge,
         "artifact_control": args.artifact_control,
         "glossy_estimate": format!("{:?}", args.glossy_estimate),
+        "detp_acceleration": format!("{:?}", args.detp_acceleration),
+        "pretest": format!("{:?}", args.pretest),
         "triangles": sim.scene().triangle_count(),
         "estimation_points": sim.points().points.len(),
         "ray_segments": sim.rays().segments().count(),
