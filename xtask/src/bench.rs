@@ -742,7 +742,7 @@ fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String>
         );
         let _ = writeln!(
             s,
-            "| estimator | photons | segments | points | first frame: photosimulation / radiosity (ms) | frame (criterion median, ms) | photosimulation update (ms) | radiosity (ms) | recalculated paths | ray set bytes per photon |"
+            "| estimator | photons | segments | points | first frame: photosimulation / radiosity | frame (criterion median) | photosimulation update | radiosity | recalculated paths | ray set bytes per photon |"
         );
         let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
         for (name, v) in &setups {

@@ -33,8 +33,17 @@ fn bench(c: &mut Criterion) {
     let mobile = scene.mobile_objects()[0].clone();
     let poses: Vec<Affine3A> = mobile.path.frames(FRAMES);
     let ids: Vec<ObjectId> = vec![mobile.object];
-    let out = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../target/criterion/quasi_static_tree");
+    // Beside criterion's own results: $CRITERION_HOME, else $CARGO_TARGET_DIR/criterion, else the workspace's target/criterion.
+    let criterion = std::env::var_os("CRITERION_HOME")
+        .map(std::path::PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR")
+                .map(|t| std::path::PathBuf::from(t).join("criterion"))
+        })
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/criterion")
+        });
+    let out = criterion.join("quasi_static_tree");
     let _ = std::fs::create_dir_all(&out);
     let mut group = c.benchmark_group("quasi_static_tree");
     group
