@@ -8,7 +8,10 @@
 //! cores): over every disc without pre-test, over every 8th disc (times 8)
 //! with one. `DETP_BENCH_EDGE` and `DETP_BENCH_PHOTONS` override either.
 //! A positional filter (`cargo bench --bench detp -- leaf_`) also skips the
-//! other groups' setup.
+//! other groups' setup, or `DETP_BENCH_GROUPS=detp_r,mobile` (group name
+//! prefixes) selects the groups whatever the filter; `DETP_BENCH_BRUTE`
+//! (pre-test names, e.g. `none,plucker`) limits the full-size brute-force
+//! runs.
 //!
 //! Groups:
 //! - `detp_r0.050`: the full estimate (`DiscSet::accumulate` over every
@@ -20,6 +23,44 @@
 //! - `mobile`: the discs of the tall box moved each frame (`update_discs`
 //!   then a full estimate), and the persistent segment grid
 //!   (`accumulate_grid`) with its per-frame maintenance.
+
+//!
+//! Medians with `DETP_BENCH_FULL=1` on the 2-core Xeon (23 979 discs,
+//! 262 574 segments; brute force single runs, the ×8 ones over every 8th
+//! disc; machine shared, so a few percent of noise):
+//!
+//! | r = 0.05 | none | Badouel | Plücker | Möller |
+//! |---|---|---|---|---|
+//! | brute force | 37.6 s | 67.6 s | 77.9 s | 73.1 s |
+//! | ray cache, sorted | 1.10 s | 1.32 s | 1.39 s | 1.44 s |
+//! | ray cache, unsorted | 12.8 s | | | |
+//! | disc index (leaf 16) | 0.330 s | 0.418 s | 0.411 s | 0.416 s |
+//! | segment grid, cells 2r | 0.745 s | 0.913 s | 0.954 s | 0.955 s |
+//! | segment grid, cells 4r | 1.30 s | 1.67 s | 1.74 s | 1.77 s |
+//!
+//! | no pre-test | r = 0.025 | r = 0.05 | r = 0.1 |
+//! |---|---|---|---|
+//! | brute force | 37.5 s | 37.6 s | 37.4 s |
+//! | ray cache, sorted | 0.892 s | 1.10 s | 3.48 s |
+//! | ray cache, unsorted | 11.7 s | 12.8 s | 28 s |
+//! | disc index (tuned) | 0.221 s (leaf 8) | 0.330 s (16) | 0.568 s (16) |
+//! | segment grid, cells 2r | 0.618 s | 0.745 s | 2.57 s |
+//! | segment grid, cells 4r | 0.509 s | 1.30 s | 6.4 s |
+//!
+//! `BENCH_DISC_INDEX`, disc index time (ms) by leaf size (depth 32; the
+//! paper's table 2.2 b):
+//!
+//! | leaf | 1 | 2 | 4 | 8 | 16 | 32 | 64 |
+//! |---|---|---|---|---|---|---|---|
+//! | r = 0.025 | 271 | 253 | 235 | **223** | **223** | 241 | 296 |
+//! | r = 0.05 | 435 | 391 | 349 | 327 | **320** | 337 | 392 |
+//! | r = 0.1 | 867 | 758 | 646 | 594 | **562** | 586 | 674 |
+//!
+//! Mobile object (5 046 discs of the tall box, moved each frame), per frame:
+//! `update_discs` + full estimate 7.90 s brute force, 1.06 s ray cache,
+//! 68 ms disc index, 205 ms per-call segment grid; a persistent grid of
+//! 0.1 m cells answers in 206 ms, is built in 222 ms and replaces 5 % of
+//! its segments in 31 ms.
 
 // criterion's macros generate undocumented public items.
 #![allow(missing_docs)]
@@ -58,6 +99,9 @@ fn sizes() -> (f32, u64, bool) {
 
 /// Whether a group is selected by the positional filters given to the bench (criterion's filters, matched here as plain substrings, `|` separating alternatives), so that unselected groups skip their setup and their single runs.
 fn wanted(group: &str) -> bool {
+    if let Ok(groups) = std::env::var("DETP_BENCH_GROUPS") {
+        return groups.split(',').any(|g| group.starts_with(g.trim()));
+    }
     let filters: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with('-'))
@@ -185,7 +229,12 @@ fn detp(c: &mut Criterion) {
         group.warm_up_time(Duration::from_millis(500));
         group.measurement_time(Duration::from_secs(3));
         for &pretest in pretests {
-            if full {
+            let brute_wanted = std::env::var("DETP_BENCH_BRUTE").map_or(true, |v| {
+                v.split(',').any(|p| p.trim() == pretest_name(pretest))
+            });
+            if full && !brute_wanted {
+                // Skipped (`DETP_BENCH_BRUTE` lists the pre-tests to time brute force with).
+            } else if full {
                 // One run; with a pre-test, on every 8th disc only, scaled by 8.
                 let (subset, scale): (Vec<Disc>, f64) = if pretest == PreTest::None {
                     (discs.clone(), 1.0)

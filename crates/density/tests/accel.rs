@@ -763,7 +763,15 @@ fn invalid_options_are_errors() {
     .unwrap();
     let mut out = vec![DVec3::ZERO];
     assert!(strict.accumulate_grid(&grid, 1.0, &mut out).is_err());
-    assert!(set.validate_ray_cache(&[]).is_ok());
+    let cached = DiscSet::new(
+        vec![disc],
+        DiscSetOptions {
+            acceleration: Acceleration::RayCache { sorted: true },
+            ..options
+        },
+    )
+    .unwrap();
+    assert!(cached.validate_ray_cache(&[]).is_ok());
     let brute = DiscSet::new(
         vec![disc],
         DiscSetOptions {

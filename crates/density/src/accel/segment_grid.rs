@@ -413,6 +413,59 @@ impl SegmentGrid {
         }
     }
 
+    /// Calls `f(slot)` once for every live slot registered in a cell that the disc box overlaps (and on the outside list when the box leaves the grid), in no particular order; `stamps` and `epoch` are the caller's per-thread mailbox, so that no list is sorted.
+    pub(crate) fn for_each_unique_slot(
+        &self,
+        disc: &DiscEnvelope,
+        stamps: &mut Vec<u32>,
+        epoch: &mut u32,
+        mut f: impl FnMut(u32),
+    ) {
+        if stamps.len() < self.slots.len() {
+            stamps.resize(self.slots.len(), 0);
+        }
+        *epoch = epoch.wrapping_add(1);
+        if *epoch == 0 {
+            stamps.fill(0);
+            *epoch = 1;
+        }
+        let e = *epoch;
+        let mut visit = |n: u32| {
+            let stamp = &mut stamps[n as usize];
+            if *stamp != e {
+                *stamp = e;
+                if self.slots[n as usize].is_some() {
+                    f(n);
+                }
+            }
+        };
+        let b = &disc.bounds;
+        let lo = [0, 1, 2].map(|a| self.coord(a, b.min[a]));
+        let hi = [0, 1, 2].map(|a| self.coord(a, b.max[a]));
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    for &n in &self.cells[self.index([i, j, k])] {
+                        visit(n);
+                    }
+                }
+            }
+        }
+        if !self.bounds.contains_box(b) {
+            for &n in &self.outside {
+                visit(n);
+            }
+        }
+    }
+
+    /// The id of a live slot.
+    #[inline]
+    pub(crate) fn slot_id(&self, slot: u32) -> u32 {
+        self.slots[slot as usize]
+            .as_ref()
+            .map_or(u32::MAX, |s| s.id)
+    }
+
     /// The stored envelope and segment of a live slot.
     #[inline]
     pub(crate) fn slot_data(&self, slot: u32) -> (Option<&SegmentEnvelope>, &RaySegment) {
