@@ -380,7 +380,7 @@ proptest! {
     }
 }
 
-/// The Cornell box with every mesh subdivided to edges of at most 0.1 (6 499 vertices), and its ray set (1 200 photons), with artifact-control extensions on some segments.
+/// The Cornell box with every mesh subdivided to edges of at most 0.1 (6 499 vertices), and its ray set (1 500 photons), with artifact-control extensions on some segments.
 fn cornell() -> &'static (Scene, Vec<RaySegment>) {
     static SHARED: OnceLock<(Scene, Vec<RaySegment>)> = OnceLock::new();
     SHARED.get_or_init(|| {
@@ -396,7 +396,7 @@ fn cornell() -> &'static (Scene, Vec<RaySegment>) {
             &scene,
             &bvh,
             &RaySetOptions {
-                photons: 1_200,
+                photons: 1_500,
                 seed: 11,
                 max_segments: 8,
                 extension: 0.0,
