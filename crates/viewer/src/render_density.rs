@@ -261,10 +261,7 @@ mod tests {
         let bad = vertex_radiance(
             Estimator::Detp { radius: 0.0 },
             &scene,
-            10,
-            1,
-            false,
-            GlossyEstimate::None,
+            &DensitySettings::new(10, 1),
         );
         assert!(format!("{:#}", bad.unwrap_err()).contains("radius"));
     }
