@@ -271,6 +271,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         bail!("--photons 0: at least one photon is needed");
     }
     let density = args.technique.estimator(args.radius, args.k);
+    match density {
+        Some(Estimator::PhotonMaps { k: 0 }) => {
+            bail!("--k 0: Photon Maps needs at least one nearest impact")
+        }
+        Some(Estimator::Detp { radius }) if !(radius > 0.0 && radius.is_finite()) => {
+            bail!("--radius {radius}: the DETP disc radius must be positive")
+        }
+        _ => {}
+    }
     let mut timings = serde_json::Map::new();
     let start = Instant::now();
     let loaded = scene_arg::load(&args.scene)?;
