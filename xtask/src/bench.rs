@@ -735,7 +735,8 @@ fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String>
              radiosity recalculation (equation 2.4 on static vertices, the full estimate on the ball's, \
              figure 2.4 for Impact Count, a full estimate for Photon Maps), including each point's \
              irradiance. DETP uses the paper's radius, 1 % of the scene (0.02 m), and the tuned disc \
-             index; Photon Maps k = 50. Median over the frames criterion ran, on the machine above \
+             index; the `detp_<speed-up>` rows use the Möller pre-test, the sorted ray cache, the \
+             segment grid (cells 2r) or brute force instead (sections 2.6–2.8); Photon Maps k = 50. Median over the frames criterion ran, on the machine above \
              (CPU only, rayon over all cores). Memory per photon is the ray set's bytes (primary rays \
              and their segments) over the photons emitted. Written by `cargo xtask bench quasi_static` \
              (`LUSTRE_BENCH_DENSITY_MAX=1000000` adds 1M photons).\n"

@@ -1,6 +1,6 @@
 //! Per-frame cost of the quasi-static loop on García et al.'s tree scene (section 2.9): the ball rolls along its path, each iteration is one frame (photosimulation update, figure 2.2, plus radiosity recalculation, equation 2.4 / figure 2.4 / full Photon Maps). Criterion measures the whole frame; the split, the first frame and the memory per photon go to `target/criterion/quasi_static_tree/<config>.json` for `cargo xtask bench`.
 //!
-//! `LUSTRE_BENCH_DENSITY_MAX` (default 100000) caps the photon counts 10k, 100k, 1M.
+//! `LUSTRE_BENCH_DENSITY_MAX` (default 100000) caps the photon counts 10k, 100k, 1M. DETP runs with the tuned disc index, and with each other speed-up (`detp_<speed-up>`, sections 2.6–2.8) up to 100k photons (brute force: 10k).
 
 // criterion_group! generates an undocumented function.
 #![allow(missing_docs)]
@@ -9,7 +9,9 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::Affine3A;
-use lustre_density::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions};
+use lustre_density::{
+    Acceleration, Estimator, FrameStats, PreTest, QuasiStatic, QuasiStaticOptions,
+};
 use lustre_geometry::{ObjectId, builtin};
 
 /// Frames per loop of the ball's path.
@@ -54,9 +56,20 @@ fn bench(c: &mut Criterion) {
         .into_iter()
         .filter(|&p| p <= max)
     {
-        for (name, estimator) in ESTIMATORS {
+        for (name, estimator, acceleration, pretest) in CONFIGS {
+            // The other speed-ups stop at 100k photons, brute force at 10k (its first frame tests every segment at 83k discs).
+            let limit = match acceleration {
+                None => u64::MAX,
+                Some(Acceleration::BruteForce) => 10_000,
+                Some(_) => 100_000,
+            };
+            if photons > limit {
+                continue;
+            }
             let mut options = QuasiStaticOptions::new(*estimator, photons);
             options.rays.seed = 1;
+            options.acceleration = *acceleration;
+            options.pretest = *pretest;
             let mut sim = QuasiStatic::new(scene.clone(), &ids, options).expect("first frame");
             let first = sim.first_frame();
             let mut frame = 0usize;
@@ -102,11 +115,50 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-/// The estimators measured: DETP with the paper's radius (1 % of the scene, section 2.9), Impact Count, Photon Maps.
-const ESTIMATORS: &[(&str, Estimator)] = &[
-    ("detp", Estimator::Detp { radius: 0.02 }),
-    ("impact", Estimator::ImpactCount),
-    ("photonmap", Estimator::PhotonMaps { k: 50 }),
+/// DETP's radius: 1 % of the scene, as the paper's (section 2.9).
+const RADIUS: f32 = 0.02;
+
+/// The configurations measured: DETP with the tuned disc index and with each other speed-up (sections 2.6–2.8), Impact Count, Photon Maps.
+const CONFIGS: &[(&str, Estimator, Option<Acceleration>, PreTest)] = &[
+    (
+        "detp",
+        Estimator::Detp { radius: RADIUS },
+        None,
+        PreTest::None,
+    ),
+    (
+        "detp_moller",
+        Estimator::Detp { radius: RADIUS },
+        None,
+        PreTest::MollerTrumbore,
+    ),
+    (
+        "detp_ray_cache",
+        Estimator::Detp { radius: RADIUS },
+        Some(Acceleration::RayCache { sorted: true }),
+        PreTest::None,
+    ),
+    (
+        "detp_segment_grid",
+        Estimator::Detp { radius: RADIUS },
+        Some(Acceleration::SegmentGrid {
+            cell_size: 2.0 * RADIUS,
+        }),
+        PreTest::None,
+    ),
+    (
+        "detp_brute_force",
+        Estimator::Detp { radius: RADIUS },
+        Some(Acceleration::BruteForce),
+        PreTest::None,
+    ),
+    ("impact", Estimator::ImpactCount, None, PreTest::None),
+    (
+        "photonmap",
+        Estimator::PhotonMaps { k: 50 },
+        None,
+        PreTest::None,
+    ),
 ];
 
 criterion_group!(benches, bench);
