@@ -17,6 +17,7 @@
 //! | 2.5.2: the full estimate on the mobile objects' vertices | [`QuasiStatic::set_pose`] |
 //! | 2.10: glossy vertices' ray lists updated with OldRays/NewRays, view-dependent radiance | [`QuasiStatic::glossy_radiance`] |
 //! | 3.4.2: vertex-based calculation shared by triangles of different colours | [`EstimationPoints`] |
+//! | 1.2.1, 2.6–2.8: ray cache with the sorted order reused, disc indexing tuned by radius, pre-intersection tests; a segment grid beyond the paper | [`DiscSet`], [`Acceleration`], [`PreTest`], [`SegmentGrid`] |
 //! | 1.2, 2.5.1 Impact Count: impact energy per triangle over its area, vertex mean | [`impact_count`] |
 //! | 1.2 Photon Maps (Jensen): `k` nearest impacts, `Σ φ / (π r_k²)` | [`photon_maps`], [`KdTree`] |
 //! | 1.2 DETP: fixed-radius disc on the tangent plane, rays crossing it | [`detp`], [`Disc`] |
