@@ -62,13 +62,8 @@ pub fn detp(scene: &Scene, rays: &RaySet, radius: f32) -> Result<VertexIrradianc
             message: format!("{radius} is not a positive finite disc radius"),
         });
     }
-    let scale = scene.bounds().extent().max_element();
     // A segment ending on the disc's own surface reaches the plane at its end; f32 rounding may put it just past it.
-    let slack = if scale.is_finite() && scale > 0.0 {
-        scale * 1e-4
-    } else {
-        1e-4
-    };
+    let slack = crate::accel::scene_slack(scene);
     let segments: Vec<RaySegment> = rays.segments().copied().collect();
     Ok((0..scene.meshes().len())
         .map(|m| {

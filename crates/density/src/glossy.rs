@@ -474,7 +474,7 @@ impl GlossyVertices {
                 message: format!("mesh {m} does not exist"),
             });
         }
-        let slack = detp_slack(scene);
+        let slack = crate::accel::scene_slack(scene);
         let segments: Vec<RaySegment> = rays.segments().copied().collect();
         let out = (0..scene.meshes().len() as MeshId)
             .map(|m| {
@@ -578,15 +578,5 @@ impl GlossyVertices {
                     .collect())
             })
             .collect()
-    }
-}
-
-/// The slack [`crate::detp`] gives segments that end on the disc's own surface: `10⁻⁴` of the scene's size.
-pub(crate) fn detp_slack(scene: &Scene) -> f32 {
-    let scale = scene.bounds().extent().max_element();
-    if scale.is_finite() && scale > 0.0 {
-        scale * 1e-4
-    } else {
-        1e-4
     }
 }

@@ -14,6 +14,7 @@ use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
 use crate::kdtree::KdTree;
+use crate::photon_maps::photon_map_estimate;
 use crate::points::{EstimationPoint, EstimationPoints};
 use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
 use crate::update::{RayUpdate, update_ray_set};
@@ -177,12 +178,7 @@ impl QuasiStatic {
         let rays = trace_ray_set_in(&scene, &world, &options.rays)?;
         let photosimulation = t0.elapsed();
         let points = EstimationPoints::new(&scene, &world);
-        let scale = scene.bounds().extent().max_element();
-        let slack = if scale.is_finite() && scale > 0.0 {
-            scale * 1e-4
-        } else {
-            1e-4
-        };
+        let slack = crate::accel::scene_slack(&scene);
         let state = match options.estimator {
             Estimator::ImpactCount => State::ImpactCount {
                 power: Vec::new(),
@@ -593,18 +589,7 @@ impl QuasiStatic {
         self.points
             .points
             .par_iter()
-            .map(|p| {
-                let found = tree.nearest(p.position, k);
-                let r2 = found.last().map_or(0.0, |n| n.distance_squared);
-                if !(r2 > 0.0) {
-                    return DVec3::ZERO;
-                }
-                let sum: DVec3 = found
-                    .iter()
-                    .map(|n| powers[n.index as usize].as_dvec3())
-                    .sum();
-                sum / (std::f64::consts::PI * r2 as f64)
-            })
+            .map(|p| photon_map_estimate(&tree, &powers, p.position, k))
             .collect()
     }
 }

@@ -152,7 +152,7 @@ pub fn trace_ray_set_in(scene: &Scene, world: &World, options: &RaySetOptions) -
 }
 
 /// The offset that steps a reflected ray off its surface: 10⁻⁵ of the scene's size.
-fn world_epsilon(scene: &Scene) -> f32 {
+pub(crate) fn world_epsilon(scene: &Scene) -> f32 {
     let scale = scene.bounds().extent().max_element();
     if scale.is_finite() && scale > 0.0 {
         scale * 1e-5

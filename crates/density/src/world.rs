@@ -119,12 +119,7 @@ impl World {
             mesh_of.extend(std::iter::repeat_n(m as MeshId, mesh.indices.len()));
         }
         let all = scene.world_triangles();
-        let scale = scene.bounds().extent().max_element();
-        let epsilon = if scale.is_finite() && scale > 0.0 {
-            scale * 1e-5
-        } else {
-            1e-5
-        };
+        let epsilon = crate::ray_set::world_epsilon(scene);
         Ok(Self {
             static_part: Part::new(&all, &mesh_of, |m| !mobile_mesh[m as usize]),
             mobile_part: Part::new(&all, &mesh_of, |m| mobile_mesh[m as usize]),
@@ -205,11 +200,6 @@ impl World {
         self.epsilon
     }
 
-    /// The static part's BVH, answering with scene-wide ids through [`World::static_hit`].
-    pub fn static_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.static_part.closest_hit(ray)
-    }
-
     /// A BVH of the static scene answering with scene-wide triangle ids, as artifact control needs (section 1.2.1): every mobile triangle is collapsed to a point, which no ray meets. Built on first use from `scene`, which must be the scene this world was made from.
     pub fn static_scene_bvh(&self, scene: &Scene) -> &Bvh {
         self.statics.get_or_init(|| {
@@ -221,10 +211,5 @@ impl World {
             }
             Bvh::from_triangles(all)
         })
-    }
-
-    /// Bounds of the static part.
-    pub fn static_bounds(&self) -> Aabb {
-        self.static_part.bounds
     }
 }
