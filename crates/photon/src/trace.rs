@@ -3,12 +3,18 @@
 //! ## Absorption and reflection (Russian roulette)
 //!
 //! At a hit the photon arrives from `ω_in` (pointing away from the surface)
-//! with attenuation `ρ`. The BRDF's sampler, called with `wo = ω_in`, draws
-//! an outgoing direction `ω_out` with density `p` and weight
-//! `w = f(ω_out, ω_in) |cos θ_out| / p` (RGB). By Helmholtz reciprocity
-//! `f(ω_out, ω_in) = f(ω_in, ω_out)`, so `w` is the weight with which the
-//! photon's power leaves along `ω_out`, and `E[w] = a(ω_in)`, the
-//! directional albedo. A random number `ξ` then decides between absorption
+//! with attenuation `ρ`. Light travels from `ω_in` to `ω_out`, so in the
+//! radiance convention `f(wi, wo)` of lustre-brdf the photon scatters with
+//! `f(ω_in, ω_out)`: the adjoint BSDF `f*(ω_out, ω_in) = f(ω_in, ω_out)` of
+//! the importance that particle tracing transports (Veach 1997, sections
+//! 3.7.6 and 5.3.2). [`lustre_brdf::Brdf::sample_adjoint`], called with
+//! `wi = ω_in`, draws `ω_out` with density `p` and weight
+//! `w = f(ω_in, ω_out) |cos θ_out| / p` (RGB), the weight with which the
+//! photon's power leaves along `ω_out`; `E[w]` is the fraction of the power
+//! arriving from `ω_in` that the surface scatters (the directional albedo
+//! `a(ω_in)` for a reciprocal model). Drawing with `wo = ω_in` and weighting
+//! with `f(ω_out, ω_in)` instead would be right only for reciprocal models.
+//! A random number `ξ` then decides between absorption
 //! and reflection (section 2.1): the photon survives with probability
 //! `q = min(1, max_c w_c)` and its attenuation becomes `ρ' = ρ w / q`. The
 //! estimator stays unbiased: `E[ρ'] = q · ρ E[w | sampled] / q = ρ a(ω_in)`,
@@ -19,8 +25,8 @@
 //! that returns nothing (a draw where the BRDF is zero) absorbs the photon,
 //! which is also unbiased since that draw contributes zero.
 //!
-//! Non-reciprocal models (the original Phong) are traced with their adjoint;
-//! refraction lacks the η² radiance scaling. A photon stops after
+//! Non-reciprocal models (the original Phong, Diefenbach's fit, Strauss) are
+//! thus traced with their adjoint; refraction lacks the η² radiance scaling. A photon stops after
 //! [`TraceOptions::max_bounces`] hits (a truncation bias below `a^max` of the
 //! power), or when it leaves the scene.
 //!
@@ -262,10 +268,11 @@ impl<'a> PhotonTracer<'a> {
                 return;
             };
             let frame = self.frame_at(&hit, incoming);
-            let wo = frame.to_local(incoming);
+            let wi = frame.to_local(incoming);
             let u = rng.next_vec2();
             let u_lobe = rng.next_f32();
-            let Some(sample) = brdf.sample(wo, u, u_lobe) else {
+            // The adjoint: the photon leaves along `sample.wi` with f(ω_in, ω_out).
+            let Some(sample) = brdf.sample_adjoint(wi, u, u_lobe) else {
                 return;
             };
             let w = sample.weight;
