@@ -19,6 +19,16 @@
 //! against the curvature radius). Near a surface's edges part of the kernel
 //! falls outside the surface and the estimate is biased low, as in the paper.
 //!
+//! **Noise on glossy surfaces.** Equation 3 keeps the expected number of
+//! photons under one kernel fixed (`π C²` on a uniformly lit surface), so as
+//! photons are added only the bias shrinks; the variance of each estimate
+//! stays. On a diffuse surface every photon under the kernel counts and the
+//! variance is small; on a glossy one only the photons arriving inside the
+//! BRDF's lobe around the mirror of `ω` count, a few per cent of them, and
+//! the estimate stays speckled however many photons are traced.
+//! [`Support::Silverman`] shrinks `h` at Silverman's (1986) `n^(-1/6)` rate
+//! instead, so that both the variance and the bias fall.
+//!
 //! The BRDF is evaluated in the same two-sided frame as the tracer: the
 //! normal is flipped to the viewer's side, and photons that arrived on the
 //! other side contribute nothing.
@@ -31,7 +41,7 @@ use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
 use crate::error::{PhotonError, Result};
 use crate::grid::PointGrid;
 use crate::hit_record::{HitRecord, PhotonMap};
-use crate::kernel::{Kernel, kernel_support};
+use crate::kernel::{Kernel, kernel_support, kernel_support_silverman};
 use crate::parameterisation::{SurfaceParam, SurfaceParams};
 use crate::trace::scene_brdfs;
 
@@ -65,6 +75,8 @@ pub enum Support {
     Scaled(f32),
     /// The same `h` on every surface, in metres (for tests and studies of the bias).
     Fixed(f32),
+    /// `h = c √A n^(-1/6)` per surface: Silverman's (1986, section 4.3.1) rate, under which the error falls as photons are added on glossy surfaces too ([`crate::kernel::kernel_support_silverman`]).
+    Silverman(f32),
 }
 
 /// Settings of the splat estimator (section 2.2).
@@ -141,7 +153,9 @@ impl SplatEstimator {
     /// Indexes the selected photons of `map` per surface of `scene` and sets each surface's support (equation 3).
     pub fn build(scene: &Scene, map: &PhotonMap, options: EstimatorOptions) -> Result<Self> {
         match options.support {
-            Support::Scaled(c) | Support::Fixed(c) if !(c > 0.0 && c.is_finite()) => {
+            Support::Scaled(c) | Support::Fixed(c) | Support::Silverman(c)
+                if !(c > 0.0 && c.is_finite()) =>
+            {
                 return Err(PhotonError::InvalidOption {
                     option: "support",
                     message: format!("{c} must be positive and finite"),
@@ -192,6 +206,9 @@ impl SplatEstimator {
                     kernel_support(c, params.area(id as SurfaceId), s.points.len())
                 }
                 Support::Fixed(h) => h,
+                Support::Silverman(c) => {
+                    kernel_support_silverman(c, params.area(id as SurfaceId), s.points.len())
+                }
             };
             s.grid = PointGrid::build(&s.points, s.h);
         }

@@ -74,6 +74,20 @@ pub fn kernel_support(c: f32, area: f32, n: usize) -> f32 {
     c * (area / n as f32).sqrt()
 }
 
+/// The kernel support `h = c √A n^(-1/6)` of a surface of area `A` with `n` hit points: the rate `h ∝ n^(-1/(d+4))`, `d = 2`, of the bandwidth that minimises the mean integrated squared error (Silverman 1986, the paper's reference [13], section 4.3.1 and equation 4.14); zero when `n = 0` or the inputs are not positive and finite.
+///
+/// Equation 3 keeps the expected number of photons under a kernel fixed
+/// (`π C²` on a uniformly lit surface), so the estimate's variance does not
+/// fall as photons are added; at this rate the count grows as `n^(2/3)` and
+/// both the variance (`∝ 1/(n h²)`) and the squared bias (`∝ h⁴`) fall as
+/// `n^(-2/3)`. `c = C n₀^(-1/3)` gives equation 3's support at `n₀` hits.
+pub fn kernel_support_silverman(c: f32, area: f32, n: usize) -> f32 {
+    if n == 0 || !(c > 0.0) || !(area > 0.0) || !c.is_finite() || !area.is_finite() {
+        return 0.0;
+    }
+    c * area.sqrt() * (n as f32).powf(-1.0 / 6.0)
+}
+
 /// The splat triangle of section 3.2 (figure 1) in kernel units (multiply by
 /// `h` along two orthonormal in-plane axes): right angle at `(-1, -1)`, legs
 /// of `2 + √2` along the axes, hypotenuse `x + y = √2`. Its three sides touch
@@ -98,6 +112,23 @@ pub fn splat_triangle() -> [glam::Vec2; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Silverman's rate meets equation 3 at `n₀` hits with `c = C n₀^(-1/3)`, and the photons expected under the kernel, `π h² n / A`, grow as `n^(2/3)` (64× the hits, 16× the photons under a kernel) where equation 3 keeps `π C²`.
+    #[test]
+    fn silverman_support_keeps_more_photons_under_the_kernel_as_n_grows() {
+        let (c, area, n0) = (16.0f32, 4.0f32, 30_000usize);
+        let s = c * (n0 as f32).powf(-1.0 / 3.0);
+        let h0 = kernel_support_silverman(s, area, n0);
+        assert!((h0 - kernel_support(c, area, n0)).abs() < 1e-5 * h0);
+        let under = |h: f32, n: usize| PI * h * h * n as f32 / area;
+        let n1 = 64 * n0;
+        let ratio = under(kernel_support_silverman(s, area, n1), n1) / under(h0, n0);
+        assert!((ratio - 16.0).abs() < 1e-3, "{ratio}");
+        let fixed = under(kernel_support(c, area, n1), n1);
+        assert!((fixed - PI * c * c).abs() < 1e-2 * fixed);
+        assert_eq!(kernel_support_silverman(s, area, 0), 0.0);
+        assert_eq!(kernel_support_silverman(f32::NAN, area, n0), 0.0);
+    }
 
     #[test]
     fn the_splat_triangle_touches_the_support_disc_on_all_three_sides() {

@@ -15,6 +15,7 @@
 //! | 3.1 position `(u, v)` on the surface | [`SurfaceParams`], [`PlanarFrame`] |
 //! | 3.1 21 bytes per record, stored on disk | [`quantise`], [`write_photon_file`], [`append_photon_file`], [`read_photon_file`] |
 //! | 2.2 unit-volume kernel `k`, equation 3 `h = C √(A/n)` | [`Kernel`], [`kernel_support`] |
+//! | 2.2 the kernel `k` of Silverman's book [13]: the `n^(-1/6)` bandwidth rate | [`kernel_support_silverman`], [`Support::Silverman`] |
 //! | 2.2 equation 2 (with `1/h²`, see [`estimator`]) | [`SplatEstimator`] |
 //! | 2.2.1 direct/indirect split | [`BounceSelection`], [`HitRecord::is_indirect`] |
 //!
@@ -53,7 +54,7 @@ pub use estimator::{BounceSelection, EstimatorOptions, Splat, SplatEstimator, Su
 pub use file::{append_photon_file, read_photon_file, read_photon_file_for, write_photon_file};
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};
-pub use kernel::{Kernel, kernel_support, splat_triangle};
+pub use kernel::{Kernel, kernel_support, kernel_support_silverman, splat_triangle};
 pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams};
 pub use progress::{NoProgress, Progress};
 pub use quantise::RECORD_BYTES;
