@@ -7,7 +7,10 @@
 //!
 //! Conventions: `wi` points towards the light, `wo` towards the viewer, both
 //! away from the surface. [`Brdf::eval`] is `f` without the cosine;
-//! [`Brdf::sample`] returns `weight = f |cos θi| / pdf`. Dirac lobes
+//! [`Brdf::sample`] returns `weight = f |cos θi| / pdf`; particle tracing
+//! draws with [`Brdf::sample_adjoint`] instead, `weight = f(wi, wo) |cos θo| /
+//! pdf` for a given `wi`, which differs for the non-reciprocal models (Veach
+//! 1997, section 3.7.6). Dirac lobes
 //! (mirrors, refraction, the specular spike of HTSG) are left out of `eval`
 //! and `pdf` and come only from `sample`, flagged `delta` with the discrete
 //! probability as `pdf`. Every model's sampler is unbiased with respect to
