@@ -5,7 +5,7 @@
 //! **Normalisation.** The paper writes `1/h` in front of the sum. With a
 //! unit-volume *2D* kernel `K` (Silverman's `K₂`), `K((x - x_p)/h)`
 //! integrates to `h²` over the surface, so dividing by `h` leaves a length
-//! in the result: `φ` [W] times `f_r` [1/sr] times `1/h` [1/m] is not a
+//! in the result: `φ` (W) times `f_r` (1/sr) times `1/h` (1/m) is not a
 //! radiance. Dividing by `h²` makes `K(·/h)/h²` a density per m² and the
 //! sum a radiance in W/(m² sr); this crate implements `1/h²`.
 //!

@@ -74,7 +74,7 @@ pub fn kernel_support(c: f32, area: f32, n: usize) -> f32 {
     c * (area / n as f32).sqrt()
 }
 
-/// The kernel support `h = c √A n^(-1/6)` of a surface of area `A` with `n` hit points: the rate `h ∝ n^(-1/(d+4))`, `d = 2`, of the bandwidth that minimises the mean integrated squared error (Silverman 1986, the paper's reference [13], section 4.3.1 and equation 4.14); zero when `n = 0` or the inputs are not positive and finite.
+/// The kernel support `h = c √A n^(-1/6)` of a surface of area `A` with `n` hit points: the rate `h ∝ n^(-1/(d+4))`, `d = 2`, of the bandwidth that minimises the mean integrated squared error (Silverman 1986, the paper's reference 13, section 4.3.1 and equation 4.14); zero when `n = 0` or the inputs are not positive and finite.
 ///
 /// Equation 3 keeps the expected number of photons under a kernel fixed
 /// (`π C²` on a uniformly lit surface), so the estimate's variance does not

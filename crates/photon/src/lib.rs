@@ -15,7 +15,7 @@
 //! | 3.1 position `(u, v)` on the surface | [`SurfaceParams`], [`PlanarFrame`] |
 //! | 3.1 21 bytes per record, stored on disk | [`quantise`], [`write_photon_file`], [`append_photon_file`], [`read_photon_file`] |
 //! | 2.2 unit-volume kernel `k`, equation 3 `h = C √(A/n)` | [`Kernel`], [`kernel_support`] |
-//! | 2.2 the kernel `k` of Silverman's book [13]: the `n^(-1/6)` bandwidth rate | [`kernel_support_silverman`], [`Support::Silverman`] |
+//! | 2.2 the kernel `k` of Silverman's book (reference 13): the `n^(-1/6)` bandwidth rate | [`kernel_support_silverman`], [`Support::Silverman`] |
 //! | 2.2 equation 2 (with `1/h²`, see [`estimator`]) | [`SplatEstimator`] |
 //! | 2.2.1 direct/indirect split | [`BounceSelection`], [`HitRecord::is_indirect`] |
 //!
