@@ -25,6 +25,7 @@
 //! | 2.4, equation 2.8: contributions of rays are additive | every estimator sums per-ray terms |
 //! | 1.2.1 Artifact Control: reachable area near walls and corners, rays followed through concave parts of the own mesh | [`artifact::reachable_areas`], [`artifact::extension`], [`artifact::artifact_controlled_detp`] |
 //! | 2.10, equation 2.1 on the disc: per-vertex ray lists of glossy vertices, `L = Σ f_r φ / (π r²)` | [`glossy::GlossyVertex`], [`glossy::GlossyVertices`] |
+//! | 2.10, equation 2.1 with Impact Count and Photon Maps: each impact weighted by `f_r(ωi, ωo)`, over the vertex's triangles' area or `π r_k²` (Jensen's radiance estimate); per-triangle lists updated with OldRays/NewRays | [`radiance::TriangleImpacts`], [`radiance::ImpactMap`], [`impact_count_radiance`], [`photon_maps_radiance`] |
 //! | 2.10.1 QuadTree without summarising (exact) and with summarising (mean-direction update) | [`quadtree::QuadTree`], [`quadtree::SummaryTree`], [`quadtree::summary_degradation`] |
 //!
 //! Each photon's bounce `n` draws from its own random stream, so a path
@@ -77,6 +78,7 @@ mod photon_maps;
 mod points;
 pub mod quadtree;
 mod quasi_static;
+pub mod radiance;
 mod ray_set;
 mod update;
 mod world;
@@ -89,6 +91,7 @@ pub use kdtree::KdTree;
 pub use photon_maps::photon_maps;
 pub use points::{EstimationPoint, EstimationPoints};
 pub use quasi_static::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions};
+pub use radiance::{ImpactMap, TriangleImpacts, impact_count_radiance, photon_maps_radiance};
 pub use ray_set::{
     PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set, trace_ray_set_in,
 };

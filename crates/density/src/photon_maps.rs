@@ -10,7 +10,7 @@ use crate::kdtree::KdTree;
 use crate::ray_set::RaySet;
 
 /// The Photon Maps estimate at `x` (section 2.9.1, `PME = E / (π R²)`): the power of the `k` impacts nearest to `x` over `π r_k²`; zero where no impact lies at a positive distance.
-pub(crate) fn photon_map_estimate(tree: &KdTree, powers: &[Rgb], x: Vec3, k: usize) -> glam::DVec3 {
+fn photon_map_estimate(tree: &KdTree, powers: &[Rgb], x: Vec3, k: usize) -> glam::DVec3 {
     let found = tree.nearest(x, k);
     let r2 = found.last().map_or(0.0, |n| n.distance_squared);
     if !(r2 > 0.0) {

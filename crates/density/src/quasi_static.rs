@@ -13,9 +13,8 @@ use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reacha
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
-use crate::kdtree::KdTree;
-use crate::photon_maps::photon_map_estimate;
 use crate::points::{EstimationPoint, EstimationPoints};
+use crate::radiance::{ImpactMap, TriangleImpacts};
 use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
 use crate::update::{RayUpdate, update_ray_set};
 use crate::world::World;
@@ -57,7 +56,7 @@ pub struct QuasiStaticOptions {
     pub estimator: Estimator,
     /// Artifact control of DETP (section 1.2.1): reachable disc areas and the concave extension of [`RaySetOptions::extension`] (set to `max_extension · radius`); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
     pub artifact: Option<ArtifactOptions>,
-    /// View-dependent estimate of DETP's glossy vertices (section 2.10): per-vertex ray lists, updated with OldRays and NewRays on static vertices and rebuilt on mobile ones; `None` keeps only the irradiance.
+    /// View-dependent estimate of glossy vertices (section 2.10): DETP's per-vertex ray lists in the given store, updated with OldRays and NewRays on static vertices and rebuilt on mobile ones; Impact Count's per-triangle impact lists updated with OldRays and NewRays, and Photon Maps' radiance estimate over the frame's impacts (these two take [`GlossyMode::List`] only); `None` keeps only the irradiance.
     pub glossy: Option<GlossyMode>,
     /// How DETP finds the rays crossing each disc (sections 2.6–2.7, and the segment grid beyond the paper); `None` picks disc indexing tuned by the radius and the scene's mean edge ([`Acceleration::tuned_disc_index`]), which suits both the frame's few changed rays against every static disc and every ray against the mobile object's discs.
     pub acceleration: Option<Acceleration>,
@@ -128,6 +127,10 @@ pub struct QuasiStatic {
     glossy: Option<(GlossyVertices, GlossyVertices)>,
     /// Irradiance per estimation point of the current frame (computed within the frame's radiosity time).
     irradiance: Vec<DVec3>,
+    /// Impact Count's per-triangle impact lists of the glossy meshes (section 2.10 with figure 2.4), when the glossy option is on.
+    triangle_impacts: Option<TriangleImpacts>,
+    /// Photon Maps' impacts of the current frame in a kd-tree (section 1.2), rebuilt every frame.
+    impact_map: Option<ImpactMap>,
     /// DETP's discs at the static points (fixed) and at the mobile points (moved each frame), with their acceleration structures.
     disc_sets: Option<(DiscSet, DiscSet)>,
 }
@@ -151,11 +154,14 @@ impl QuasiStatic {
             _ => {}
         }
         let mut options = options;
-        if options.glossy.is_some() && !matches!(options.estimator, Estimator::Detp { .. }) {
+        if let Some(mode) = options.glossy
+            && !matches!(options.estimator, Estimator::Detp { .. })
+            && mode != GlossyMode::List
+        {
             return Err(DensityError::InvalidOption {
                 option: "glossy",
                 message: format!(
-                    "the view-dependent glossy estimate uses DETP's discs, not {}",
+                    "{} keeps plain impact lists on glossy vertices; the QuadTree stores are DETP's",
                     options.estimator.name()
                 ),
             });
@@ -203,6 +209,8 @@ impl QuasiStatic {
             first_frame: FrameStats::default(),
             glossy: None,
             irradiance: Vec::new(),
+            triangle_impacts: None,
+            impact_map: None,
             disc_sets: None,
         };
         let t1 = Instant::now();
@@ -230,11 +238,22 @@ impl QuasiStatic {
             };
         }
         sim.state = sim.full_state();
+        if let State::PhotonMaps { .. } = sim.state {
+            sim.impact_map = Some(ImpactMap::build(&sim.rays));
+        }
         sim.irradiance = sim.irradiance_of(&sim.state);
         if options.glossy.is_some() {
-            let fixed = sim.build_glossy(false)?;
-            let moving = sim.build_glossy(true)?;
-            sim.glossy = Some((fixed, moving));
+            match sim.state {
+                State::Detp { .. } => {
+                    let fixed = sim.build_glossy(false)?;
+                    let moving = sim.build_glossy(true)?;
+                    sim.glossy = Some((fixed, moving));
+                }
+                State::ImpactCount { .. } => {
+                    sim.triangle_impacts = Some(sim.build_triangle_impacts()?);
+                }
+                State::PhotonMaps { .. } => {}
+            }
         }
         sim.first_frame = FrameStats {
             photosimulation,
@@ -273,7 +292,13 @@ impl QuasiStatic {
         let t1 = Instant::now();
         self.points.move_mobile(&self.scene);
         self.update_state(&update)?;
+        if let State::PhotonMaps { .. } = self.state {
+            self.impact_map = Some(ImpactMap::build(&self.rays));
+        }
         self.irradiance = self.irradiance_of(&self.state);
+        if let Some(lists) = &mut self.triangle_impacts {
+            lists.update(&update.old, &update.new);
+        }
         if self.glossy.is_some() {
             let moving = self.build_glossy(true)?;
             if let Some((fixed, mobile)) = &mut self.glossy {
@@ -460,12 +485,24 @@ impl QuasiStatic {
         Ok(vertices)
     }
 
-    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1 on the disc), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
+    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1: on DETP's disc, over Impact Count's triangles, or over Photon Maps' `k` nearest impacts), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
     pub fn glossy_radiance(&self, eye: Vec3) -> Result<Option<Vec<Vec<Rgb>>>> {
+        if self.options.glossy.is_none() {
+            return Ok(None);
+        }
+        let brdfs = scene_brdfs(&self.scene)?;
+        if let Some(lists) = &self.triangle_impacts {
+            return lists.radiance(&self.scene, &brdfs, eye).map(Some);
+        }
+        if let (State::PhotonMaps { k }, Some(map)) = (&self.state, &self.impact_map) {
+            let meshes = glossy_meshes(&self.scene);
+            return map
+                .mesh_radiance(&self.scene, &brdfs, &meshes, eye, *k)
+                .map(Some);
+        }
         let Some((fixed, moving)) = &self.glossy else {
             return Ok(None);
         };
-        let brdfs = scene_brdfs(&self.scene)?;
         let a = fixed.radiance(&brdfs, eye)?;
         let b = moving.radiance(&brdfs, eye)?;
         Ok(Some(
@@ -474,6 +511,22 @@ impl QuasiStatic {
                 .map(|(a, b)| if a.is_empty() { b } else { a })
                 .collect(),
         ))
+    }
+
+    /// Impact Count's per-triangle impact lists of every glossy mesh from the whole current ray set (section 2.10, first frame).
+    fn build_triangle_impacts(&self) -> Result<TriangleImpacts> {
+        TriangleImpacts::build(&self.scene, &self.rays, &glossy_meshes(&self.scene))
+    }
+
+    /// The glossy radiance of [`QuasiStatic::glossy_radiance`] with Impact Count's lists rebuilt from scratch over the current ray set (figure 2.3), for checking their incremental update; `None` unless the estimator is Impact Count with the glossy option.
+    pub fn recompute_glossy_radiance(&self, eye: Vec3) -> Result<Option<Vec<Vec<Rgb>>>> {
+        if self.triangle_impacts.is_none() {
+            return Ok(None);
+        }
+        let brdfs = scene_brdfs(&self.scene)?;
+        self.build_triangle_impacts()?
+            .radiance(&self.scene, &brdfs, eye)
+            .map(Some)
     }
 
     /// Disc areas of the static (`mobile` false) or mobile estimation points: `π r²`, or under artifact control the reachable area against the static scene (section 1.2.1).
@@ -578,18 +631,18 @@ impl QuasiStatic {
 
     /// Photon Maps at every estimation point over the current impacts (section 1.2).
     fn photon_maps(&self, k: usize) -> Vec<DVec3> {
-        let (positions, powers): (Vec<Vec3>, Vec<Rgb>) = self
-            .rays
-            .impacts()
-            .map(|(s, h)| (h.position, s.power))
-            .unzip();
-        let Ok(tree) = KdTree::build(&positions) else {
-            return vec![DVec3::ZERO; self.points.points.len()];
+        let built;
+        let map = match &self.impact_map {
+            Some(map) => map,
+            None => {
+                built = ImpactMap::build(&self.rays);
+                &built
+            }
         };
         self.points
             .points
             .par_iter()
-            .map(|p| photon_map_estimate(&tree, &powers, p.position, k))
+            .map(|p| map.irradiance(p.position, k))
             .collect()
     }
 }

@@ -5,7 +5,8 @@ use lustre_density::PreTest;
 use lustre_density::artifact::ArtifactOptions;
 use lustre_density::glossy::GlossyMode;
 use lustre_density::{
-    Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, trace_ray_set_in,
+    Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, photon_maps,
+    photon_maps_radiance, trace_ray_set_in,
 };
 use lustre_geometry::meshing::subdivide;
 use lustre_geometry::{ObjectId, Scene, builtin};
@@ -160,13 +161,141 @@ fn artifact_controlled_detp_incremental_equals_full() {
     );
 }
 
+/// Photon Maps in the loop (section 2.5.2: estimated in full every frame) against the free `photon_maps` and `photon_maps_radiance` on an independently traced ray set of the scene posed at each frame: the loop's kd-tree must hold the frame's impacts, not the first frame's.
 #[test]
 fn photon_maps_follow_the_motion() {
-    check_frames(
-        Estimator::PhotonMaps { k: 20 },
-        &["small-box"],
-        &[(0.3, 0.1, 30.0), (-0.2, 0.2, -10.0)],
+    let scene = glosbox(0.4);
+    let small = scene.object_by_name("small-box").expect("object");
+    let rest = scene.objects()[small as usize].transform;
+    let k = 20;
+    let mut options = options(Estimator::PhotonMaps { k });
+    options.glossy = Some(GlossyMode::List);
+    let mut sim = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let eye = scene.camera().position;
+    let mut fresh_world = World::new(&scene, &[small]).expect("world");
+    let mut fresh_scene = scene;
+    let first = sim.irradiance();
+    let mut moved_vertices = 0;
+    for (frame, (dx, dz, degrees)) in [(0.3, 0.1, 30.0), (-0.2, 0.2, -10.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let pose = motion(rest, dx, dz, degrees);
+        sim.set_pose(&[(small, pose)]).expect("frame");
+        fresh_scene.set_object_transform(small, pose).expect("pose");
+        fresh_world.move_mobile(&fresh_scene);
+        let rays = trace_ray_set_in(&fresh_scene, &fresh_world, &options.rays).expect("trace");
+        let expected = photon_maps(&fresh_scene, &rays, k).expect("photon maps");
+        let got = sim.irradiance();
+        let (mut worst, mut scale) = (0.0f32, 0.0f32);
+        for (a, b) in got.iter().flatten().zip(expected.iter().flatten()) {
+            worst = worst.max((*a - *b).abs().max_element());
+            scale = scale.max(b.max_element());
+        }
+        assert!(
+            worst <= 1e-5 * scale,
+            "frame {frame}: loop and fresh Photon Maps irradiance differ by {worst} (largest {scale})"
+        );
+        moved_vertices += got
+            .iter()
+            .flatten()
+            .zip(first.iter().flatten())
+            .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * scale)
+            .count();
+        let expected = photon_maps_radiance(&fresh_scene, &rays, k, eye).expect("radiance");
+        let got = sim
+            .glossy_radiance(eye)
+            .expect("radiance")
+            .expect("glossy on");
+        let (mut worst, mut scale, mut lit) = (0.0f32, 0.0f32, 0);
+        for (a, b) in got.iter().flatten().zip(expected.iter().flatten()) {
+            worst = worst.max((*a - *b).abs().max_element());
+            scale = scale.max(b.max_element());
+            lit += usize::from(a.max_element() > 0.0);
+        }
+        assert!(lit > 100, "frame {frame}: {lit} lit glossy vertices");
+        assert!(
+            worst <= 1e-5 * scale,
+            "frame {frame}: loop and fresh Photon Maps glossy radiance differ by {worst} (largest {scale})"
+        );
+    }
+    assert!(
+        moved_vertices > 100,
+        "the motion changed only {moved_vertices} vertices' irradiance; the test proves little"
     );
+}
+
+/// The glosbox with every mesh subdivided to edges of at most `edge` metres.
+fn glosbox(edge: f32) -> Scene {
+    let s = builtin("glosbox").expect("built-in");
+    let meshes = s
+        .meshes()
+        .iter()
+        .map(|m| subdivide(m, edge).expect("subdivides"))
+        .collect();
+    s.with_meshes(meshes).expect("valid")
+}
+
+/// Impact Count's per-triangle impact lists of glossy meshes (section 2.10 with figure 2.4), updated with OldRays and NewRays, give the glossy radiance that lists rebuilt from the frame's ray set give, and that a fresh simulation at the new pose gives.
+#[test]
+fn impact_count_glossy_lists_follow_the_motion() {
+    let scene = glosbox(0.4);
+    let small = scene.object_by_name("small-box").expect("object");
+    let rest = scene.objects()[small as usize].transform;
+    let mut options = options(Estimator::ImpactCount);
+    options.glossy = Some(GlossyMode::List);
+    let mut sim = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let eye = scene.camera().position;
+    let first = sim
+        .glossy_radiance(eye)
+        .expect("radiance")
+        .expect("glossy on");
+    let mut changed = 0;
+    let mut pose = rest;
+    for (dx, dz, degrees) in [(-0.3, 0.1, 20.0), (0.2, -0.1, -40.0)] {
+        pose = motion(rest, dx, dz, degrees);
+        sim.set_pose(&[(small, pose)]).expect("frame");
+        let incremental = sim
+            .glossy_radiance(eye)
+            .expect("radiance")
+            .expect("glossy on");
+        let scratch = sim
+            .recompute_glossy_radiance(eye)
+            .expect("radiance")
+            .expect("impact count");
+        // Sorted lists of the same multiset sum in the same order: bit-identical.
+        assert_eq!(incremental, scratch);
+        changed += incremental
+            .iter()
+            .flatten()
+            .zip(first.iter().flatten())
+            .filter(|(a, b)| a != b)
+            .count();
+    }
+    assert!(
+        changed > 50,
+        "the motion changed only {changed} glossy vertices"
+    );
+    let mut moved = scene;
+    moved.set_object_transform(small, pose).expect("pose");
+    let fresh = QuasiStatic::new(moved, &[small], options).expect("fresh");
+    assert!(sim.rays() == fresh.rays(), "the ray sets differ");
+    let scratch = fresh
+        .glossy_radiance(eye)
+        .expect("radiance")
+        .expect("glossy on");
+    let incremental = sim
+        .glossy_radiance(eye)
+        .expect("radiance")
+        .expect("glossy on");
+    assert_eq!(incremental, scratch);
+    let lit = incremental
+        .iter()
+        .flatten()
+        .filter(|l| l.max_element() > 0.0)
+        .count();
+    let total = incremental.iter().flatten().count();
+    assert!(lit > total / 4, "{lit} of {total} glossy vertices lit");
 }
 
 #[test]
@@ -206,15 +335,7 @@ fn refused_input_leaves_the_simulation_unchanged() {
 /// Glossy vertices (section 2.10): the ray lists of static glossy vertices updated with OldRays and NewRays give the radiance that lists built from scratch at the new pose give.
 #[test]
 fn glossy_lists_follow_the_motion() {
-    let scene = {
-        let s = builtin("glosbox").expect("built-in");
-        let meshes = s
-            .meshes()
-            .iter()
-            .map(|m| subdivide(m, 0.4).expect("subdivides"))
-            .collect();
-        s.with_meshes(meshes).expect("valid")
-    };
+    let scene = glosbox(0.4);
     let small = scene.object_by_name("small-box").expect("object");
     let mut options = options(Estimator::Detp { radius: 0.2 });
     options.glossy = Some(GlossyMode::List);

@@ -77,7 +77,7 @@ pub fn vertex_radiance(
     })
 }
 
-/// How `lustre render` estimates DETP's glossy vertices (section 2.10).
+/// How `lustre render` estimates glossy vertices (section 2.10); Impact Count and Photon Maps use their plain impact lists for every value but `none`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum GlossyEstimate {
     /// Only the diffuse part `ρ/π E` of every material.
@@ -105,7 +105,7 @@ impl GlossyEstimate {
     }
 }
 
-/// Outgoing radiance per triangle corner for the Gouraud pass: `ρ/π E` (equation 2.2), or on glossy meshes under the glossy option the view-dependent estimate towards the camera (section 2.10).
+/// Outgoing radiance per triangle corner for the Gouraud pass: `ρ/π E` (equation 2.2), or on glossy meshes under the glossy option the view-dependent estimate towards the camera (section 2.10; DETP's disc, Impact Count's triangles or Photon Maps' nearest impacts).
 pub fn corners(sim: &QuasiStatic) -> anyhow::Result<Vec<[f32; 3]>> {
     let scene = sim.scene();
     let mut corners = corner_radiance(scene, &sim.irradiance())
@@ -210,10 +210,11 @@ impl DensitySettings {
         }
     }
 
-    /// The simulation options for an estimator; artifact control, the glossy estimate and the DETP speed-ups apply to DETP only.
+    /// The simulation options for an estimator; artifact control and the DETP speed-ups apply to DETP only; Impact Count and Photon Maps estimate glossy vertices from plain impact lists unless the glossy estimate is `none` (section 2.10).
     pub fn options(&self, estimator: Estimator) -> QuasiStaticOptions {
         let mut options = QuasiStaticOptions::new(estimator, self.photons);
         options.rays.seed = self.seed;
+        options.glossy = self.glossy.mode().map(|_| GlossyMode::List);
         if let Estimator::Detp { radius } = estimator {
             options.artifact = self.artifact_control.then(ArtifactOptions::default);
             options.glossy = self.glossy.mode();

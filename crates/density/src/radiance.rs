@@ -1,0 +1,295 @@
+//! View-dependent radiance of glossy vertices under Impact Count and Photon Maps (section 2.10 carried over from DETP's disc to the other two estimators of section 1.2).
+//!
+//! Equation 2.1, `L(x, ωo) = ∫ f_r(x, ωi, ωo) L_i cos θi dωi`, is estimated
+//! from the impacts near `x` exactly as each estimator estimates the
+//! irradiance, every impact's power weighted by the BRDF from its incoming
+//! direction `ωi` (towards where the photon came from, the light side) to the
+//! eye direction `ωo`:
+//!
+//! - Impact Count: `L_v = Σ_{t∋v} Σ_{j∈t} f_r(ωi_j, ωo) φ_j / Σ_{t∋v} A_t`
+//!   over the impacts on the triangles meeting at the vertex, the analogue of
+//!   its irradiance `Σ_t Σ φ / Σ_t A_t`;
+//! - Photon Maps: `L(x, ωo) = Σ_{k nearest} f_r(ωi_j, ωo) φ_j / (π r_k²)`,
+//!   Jensen's radiance estimate.
+//!
+//! A diffuse `f_r = ρ/π` gives back `ρ/π E` of equation 2.2 exactly, so the
+//! diffuse part of a blended material is the one the irradiance gives. The
+//! BRDF is evaluated as `f_r(ωi, ωo)` in the vertex's shading frame, the
+//! order non-reciprocal models (Phong) need.
+
+use glam::{DVec3, Vec3};
+use lustre_brdf::{BoxedBrdf, Brdf};
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{MeshId, Rgb, Scene, triangle_area};
+use rayon::prelude::*;
+
+use crate::error::{DensityError, Result};
+use crate::glossy::{IncidentRay, RayList, glossy_meshes};
+use crate::kdtree::KdTree;
+use crate::ray_set::{RaySegment, RaySet};
+
+/// The incident ray of an impact in world coordinates (section 2.10): `ωi = −direction`, the direction back towards the light side, and the power.
+fn world_incident(segment: &RaySegment) -> IncidentRay {
+    IncidentRay {
+        wi: -segment.direction,
+        power: segment.power,
+    }
+}
+
+/// One term of equation 2.1 at a vertex with shading frame `frame` and local eye direction `wo`: `f_r(ωi, ωo) φ`, `ωi` the world incident direction.
+fn term(brdf: &dyn Brdf, frame: &Frame, wo: Vec3, wi: Vec3, power: Rgb) -> DVec3 {
+    (brdf.eval(frame.to_local(wi), wo) * power).as_dvec3()
+}
+
+/// The local eye direction at a vertex, `None` for a degenerate normal or an eye on the vertex.
+fn view_frame(normal: Vec3, x: Vec3, eye: Vec3) -> Option<(Frame, Vec3)> {
+    let n = normal.normalize_or_zero();
+    let wo = (eye - x).normalize_or_zero();
+    if n == Vec3::ZERO || wo == Vec3::ZERO {
+        return None;
+    }
+    let frame = Frame::from_normal(n);
+    let wo = frame.to_local(wo);
+    Some((frame, wo))
+}
+
+/// The BRDF of a mesh's material (`brdfs` from `lustre_photon::trace::scene_brdfs`); an error names the material without one.
+fn mesh_brdf<'a>(scene: &Scene, brdfs: &'a [BoxedBrdf], mesh: MeshId) -> Result<&'a BoxedBrdf> {
+    let material = scene.meshes()[mesh as usize].material;
+    brdfs
+        .get(material as usize)
+        .ok_or_else(|| DensityError::InvalidOption {
+            option: "brdfs",
+            message: format!("no BRDF for material {material}"),
+        })
+}
+
+/// Impact Count's per-triangle impact lists of the glossy meshes (section 2.5.1's per-triangle `Add`/`Substract`, kept as ray lists as section 2.10 keeps DETP's), for the view-dependent estimate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriangleImpacts {
+    /// Impacts per scene-wide triangle (world incident directions), empty for triangles of the other meshes.
+    lists: Vec<RayList>,
+    /// World area of every scene-wide triangle (rigid motions keep it).
+    area: Vec<f64>,
+    /// The meshes holding lists.
+    meshes: Vec<MeshId>,
+}
+
+impl TriangleImpacts {
+    /// The lists of the triangles of `meshes` from every impact of the ray set (figure 2.3, first frame). Fails on a mesh id that does not exist.
+    pub fn build(scene: &Scene, rays: &RaySet, meshes: &[MeshId]) -> Result<Self> {
+        if let Some(&m) = meshes.iter().find(|&&m| m as usize >= scene.meshes().len()) {
+            return Err(DensityError::InvalidOption {
+                option: "meshes",
+                message: format!("mesh {m} does not exist"),
+            });
+        }
+        let n = scene.triangle_count();
+        let mut area = vec![0.0f64; n];
+        let mut kept = vec![false; n];
+        for (m, mesh) in scene.meshes().iter().enumerate() {
+            let positions = scene.world_positions(m as MeshId);
+            let glossy = meshes.contains(&(m as MeshId));
+            for (t, idx) in mesh.indices.iter().enumerate() {
+                let id = scene.triangle_id(m as MeshId, t as u32) as usize;
+                area[id] = triangle_area(idx.map(|i| positions[i as usize])) as f64;
+                kept[id] = glossy;
+            }
+        }
+        let mut rays_of: Vec<Vec<IncidentRay>> = vec![Vec::new(); n];
+        for (segment, hit) in rays.impacts() {
+            let t = hit.triangle as usize;
+            if kept.get(t).copied().unwrap_or(false) {
+                rays_of[t].push(world_incident(segment));
+            }
+        }
+        Ok(Self {
+            lists: rays_of.iter().map(|r| RayList::from_rays(r)).collect(),
+            area,
+            meshes: meshes.to_vec(),
+        })
+    }
+
+    /// One frame's update (figure 2.4 on the lists, as section 2.10 updates DETP's): the Old Rays' impacts leave their triangle's list, the New Rays' join it. Returns the Old Rays' impacts that were not in their list (zero for a consistent update).
+    pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> usize {
+        let mut missing = 0;
+        for s in old {
+            if let Some(list) = self.list_of(s)
+                && !list.remove(&world_incident(s))
+            {
+                missing += 1;
+            }
+        }
+        for s in new {
+            if let Some(list) = self.list_of(s) {
+                list.insert(world_incident(s));
+            }
+        }
+        missing
+    }
+
+    /// The list of the triangle a segment ends on, when that triangle's mesh is kept.
+    fn list_of(&mut self, s: &RaySegment) -> Option<&mut RayList> {
+        let hit = s.hit?;
+        if !self.meshes.contains(&hit.mesh) {
+            return None;
+        }
+        self.lists.get_mut(hit.triangle as usize)
+    }
+
+    /// The impacts on one scene-wide triangle.
+    pub fn impacts(&self, triangle: usize) -> &[IncidentRay] {
+        self.lists.get(triangle).map_or(&[], |l| l.rays())
+    }
+
+    /// Impact Count's view-dependent radiance towards `eye` at every vertex of the kept meshes, `L_v = Σ_{t∋v} Σ_{j∈t} f_r(ωi_j, ωo) φ_j / Σ_{t∋v} A_t` (section 1.2 with equation 2.1), `[mesh][vertex]`, empty for the other meshes. Fails when a kept mesh's material has no BRDF.
+    pub fn radiance(&self, scene: &Scene, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+        (0..scene.meshes().len() as MeshId)
+            .map(|m| {
+                if !self.meshes.contains(&m) {
+                    return Ok(Vec::new());
+                }
+                let brdf = mesh_brdf(scene, brdfs, m)?.as_ref();
+                let mesh = &scene.meshes()[m as usize];
+                let positions = scene.world_positions(m);
+                let normals = scene.world_normals(m);
+                // The triangles meeting at each vertex, in triangle order (a fixed summation order).
+                let mut around: Vec<Vec<usize>> = vec![Vec::new(); positions.len()];
+                for (t, idx) in mesh.indices.iter().enumerate() {
+                    let id = scene.triangle_id(m, t as u32) as usize;
+                    for &v in idx {
+                        around[v as usize].push(id);
+                    }
+                }
+                Ok(positions
+                    .par_iter()
+                    .zip(normals.par_iter())
+                    .zip(around.par_iter())
+                    .map(|((&x, &n), tris)| {
+                        let Some((frame, wo)) = view_frame(n, x, eye) else {
+                            return Rgb::ZERO;
+                        };
+                        let mut sum = DVec3::ZERO;
+                        let mut area = 0.0f64;
+                        for &t in tris {
+                            area += self.area[t];
+                            for r in self.impacts(t) {
+                                sum += term(brdf, &frame, wo, r.wi, r.power);
+                            }
+                        }
+                        if area > 0.0 {
+                            (sum / area).as_vec3()
+                        } else {
+                            Rgb::ZERO
+                        }
+                    })
+                    .collect())
+            })
+            .collect()
+    }
+}
+
+/// The impacts of a ray set in a kd-tree with their powers and world incident directions (Jensen's photon map, section 1.2).
+#[derive(Debug, Clone)]
+pub struct ImpactMap {
+    tree: Option<KdTree>,
+    powers: Vec<Rgb>,
+    incident: Vec<Vec3>,
+}
+
+impl ImpactMap {
+    /// The map of every impact of the ray set; empty when there is none.
+    pub fn build(rays: &RaySet) -> Self {
+        let mut positions = Vec::new();
+        let mut powers = Vec::new();
+        let mut incident = Vec::new();
+        for (s, h) in rays.impacts() {
+            positions.push(h.position);
+            powers.push(s.power);
+            incident.push(-s.direction);
+        }
+        Self {
+            tree: KdTree::build(&positions).ok(),
+            powers,
+            incident,
+        }
+    }
+
+    /// Photon Maps irradiance at `x` (section 1.2; section 2.9.1, `PME = E / (π R²)`): `Σ φ_j / (π r_k²)` over the `k` nearest impacts; zero where none lies at a positive distance.
+    pub fn irradiance(&self, x: Vec3, k: usize) -> DVec3 {
+        self.weighted(x, k, |j| self.powers[j].as_dvec3())
+    }
+
+    /// Jensen's radiance estimate at `x` towards the world direction `eye − x` (section 1.2 with equation 2.1): `Σ f_r(ωi_j, ωo) φ_j / (π r_k²)` over the `k` nearest impacts, in the shading frame of `normal`; zero where no impact lies at a positive distance or the normal is degenerate.
+    pub fn radiance(&self, brdf: &dyn Brdf, x: Vec3, normal: Vec3, eye: Vec3, k: usize) -> DVec3 {
+        let Some((frame, wo)) = view_frame(normal, x, eye) else {
+            return DVec3::ZERO;
+        };
+        self.weighted(x, k, |j| {
+            term(brdf, &frame, wo, self.incident[j], self.powers[j])
+        })
+    }
+
+    /// `Σ w(j) / (π r_k²)` over the `k` impacts `j` nearest to `x`.
+    fn weighted(&self, x: Vec3, k: usize, w: impl Fn(usize) -> DVec3) -> DVec3 {
+        let Some(tree) = &self.tree else {
+            return DVec3::ZERO;
+        };
+        let found = tree.nearest(x, k);
+        let r2 = found.last().map_or(0.0, |n| n.distance_squared);
+        if !(r2 > 0.0) {
+            return DVec3::ZERO;
+        }
+        let sum: DVec3 = found.iter().map(|n| w(n.index as usize)).sum();
+        sum / (std::f64::consts::PI * r2 as f64)
+    }
+
+    /// Jensen's radiance estimate towards `eye` at every vertex of `meshes`, `[mesh][vertex]`, empty for the other meshes. Fails when a mesh's material has no BRDF.
+    pub fn mesh_radiance(
+        &self,
+        scene: &Scene,
+        brdfs: &[BoxedBrdf],
+        meshes: &[MeshId],
+        eye: Vec3,
+        k: usize,
+    ) -> Result<Vec<Vec<Rgb>>> {
+        (0..scene.meshes().len() as MeshId)
+            .map(|m| {
+                if !meshes.contains(&m) {
+                    return Ok(Vec::new());
+                }
+                let brdf = mesh_brdf(scene, brdfs, m)?.as_ref();
+                let positions = scene.world_positions(m);
+                let normals = scene.world_normals(m);
+                Ok(positions
+                    .par_iter()
+                    .zip(normals.par_iter())
+                    .map(|(&x, &n)| self.radiance(brdf, x, n, eye, k).as_vec3())
+                    .collect())
+            })
+            .collect()
+    }
+}
+
+/// Impact Count's view-dependent radiance towards `eye` at every vertex of the glossy meshes ([`glossy_meshes`]) over a ray set, `[mesh][vertex]`, empty for the other meshes (section 1.2 with equation 2.1; see [`TriangleImpacts::radiance`]). Fails when a material has no BRDF.
+pub fn impact_count_radiance(scene: &Scene, rays: &RaySet, eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+    let brdfs = lustre_photon::trace::scene_brdfs(scene)?;
+    TriangleImpacts::build(scene, rays, &glossy_meshes(scene))?.radiance(scene, &brdfs, eye)
+}
+
+/// Jensen's radiance estimate with the `k` nearest impacts towards `eye` at every vertex of the glossy meshes ([`glossy_meshes`]), `[mesh][vertex]`, empty for the other meshes (section 1.2 with equation 2.1; see [`ImpactMap::radiance`]). Fails when `k` is zero or a material has no BRDF.
+pub fn photon_maps_radiance(
+    scene: &Scene,
+    rays: &RaySet,
+    k: usize,
+    eye: Vec3,
+) -> Result<Vec<Vec<Rgb>>> {
+    if k == 0 {
+        return Err(DensityError::InvalidOption {
+            option: "k",
+            message: "the number of nearest impacts must be at least 1".into(),
+        });
+    }
+    let brdfs = lustre_photon::trace::scene_brdfs(scene)?;
+    ImpactMap::build(rays).mesh_radiance(scene, &brdfs, &glossy_meshes(scene), eye, k)
+}
