@@ -370,7 +370,8 @@ impl<'a> Tracer<'a> {
             let frame = Frame::from_normal(normal);
             let u = rng.next_vec2();
             let u_lobe = rng.next_f32();
-            let Some(sample) = brdf.sample(frame.to_local(incoming), u, u_lobe) else {
+            // The adjoint BSDF f(ω_in, ω_out) carries the photon (Veach 3.7.6), as in lustre-photon's tracer.
+            let Some(sample) = brdf.sample_adjoint(frame.to_local(incoming), u, u_lobe) else {
                 break;
             };
             let w = sample.weight;
