@@ -7,8 +7,14 @@
 //! - `splat-direct`: section 2.2.1, the optimised method: direct light from
 //!   point lights with shadow maps and per-pixel BRDF, diffuse planar surfaces
 //!   from textures precomputed once, and the splats of photons with more than
-//!   one bounce on the others. Small area lights become cosine point lights of
-//!   equal power in both phases, as in the paper's section 3.
+//!   one bounce on the others. With `--light-samples 1` small area lights
+//!   become cosine point lights of equal power in both phases, as in the
+//!   paper's section 3; with `K > 1` the direct light comes from `K` jittered
+//!   point lights over each area light (Diefenbach & Badler 1997, section
+//!   4.4) and the photons from the area light itself.
+//!
+//! Every technique's frame is antialiased by `--aa N` jittered accumulation
+//! (Diefenbach & Badler 1997, section 7).
 //!
 //! Techniques (García Hernández, Ureña & Lastra 2003, see [`crate::render_density`]):
 //! per-vertex radiance `ρ/π E` of a density estimator (section 1.2) on the
@@ -196,6 +202,17 @@ pub struct RenderArgs {
     /// Longest mesh edge in m after subdivision, for the per-vertex techniques.
     #[arg(long, default_value_t = DEFAULT_MESH_EDGE)]
     pub mesh_edge: f32,
+    /// `--technique splat-direct`: jittered point lights per area light for the
+    /// direct light, each with its own shadow map (Diefenbach & Badler 1997,
+    /// section 4.4: soft shadows), photons then leaving the area light itself;
+    /// 1 keeps the paper's single point light of equal power for both phases.
+    #[arg(long, default_value_t = DEFAULT_LIGHT_SAMPLES)]
+    pub light_samples: u32,
+    /// Antialiasing: frames rendered with sub-pixel jittered projections and
+    /// averaged, a box filter over each pixel (Diefenbach & Badler 1997,
+    /// section 7); 1 renders once through the pixel centres.
+    #[arg(long, default_value_t = DEFAULT_AA)]
+    pub aa: u32,
     /// Use the software adapter even where a hardware one exists.
     #[arg(long)]
     pub software: bool,
@@ -223,6 +240,12 @@ impl RenderArgs {
 
 /// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
 pub const DEFAULT_KERNEL_C: f32 = 16.0;
+
+/// The default `--light-samples`; chosen by error against the Mitsuba reference and time (BENCHMARKS.md).
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
+
+/// The default `--aa`; chosen by error against the Mitsuba reference and time (BENCHMARKS.md).
+pub const DEFAULT_AA: u32 = 4;
 
 /// Milliseconds since `start`.
 fn ms(start: Instant) -> f64 {
@@ -270,6 +293,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.photons == 0 {
         bail!("--photons 0: at least one photon is needed");
     }
+    if args.light_samples == 0 {
+        bail!("--light-samples 0: at least one point light per area light is needed");
+    }
+    if args.aa == 0 {
+        bail!("--aa 0: at least one sample per pixel is needed");
+    }
     let density = args.technique.estimator(args.radius, args.k);
     match density {
         Some(Estimator::PhotonMaps { k: 0 }) => {
@@ -287,7 +316,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         eprintln!("warning: {w}");
     }
     let mut scene = loaded.scene;
-    if args.technique == Technique::SplatDirect {
+    // Section 3: one point light of equal power for both phases; with more
+    // light samples the photons leave the area light itself and only the
+    // direct light uses its jittered point lights.
+    if args.technique == Technique::SplatDirect && args.light_samples == 1 {
         scene = with_point_lights(&scene)?;
     }
     if density.is_some() {
@@ -403,13 +435,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let direct = if args.technique == Technique::SplatDirect {
         graph = graph.with_direct(&ctx, targets.hdr_format())?;
         let pass = graph.direct.as_ref().context("direct pass")?;
-        let lights = DirectLights::new(&ctx, pass, &scene, glossy)
+        let lights = DirectLights::jittered(&ctx, pass, &scene, glossy, args.light_samples)
             .with_context(|| format!("scene `{}`", scene.name))?;
         graph.update_shadows(&ctx, &scene_buffers, &lights)?;
         Some(lights)
     } else {
         None
     };
+    if args.aa > 1 {
+        graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
+    }
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("lustre-render-output"),
         size: wgpu::Extent3d {
@@ -437,7 +472,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         FilterArg::Mip => KernelFiltering::MipMapped,
     };
     let start = Instant::now();
-    graph.render(
+    graph.render_accumulated(
         &ctx,
         &FrameInputs {
             scene: &scene_buffers,
@@ -453,6 +488,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             direct: direct.as_ref(),
             diffuse: diffuse_textures.as_ref(),
         },
+        args.aa,
+        &mut |_| Ok(()),
     )?;
     ctx.device
         .poll(wgpu::PollType::wait_indefinitely())
@@ -488,6 +525,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "pretest": density.map(|_| format!("{:?}", args.pretest)),
         "triangles": scene.triangle_count(),
         "ray_segments": vertex.as_ref().map(|v| v.segments),
+        "light_samples": (args.technique == Technique::SplatDirect).then_some(args.light_samples),
+        "direct_lights": direct.as_ref().map(DirectLights::len),
+        "aa": args.aa,
         "seed": args.seed,
         "size": [width, height],
         "restriction": format!("{restriction:?}"),

@@ -16,9 +16,13 @@
 //! `depth.wgsl` does and both mark it `@invariant`, which keeps the depths
 //! bit-identical (checked on lavapipe by the tests).
 //!
-//! Area lights are not rendered here: the paper replaces small area lights
-//! by point lights of equal power (section 3), which
-//! `AreaLight::to_oriented_point` does; passing one is an error.
+//! Area lights are not rendered here as such: the paper replaces small area
+//! lights by point lights of equal power (section 3), which
+//! `AreaLight::to_oriented_point` does, and Diefenbach & Badler 1997 (section
+//! 4.4) by `K` jittered point lights of power `Φ/K` each, which soften the
+//! shadows (`lustre_geometry::light::jittered_point_lights`,
+//! [`DirectLights::jittered`], [`direct_pixels_cpu_with_lights`]); passing an
+//! area light itself is an error.
 //!
 //! A frame: [`DirectPass::encode_shadows`] once per light or scene pose,
 //! then per frame [`DirectPass::prepare`] and, after the depth pre-pass,
@@ -28,7 +32,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use lustre_brdf::models::{DiefenbachPhong, Mixture};
 use lustre_brdf::{BoxedBrdf, Fresnel};
-use lustre_geometry::light::Light;
+use lustre_geometry::light::{Light, jittered_point_lights};
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
@@ -166,6 +170,25 @@ impl DirectLights {
             ctx,
             pass,
             scene.lights(),
+            &scene_materials(scene, glossy)?,
+            ShadowSettings::default(),
+        )
+    }
+
+    /// The scene's lights with each area light as `k` jittered point lights
+    /// (Diefenbach & Badler 1997, section 4.4; `k = 1`: one point light of
+    /// equal power, Stürzlinger & Bastos 1997, section 3), default [`ShadowSettings`].
+    pub fn jittered(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        scene: &Scene,
+        glossy: GlossyModel,
+        k: u32,
+    ) -> Result<Self> {
+        Self::with_settings(
+            ctx,
+            pass,
+            &jittered_point_lights(scene.lights(), k, Vec2::ZERO),
             &scene_materials(scene, glossy)?,
             ShadowSettings::default(),
         )
@@ -615,7 +638,21 @@ pub fn direct_pixels_cpu(
     height: u32,
     glossy: GlossyModel,
 ) -> Result<Vec<DirectPixel>> {
-    if let Some(i) = scene.lights().iter().position(|l| !l.is_delta()) {
+    direct_pixels_cpu_with_lights(scene, scene.lights(), bvh, camera, width, height, glossy)
+}
+
+/// [`direct_pixels_cpu`] lit by `lights` (point lights, e.g. an area light's
+/// jittered points, Diefenbach & Badler 1997, section 4.4) instead of the scene's.
+pub fn direct_pixels_cpu_with_lights(
+    scene: &Scene,
+    lights: &[Light],
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    glossy: GlossyModel,
+) -> Result<Vec<DirectPixel>> {
+    if let Some(i) = lights.iter().position(|l| !l.is_delta()) {
         return Err(area_light_error(i));
     }
     let brdfs = scene
@@ -656,7 +693,7 @@ pub fn direct_pixels_cpu(
             let brdf = &brdfs[hit.material as usize];
             let mut radiance = Rgb::ZERO;
             let mut visible = 0u64;
-            for (j, light) in scene.lights().iter().enumerate() {
+            for (j, light) in lights.iter().enumerate() {
                 let Some(sample) = light.sample_direct(hit.position, Vec2::ZERO) else {
                     continue;
                 };
