@@ -482,3 +482,15 @@ pub fn hammersley_centred(i: u32, n: u32) -> Vec2 {
     let phi = i.reverse_bits() as f32 * (1.0 / 4_294_967_296.0);
     Vec2::new((i as f32 + 0.5) / n as f32, phi + 0.5 / strata)
 }
+
+/// The rotation of a `k`-point [`hammersley_centred`] light pattern for
+/// accumulation sample `s` of `n`: `(hammersley_centred(s, n) − ½) / (k,
+/// 2^⌈log₂ k⌉)`, which moves every light within its own stratum so that the
+/// `n k` positions of all samples are stratified together (`n = 1`: none).
+/// Diefenbach & Badler 1997, section 4.4: a different set of jittered light
+/// positions for each accumulated frame.
+pub fn paired_rotation(s: u32, n: u32, k: u32) -> Vec2 {
+    let k = k.max(1);
+    (hammersley_centred(s, n) - Vec2::splat(0.5))
+        / Vec2::new(k as f32, k.next_power_of_two() as f32)
+}

@@ -220,13 +220,17 @@ impl FrameGraph {
     /// weight `1/samples` into [`RenderTargets::accumulation`], whose average
     /// is copied into the HDR target and tone mapped to `output`. Before
     /// sample `s`, `before_sample(s)` may change the scene's lights (paired
-    /// light jitter, section 4.4). `samples <= 1` is [`FrameGraph::render`],
-    /// bit for bit.
+    /// light jitter, section 4.4). With `Splats::Once` the fill-bound splat
+    /// pass runs once, unjittered, after the average (over a fresh depth
+    /// pre-pass through the pixel centres): its kernels are smooth, only the
+    /// surface edges it is restricted to stay point sampled. `samples <= 1`
+    /// is [`FrameGraph::render`], bit for bit.
     pub fn render_accumulated(
         &self,
         ctx: &GpuContext,
         frame: &FrameInputs<'_>,
         samples: u32,
+        splats: AccumulatedSplats,
         before_sample: &mut dyn FnMut(u32) -> Result<()>,
     ) -> Result<()> {
         if samples <= 1 {
@@ -245,20 +249,25 @@ impl FrameGraph {
         let passes = self.resolve(frame)?;
         let (width, height) = (frame.targets.width, frame.targets.height);
         let weight = 1.0 / samples as f32;
+        let splat_once = splats == AccumulatedSplats::Once && passes.splat.is_some();
+        let jittered_passes = ResolvedPasses {
+            splat: if splat_once { None } else { passes.splat },
+            ..passes
+        };
         for s in 0..samples {
             before_sample(s)?;
             let camera =
                 frame
                     .camera
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
-            self.prepare_camera(ctx, &passes, &camera);
+            self.prepare_camera(ctx, &jittered_passes, &camera);
             ctx.checked_result("accumulated frame", || {
                 let mut encoder =
                     ctx.device
                         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                             label: Some("accumulated-frame"),
                         });
-                self.encode_light(ctx, &mut encoder, frame, &passes)?;
+                self.encode_light(ctx, &mut encoder, frame, &jittered_passes)?;
                 accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
                 if s + 1 == samples {
                     let accumulation = &frame.targets.accumulation.texture;
@@ -267,6 +276,28 @@ impl FrameGraph {
                         frame.targets.hdr.texture.as_image_copy(),
                         accumulation.size(),
                     );
+                    if splat_once {
+                        // Ordered after this submit's jittered camera (write_buffer applies at submit).
+                        ctx.queue.submit([encoder.finish()]);
+                        encoder =
+                            ctx.device
+                                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                                    label: Some("splats-once"),
+                                });
+                        self.depth.prepare(&ctx.queue, frame.camera);
+                        if let Some((inputs, pass)) = passes.splat {
+                            pass.prepare(&ctx.queue, frame.camera, inputs.filtering);
+                            self.depth.encode(&mut encoder, frame.scene, frame.targets);
+                            pass.encode(
+                                &ctx.device,
+                                &mut encoder,
+                                frame.scene,
+                                inputs.buffers,
+                                frame.targets,
+                                inputs.restriction,
+                            )?;
+                        }
+                    }
                     self.tonemap.encode(
                         &ctx.device,
                         &mut encoder,
@@ -382,7 +413,17 @@ impl FrameGraph {
     }
 }
 
+/// Whether [`FrameGraph::render_accumulated`] jitters the splat pass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AccumulatedSplats {
+    /// Splats drawn in every jittered frame (every edge antialiased, `N` times the fill).
+    EverySample,
+    /// Splats drawn once through the pixel centres over the average.
+    Once,
+}
+
 /// A frame's inputs paired with the graph's passes.
+#[derive(Clone, Copy)]
 struct ResolvedPasses<'a> {
     splat: Option<(SplatInputs<'a>, &'a SplatPass)>,
     direct: Option<(&'a DirectLights, &'a DirectPass)>,

@@ -10,6 +10,7 @@ mod support;
 use glam::{DVec2, Vec2, Vec3};
 use lustre_geometry::light::{AreaShape, Light, hammersley_centred};
 use lustre_geometry::{Camera, Scene, builtin};
+use lustre_mpr::frame::AccumulatedSplats;
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::readback::read_rgba_f32;
 use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers};
@@ -164,6 +165,7 @@ fn render(ctx: &GpuContext, scene: &Scene, camera: &Camera, samples: u32) -> Vec
                 diffuse: None,
             },
             samples,
+            AccumulatedSplats::EverySample,
             &mut |_| {
                 calls += 1;
                 Ok(())

@@ -16,8 +16,7 @@ use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Rgb, Scene, WorldTria
 use lustre_mpr::material::{GlossyModel, scene_materials};
 use lustre_mpr::passes::depth::DepthPass;
 use lustre_mpr::passes::direct::{
-    DirectLights, DirectPass, DirectPixel, cpu_brdf, direct_pass_cpu, direct_pixels_cpu,
-    direct_pixels_cpu_with_lights,
+    DirectLights, DirectPass, DirectPixel, cpu_brdf, direct_pass_cpu, direct_pixels_cpu_with_lights,
 };
 use lustre_mpr::passes::shadow::{NO_OCCLUDER, ShadowSettings, shadow_cube_cpu};
 use lustre_mpr::readback::{read_rgba_f32, read_u32};
@@ -734,7 +733,7 @@ fn moved_lights_are_shaded_at_their_new_pose_after_their_shadows_are_redrawn() {
         ..target
     });
     let materials = scene_materials(&scene, GlossyModel::Exact).unwrap();
-    let mut lights = DirectLights::with_settings(
+    let lights = DirectLights::with_settings(
         &ctx,
         &direct,
         &[start],

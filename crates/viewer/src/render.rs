@@ -30,9 +30,10 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
+use lustre_geometry::light::{jittered_point_lights, paired_rotation};
 use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
-use lustre_mpr::frame::SplatInputs;
+use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
@@ -213,6 +214,15 @@ pub struct RenderArgs {
     /// section 7); 1 renders once through the pixel centres.
     #[arg(long, default_value_t = DEFAULT_AA)]
     pub aa: u32,
+    /// With `--aa N`: draw the photon splats in every jittered frame (N times
+    /// the splat fill) instead of once through the pixel centres.
+    #[arg(long)]
+    pub aa_splats: bool,
+    /// With `--aa N` and `--light-samples K > 1`: keep the same K light
+    /// positions in every jittered frame instead of moving them within their
+    /// strata per frame (N K positions in all, Diefenbach & Badler 1997, section 4.4).
+    #[arg(long)]
+    pub unpaired_lights: bool,
     /// Use the software adapter even where a hardware one exists.
     #[arg(long)]
     pub software: bool,
@@ -471,6 +481,25 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         FilterArg::Centre => KernelFiltering::PixelCentre,
         FilterArg::Mip => KernelFiltering::MipMapped,
     };
+    // Paired light jitter: a different set of light positions per accumulation sample.
+    let paired = args.aa > 1
+        && args.light_samples > 1
+        && !args.unpaired_lights
+        && scene.lights().iter().any(|l| !l.is_delta());
+    if paired {
+        if let (Some(lights), Some(pass)) = (&direct, &graph.direct) {
+            lights.set_lights(
+                pass,
+                &ctx.queue,
+                &jittered_point_lights(
+                    scene.lights(),
+                    args.light_samples,
+                    paired_rotation(0, args.aa, args.light_samples),
+                ),
+            )?;
+            graph.update_shadows(&ctx, &scene_buffers, lights)?;
+        }
+    }
     let start = Instant::now();
     graph.render_accumulated(
         &ctx,
@@ -489,7 +518,26 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             diffuse: diffuse_textures.as_ref(),
         },
         args.aa,
-        &mut |_| Ok(()),
+        if args.aa_splats {
+            AccumulatedSplats::EverySample
+        } else {
+            AccumulatedSplats::Once
+        },
+        &mut |s| {
+            let (Some(lights), Some(pass)) = (&direct, &graph.direct) else {
+                return Ok(());
+            };
+            if !paired || s == 0 {
+                return Ok(());
+            }
+            let rotation = paired_rotation(s, args.aa, args.light_samples);
+            lights.set_lights(
+                pass,
+                &ctx.queue,
+                &jittered_point_lights(scene.lights(), args.light_samples, rotation),
+            )?;
+            graph.update_shadows(&ctx, &scene_buffers, lights)
+        },
     )?;
     ctx.device
         .poll(wgpu::PollType::wait_indefinitely())
@@ -528,6 +576,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "light_samples": (args.technique == Technique::SplatDirect).then_some(args.light_samples),
         "direct_lights": direct.as_ref().map(DirectLights::len),
         "aa": args.aa,
+        "aa_splats": args.aa_splats,
+        "paired_light_jitter": paired,
         "seed": args.seed,
         "size": [width, height],
         "restriction": format!("{restriction:?}"),

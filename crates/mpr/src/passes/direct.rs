@@ -28,6 +28,8 @@
 //! then per frame [`DirectPass::prepare`] and, after the depth pre-pass,
 //! [`DirectPass::encode`].
 
+use std::cell::Cell;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use lustre_brdf::models::{DiefenbachPhong, Mixture};
@@ -142,7 +144,7 @@ impl GpuLight {
 /// One light's uniform block, shadow cube and bind group.
 #[derive(Debug)]
 struct LightSlot {
-    light: GpuLight,
+    light: Cell<GpuLight>,
     uniforms: wgpu::Buffer,
     cube: ShadowCube,
     bind_group: wgpu::BindGroup,
@@ -262,7 +264,7 @@ impl DirectLights {
             pass.shadow
                 .prepare(&ctx.queue, &cube, light.position(), settings.near);
             slots.push(LightSlot {
-                light,
+                light: Cell::new(light),
                 uniforms,
                 cube,
                 bind_group,
@@ -277,9 +279,11 @@ impl DirectLights {
     }
 
     /// Moves or changes the lights (same count as before); their shadow cubes
-    /// must then be redrawn with [`DirectPass::encode_shadows`].
+    /// must then be redrawn with [`DirectPass::encode_shadows`]. Takes `&self`
+    /// so that a frame in progress can move its jittered lights between
+    /// accumulation samples (Diefenbach & Badler 1997, section 4.4).
     pub fn set_lights(
-        &mut self,
+        &self,
         pass: &DirectPass,
         queue: &wgpu::Queue,
         lights: &[Light],
@@ -299,8 +303,8 @@ impl DirectLights {
             .enumerate()
             .map(|(i, l)| GpuLight::new(i, l, &self.settings))
             .collect::<Result<Vec<_>>>()?;
-        for (slot, light) in self.slots.iter_mut().zip(gpu_lights) {
-            slot.light = light;
+        for (slot, light) in self.slots.iter().zip(gpu_lights) {
+            slot.light.set(light);
             queue.write_buffer(&slot.uniforms, 0, bytemuck::bytes_of(&light));
             pass.shadow
                 .prepare(queue, &slot.cube, light.position(), self.settings.near);
@@ -337,8 +341,8 @@ impl DirectLights {
     }
 
     /// The lights as the GPU sees them.
-    pub fn lights(&self) -> impl Iterator<Item = &GpuLight> {
-        self.slots.iter().map(|s| &s.light)
+    pub fn lights(&self) -> impl Iterator<Item = GpuLight> + '_ {
+        self.slots.iter().map(|s| s.light.get())
     }
 
     /// The shadow cube of light `index`.
