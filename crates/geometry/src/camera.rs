@@ -19,6 +19,9 @@ pub struct Camera {
     pub aspect: f32,
     /// Distance of the near plane (the far plane is at infinity).
     pub near: f32,
+    /// Offset of the projected image in NDC (zero: none), the sub-pixel
+    /// shift of jittered accumulation (Diefenbach & Badler 1997, section 7).
+    pub jitter: Vec2,
 }
 
 impl Camera {
@@ -31,12 +34,25 @@ impl Camera {
             fov_y_degrees,
             aspect: 1.0,
             near: 1e-3,
+            jitter: Vec2::ZERO,
         }
     }
 
     /// This camera with another aspect ratio (width over height).
     pub fn with_aspect(mut self, aspect: f32) -> Self {
         self.aspect = aspect;
+        self
+    }
+
+    /// This camera with its image shifted so that a `width`×`height`
+    /// rasteriser, which samples pixel centres, samples each pixel at
+    /// `offset` in [0, 1)² instead (0.5, 0.5: no shift; row 0 at the top):
+    /// one projection of jittered accumulation (Diefenbach & Badler 1997, section 7).
+    pub fn with_pixel_offset(mut self, offset: Vec2, width: u32, height: u32) -> Self {
+        self.jitter = Vec2::new(
+            2.0 * (0.5 - offset.x) / width as f32,
+            -2.0 * (0.5 - offset.y) / height as f32,
+        );
         self
     }
 
@@ -54,13 +70,19 @@ impl Camera {
     }
 
     /// View to clip matrix in wgpu's convention with reverse Z: depth 1 at the
-    /// near plane, 0 at infinity (clear depth to 0 and test `Greater`).
+    /// near plane, 0 at infinity (clear depth to 0 and test `Greater`); a
+    /// non-zero [`Camera::jitter`] translates the result in NDC.
     pub fn projection_matrix(&self) -> Mat4 {
-        glam::camera::rh::proj::directx::perspective_infinite_reverse(
+        let projection = glam::camera::rh::proj::directx::perspective_infinite_reverse(
             self.fov_y_degrees.to_radians(),
             self.aspect,
             self.near,
-        )
+        );
+        if self.jitter == Vec2::ZERO {
+            projection
+        } else {
+            Mat4::from_translation(self.jitter.extend(0.0)) * projection
+        }
     }
 
     /// World to clip matrix.
@@ -69,8 +91,10 @@ impl Camera {
     }
 
     /// The primary ray through a point of the image, `ndc` in [-1, 1]^2 with
-    /// +x to the right and +y up (pixel centres: see [`Camera::pixel_ndc`]).
+    /// +x to the right and +y up (pixel centres: see [`Camera::pixel_ndc`]);
+    /// it follows [`Camera::jitter`], as the projection does.
     pub fn primary_ray(&self, ndc: Vec2) -> Ray {
+        let ndc = ndc - self.jitter;
         let (right, up, forward) = self.frame();
         let tan_half = (0.5 * self.fov_y_degrees.to_radians()).tan();
         let dir = forward + right * (ndc.x * tan_half * self.aspect) + up * (ndc.y * tan_half);

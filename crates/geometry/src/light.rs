@@ -200,6 +200,31 @@ impl AreaLight {
             intensity: self.radiance * self.shape.area(),
         }
     }
+
+    /// `k` jittered point lights over the light (Diefenbach & Badler 1997,
+    /// section 4.4): cosine point lights of intensity `L A / k` (power `Φ/k`)
+    /// along the local normal, at the points of [`hammersley_centred`]
+    /// shifted by `rotation` modulo 1 (a Cranley–Patterson rotation, zero for
+    /// none) and mapped onto the shape. `k = 1` without rotation is
+    /// [`AreaLight::to_oriented_point`], the paper's single point light.
+    pub fn jittered_points(&self, k: u32, rotation: Vec2) -> Vec<OrientedPointLight> {
+        let k = k.max(1);
+        if k == 1 && rotation == Vec2::ZERO {
+            return vec![self.to_oriented_point()];
+        }
+        let intensity = self.radiance * (self.shape.area() / k as f32);
+        (0..k)
+            .map(|i| {
+                let u = (hammersley_centred(i, k) + rotation).fract();
+                let (position, normal) = self.shape.sample_point(u);
+                OrientedPointLight {
+                    position,
+                    normal,
+                    intensity,
+                }
+            })
+            .collect()
+    }
 }
 
 /// A light source.
@@ -275,6 +300,20 @@ impl Light {
             }
             Self::Area(a) if !(a.shape.area() > 0.0) => bad("area light has zero area"),
             _ => Ok(()),
+        }
+    }
+
+    /// The light as point lights for a point-light renderer: an area light as
+    /// its `k` [`AreaLight::jittered_points`] (Diefenbach & Badler 1997,
+    /// section 4.4), any other light as itself.
+    pub fn as_point_lights(&self, k: u32, rotation: Vec2) -> Vec<Light> {
+        match self {
+            Self::Area(a) => a
+                .jittered_points(k, rotation)
+                .into_iter()
+                .map(Self::OrientedPoint)
+                .collect(),
+            other => vec![other.clone()],
         }
     }
 
@@ -421,4 +460,37 @@ impl Light {
             }
         }
     }
+}
+
+/// Every light of `lights` as point lights, each area light as its `k`
+/// [`AreaLight::jittered_points`] (Diefenbach & Badler 1997, section 4.4).
+pub fn jittered_point_lights(lights: &[Light], k: u32, rotation: Vec2) -> Vec<Light> {
+    lights
+        .iter()
+        .flat_map(|l| l.as_point_lights(k, rotation))
+        .collect()
+}
+
+/// The `i`-th of `n` offsets in [0, 1)²: the Hammersley set
+/// `((i + ½)/n, φ₂(i) + ½/2^⌈log₂ n⌉)`, stratified in x for every `n` and in y
+/// when `n` is a power of two; `n = 1` is the centre (0.5, 0.5). The jitter pattern
+/// of accumulation antialiasing (Diefenbach & Badler 1997, section 7) and of
+/// jittered point lights (section 4.4).
+pub fn hammersley_centred(i: u32, n: u32) -> Vec2 {
+    let n = n.max(1);
+    let strata = n.next_power_of_two() as f32;
+    let phi = i.reverse_bits() as f32 * (1.0 / 4_294_967_296.0);
+    Vec2::new((i as f32 + 0.5) / n as f32, phi + 0.5 / strata)
+}
+
+/// The rotation of a `k`-point [`hammersley_centred`] light pattern for
+/// accumulation sample `s` of `n`: `(hammersley_centred(s, n) − ½) / (k,
+/// 2^⌈log₂ k⌉)`, which moves every light within its own stratum so that the
+/// `n k` positions of all samples are stratified together (`n = 1`: none).
+/// Diefenbach & Badler 1997, section 4.4: a different set of jittered light
+/// positions for each accumulated frame.
+pub fn paired_rotation(s: u32, n: u32, k: u32) -> Vec2 {
+    let k = k.max(1);
+    (hammersley_centred(s, n) - Vec2::splat(0.5))
+        / Vec2::new(k as f32, k.next_power_of_two() as f32)
 }

@@ -84,3 +84,31 @@ fn mirrored_view_sees_reflections_where_the_mirror_shows_them() {
     let (_, up, forward) = virtual_cam.frame();
     assert!(up.length() > 0.99 && forward.length() > 0.99);
 }
+
+/// Jittered accumulation (Diefenbach & Badler 1997, section 7): a camera with
+/// pixel offset `o` projects the point its pixel sees at `o` onto the pixel's
+/// centre, and its primary rays follow the shift.
+#[test]
+fn pixel_offsets_shift_the_image_by_a_fraction_of_a_pixel() {
+    let (width, height) = (64, 48);
+    let cam = camera().with_aspect(width as f32 / height as f32);
+    assert_eq!(cam.with_pixel_offset(Vec2::splat(0.5), width, height), cam);
+    for offset in [Vec2::new(0.1, 0.9), Vec2::new(0.75, 0.25)] {
+        let jittered = cam.with_pixel_offset(offset, width, height);
+        for (x, y) in [(0, 0), (10, 30), (63, 47)] {
+            // The point the unjittered camera sees at offset `offset` of the pixel...
+            let ray = cam.primary_ray(Camera::pixel_ndc(x, y, width, height, offset));
+            let p = ray.at(2.0);
+            // ...is at the pixel's centre in the jittered image.
+            let ndc = project(&jittered, p);
+            let centre = Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5));
+            assert!(
+                (ndc.truncate() - centre).length() < 1e-4,
+                "{ndc} vs {centre}"
+            );
+            // The jittered camera's ray through the centre is the same ray.
+            let through = jittered.primary_ray(centre);
+            assert!((through.direction - ray.direction).length() < 1e-5);
+        }
+    }
+}

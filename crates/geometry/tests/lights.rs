@@ -379,3 +379,74 @@ fn invalid_lights_are_rejected() {
     });
     assert!(flat.validate("flat").is_err());
 }
+
+/// Diefenbach & Badler's jittered point lights (section 4.4): `k` cosine
+/// point lights on the shape, facing its normal, sharing the power equally;
+/// `k = 1` is the paper's single point light of equal power.
+#[test]
+fn jittered_points_lie_on_the_light_share_its_power_and_reduce_to_the_centroid() {
+    for light in [rect_light(), triangle_light()] {
+        let Light::Area(area) = &light else {
+            unreachable!()
+        };
+        assert_eq!(
+            area.jittered_points(1, Vec2::ZERO),
+            vec![area.to_oriented_point()]
+        );
+        for k in [2u32, 5, 16, 64] {
+            for rotation in [Vec2::ZERO, Vec2::new(0.3, 0.8)] {
+                let points = light.as_point_lights(k, rotation);
+                assert_eq!(points.len(), k as usize);
+                let total: Vec3 = points.iter().map(Light::power).sum();
+                assert!(
+                    close(total, light.power(), 1e-5),
+                    "{total} vs {}",
+                    light.power()
+                );
+                for p in &points {
+                    let Light::OrientedPoint(p) = p else {
+                        panic!("{p:?} is not a cosine point light")
+                    };
+                    assert!((p.normal - area.shape.mean_normal()).length() < 1e-5);
+                    // On the plane of the light and within its bounds.
+                    assert!(
+                        (p.position.y - 0.99).abs() < 1e-5 || (p.position.y - 1.0).abs() < 1e-5
+                    );
+                    assert!(p.position.x >= -0.5 - 1e-5 && p.position.x <= 0.5 + 1e-5);
+                }
+            }
+        }
+        // The centred rectangle's stratified points average to its centroid.
+        if let AreaShape::Rectangle { .. } = area.shape {
+            let points = area.jittered_points(16, Vec2::ZERO);
+            let mean = points.iter().map(|p| p.position).sum::<Vec3>() / 16.0;
+            assert!((mean - area.shape.centroid()).length() < 1e-5, "{mean}");
+        }
+    }
+    // Point lights pass through unchanged.
+    for light in point_lights() {
+        assert_eq!(light.as_point_lights(8, Vec2::ZERO), vec![light.clone()]);
+    }
+}
+
+/// The centred Hammersley pattern: one point per x stratum for every n,
+/// one per y stratum for powers of two, the centre for n = 1.
+#[test]
+fn centred_hammersley_is_stratified() {
+    use lustre_geometry::light::hammersley_centred;
+    assert_eq!(hammersley_centred(0, 1), Vec2::splat(0.5));
+    for n in [1u32, 2, 3, 4, 7, 8, 16, 64] {
+        let mut xs = vec![0; n as usize];
+        let mut ys = vec![0; n as usize];
+        for i in 0..n {
+            let p = hammersley_centred(i, n);
+            assert!(p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0, "{p}");
+            xs[(p.x * n as f32) as usize] += 1;
+            ys[(p.y * n as f32) as usize] += 1;
+        }
+        assert!(xs.iter().all(|&c| c == 1), "n = {n}: x strata {xs:?}");
+        if n.is_power_of_two() {
+            assert!(ys.iter().all(|&c| c == 1), "n = {n}: y strata {ys:?}");
+        }
+    }
+}

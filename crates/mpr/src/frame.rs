@@ -2,10 +2,14 @@
 //! section 7): one command encoder per frame runs the passes in order (clear
 //! HDR, depth pre-pass, emitters, Gouraud vertex radiance, direct light,
 //! diffuse textures, photon splats, tone map) into
-//! any `TextureView`. Shadow maps are rendered per light pose, not per frame
+//! any `TextureView`; [`FrameGraph::render_accumulated`] averages jittered
+//! frames for antialiasing (section 7). Shadow maps are rendered per light pose, not per frame
 //! ([`FrameGraph::update_shadows`]).
 
 use lustre_geometry::Camera;
+use lustre_geometry::light::hammersley_centred;
+
+use crate::passes::accumulate::AccumulatePass;
 
 use crate::passes::depth::DepthPass;
 use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
@@ -65,6 +69,8 @@ pub struct FrameGraph {
     pub diffuse: Option<DiffuseTexturePass>,
     /// The splat pass ([`FrameGraph::with_splats`]).
     pub splat: Option<SplatPass>,
+    /// The accumulation of jittered frames ([`FrameGraph::with_accumulation`]).
+    pub accumulate: Option<AccumulatePass>,
     /// The final tone map.
     pub tonemap: TonemapPass,
 }
@@ -79,6 +85,7 @@ impl FrameGraph {
             direct: None,
             diffuse: None,
             splat: None,
+            accumulate: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
         })
     }
@@ -171,17 +178,144 @@ impl FrameGraph {
         Ok(self)
     }
 
+    /// Adds the accumulation pass of [`FrameGraph::render_accumulated`] for HDR targets of `hdr_format`.
+    pub fn with_accumulation(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+    ) -> Result<Self> {
+        self.accumulate = Some(AccumulatePass::new(ctx, hdr_format)?);
+        Ok(self)
+    }
+
     /// Records and submits one frame in one command encoder: clear HDR to
     /// black (passes add light into it), depth pre-pass, emitters, Gouraud
     /// vertex radiance, direct light, splats, tone map to `output`.
     pub fn render(&self, ctx: &GpuContext, frame: &FrameInputs<'_>) -> Result<()> {
-        self.depth.prepare(&ctx.queue, frame.camera);
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
-        let splat = match (&frame.splats, &self.splat) {
-            (Some(inputs), Some(pass)) => {
-                pass.prepare(&ctx.queue, frame.camera, inputs.filtering);
-                Some((inputs, pass))
-            }
+        let passes = self.resolve(frame)?;
+        self.prepare_camera(ctx, &passes, frame.camera);
+        ctx.checked_result("frame", || {
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame"),
+                });
+            self.encode_light(ctx, &mut encoder, frame, &passes)?;
+            self.tonemap.encode(
+                &ctx.device,
+                &mut encoder,
+                &frame.targets.hdr.view,
+                frame.output,
+            );
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })
+    }
+
+    /// Antialiasing by jittered accumulation (Diefenbach & Badler 1997,
+    /// section 7): the frame rendered `samples` times, each through
+    /// `frame.camera` shifted to sample every pixel at the next offset of
+    /// [`hammersley_centred`] (a box filter over the pixel), each added with
+    /// weight `1/samples` into [`RenderTargets::accumulation`], whose average
+    /// is copied into the HDR target and tone mapped to `output`. Before
+    /// sample `s`, `before_sample(s)` may change the scene's lights (paired
+    /// light jitter, section 4.4). With `Splats::Once` the fill-bound splat
+    /// pass runs once, unjittered, after the average (over a fresh depth
+    /// pre-pass through the pixel centres): its kernels are smooth, only the
+    /// surface edges it is restricted to stay point sampled. `samples <= 1`
+    /// is [`FrameGraph::render`], bit for bit.
+    pub fn render_accumulated(
+        &self,
+        ctx: &GpuContext,
+        frame: &FrameInputs<'_>,
+        samples: u32,
+        splats: AccumulatedSplats,
+        before_sample: &mut dyn FnMut(u32) -> Result<()>,
+    ) -> Result<()> {
+        if samples <= 1 {
+            before_sample(0)?;
+            return self.render(ctx, frame);
+        }
+        let Some(accumulate) = &self.accumulate else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "frame",
+                message: "jittered accumulation needs the accumulation pass \
+                          (FrameGraph::with_accumulation)"
+                    .into(),
+            });
+        };
+        self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
+        let passes = self.resolve(frame)?;
+        let (width, height) = (frame.targets.width, frame.targets.height);
+        let weight = 1.0 / samples as f32;
+        let splat_once = splats == AccumulatedSplats::Once && passes.splat.is_some();
+        let jittered_passes = ResolvedPasses {
+            splat: if splat_once { None } else { passes.splat },
+            ..passes
+        };
+        for s in 0..samples {
+            before_sample(s)?;
+            let camera =
+                frame
+                    .camera
+                    .with_pixel_offset(hammersley_centred(s, samples), width, height);
+            self.prepare_camera(ctx, &jittered_passes, &camera);
+            ctx.checked_result("accumulated frame", || {
+                let mut encoder =
+                    ctx.device
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                            label: Some("accumulated-frame"),
+                        });
+                self.encode_light(ctx, &mut encoder, frame, &jittered_passes)?;
+                accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
+                if s + 1 == samples {
+                    let accumulation = &frame.targets.accumulation.texture;
+                    encoder.copy_texture_to_texture(
+                        accumulation.as_image_copy(),
+                        frame.targets.hdr.texture.as_image_copy(),
+                        accumulation.size(),
+                    );
+                    if splat_once {
+                        // Ordered after this submit's jittered camera (write_buffer applies at submit).
+                        ctx.queue.submit([encoder.finish()]);
+                        encoder =
+                            ctx.device
+                                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                                    label: Some("splats-once"),
+                                });
+                        self.depth.prepare(&ctx.queue, frame.camera);
+                        if let Some((inputs, pass)) = passes.splat {
+                            pass.prepare(&ctx.queue, frame.camera, inputs.filtering);
+                            self.depth.encode(&mut encoder, frame.scene, frame.targets);
+                            pass.encode(
+                                &ctx.device,
+                                &mut encoder,
+                                frame.scene,
+                                inputs.buffers,
+                                frame.targets,
+                                inputs.restriction,
+                            )?;
+                        }
+                    }
+                    self.tonemap.encode(
+                        &ctx.device,
+                        &mut encoder,
+                        &frame.targets.hdr.view,
+                        frame.output,
+                    );
+                }
+                ctx.queue.submit([encoder.finish()]);
+                Ok(())
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Pairs each input of `frame` with its pass; an input without its pass is an error.
+    fn resolve<'a>(&'a self, frame: &FrameInputs<'a>) -> Result<ResolvedPasses<'a>> {
+        let splat = match (frame.splats, &self.splat) {
+            (Some(inputs), Some(pass)) => Some((inputs, pass)),
             (Some(_), None) => {
                 return Err(crate::MprError::InvalidSetting {
                     what: "frame",
@@ -193,10 +327,7 @@ impl FrameGraph {
             (None, _) => None,
         };
         let direct = match (frame.direct, &self.direct) {
-            (Some(lights), Some(pass)) => {
-                pass.prepare(&ctx.queue, frame.camera);
-                Some((lights, pass))
-            }
+            (Some(lights), Some(pass)) => Some((lights, pass)),
             (Some(_), None) => {
                 return Err(crate::MprError::InvalidSetting {
                     what: "frame",
@@ -208,10 +339,7 @@ impl FrameGraph {
             (None, _) => None,
         };
         let diffuse = match (frame.diffuse, &self.diffuse) {
-            (Some(textures), Some(pass)) => {
-                pass.prepare(&ctx.queue, frame.camera);
-                Some((textures, pass))
-            }
+            (Some(textures), Some(pass)) => Some((textures, pass)),
             (Some(_), None) => {
                 return Err(crate::MprError::InvalidSetting {
                     what: "frame",
@@ -222,52 +350,84 @@ impl FrameGraph {
             }
             (None, _) => None,
         };
-        if let Some(emission) = &self.emission {
-            emission.prepare(&ctx.queue, frame.camera);
-        }
-        if let Some(gouraud) = &self.gouraud {
-            gouraud.prepare(&ctx.queue, frame.camera);
-        }
-        ctx.checked_result("frame", || {
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("frame"),
-                });
-            clear_hdr(&mut encoder, frame.targets);
-            self.depth.encode(&mut encoder, frame.scene, frame.targets);
-            if let Some(emission) = &self.emission {
-                emission.encode(&mut encoder, frame.scene, frame.targets);
-            }
-            if let Some(gouraud) = &self.gouraud {
-                gouraud.encode(&mut encoder, frame.scene, frame.targets)?;
-            }
-            if let Some((lights, pass)) = direct {
-                pass.encode(&mut encoder, frame.scene, frame.targets, lights);
-            }
-            if let Some((textures, pass)) = diffuse {
-                pass.encode(&mut encoder, frame.scene, frame.targets, textures);
-            }
-            if let Some((inputs, pass)) = splat {
-                pass.encode(
-                    &ctx.device,
-                    &mut encoder,
-                    frame.scene,
-                    inputs.buffers,
-                    frame.targets,
-                    inputs.restriction,
-                )?;
-            }
-            self.tonemap.encode(
-                &ctx.device,
-                &mut encoder,
-                &frame.targets.hdr.view,
-                frame.output,
-            );
-            ctx.queue.submit([encoder.finish()]);
-            Ok(())
+        Ok(ResolvedPasses {
+            splat,
+            direct,
+            diffuse,
         })
     }
+
+    /// Writes `camera` into every pass of the frame.
+    fn prepare_camera(&self, ctx: &GpuContext, passes: &ResolvedPasses<'_>, camera: &Camera) {
+        self.depth.prepare(&ctx.queue, camera);
+        if let Some((inputs, pass)) = passes.splat {
+            pass.prepare(&ctx.queue, camera, inputs.filtering);
+        }
+        if let Some((_, pass)) = passes.direct {
+            pass.prepare(&ctx.queue, camera);
+        }
+        if let Some((_, pass)) = passes.diffuse {
+            pass.prepare(&ctx.queue, camera);
+        }
+        if let Some(emission) = &self.emission {
+            emission.prepare(&ctx.queue, camera);
+        }
+        if let Some(gouraud) = &self.gouraud {
+            gouraud.prepare(&ctx.queue, camera);
+        }
+    }
+
+    /// Records the passes that add light into the HDR target, cleared first (section 7.2).
+    fn encode_light(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        passes: &ResolvedPasses<'_>,
+    ) -> Result<()> {
+        clear_hdr(encoder, frame.targets);
+        self.depth.encode(encoder, frame.scene, frame.targets);
+        if let Some(emission) = &self.emission {
+            emission.encode(encoder, frame.scene, frame.targets);
+        }
+        if let Some(gouraud) = &self.gouraud {
+            gouraud.encode(encoder, frame.scene, frame.targets)?;
+        }
+        if let Some((lights, pass)) = passes.direct {
+            pass.encode(encoder, frame.scene, frame.targets, lights);
+        }
+        if let Some((textures, pass)) = passes.diffuse {
+            pass.encode(encoder, frame.scene, frame.targets, textures);
+        }
+        if let Some((inputs, pass)) = passes.splat {
+            pass.encode(
+                &ctx.device,
+                encoder,
+                frame.scene,
+                inputs.buffers,
+                frame.targets,
+                inputs.restriction,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Whether [`FrameGraph::render_accumulated`] jitters the splat pass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AccumulatedSplats {
+    /// Splats drawn in every jittered frame (every edge antialiased, `N` times the fill).
+    EverySample,
+    /// Splats drawn once through the pixel centres over the average.
+    Once,
+}
+
+/// A frame's inputs paired with the graph's passes.
+#[derive(Clone, Copy)]
+struct ResolvedPasses<'a> {
+    splat: Option<(SplatInputs<'a>, &'a SplatPass)>,
+    direct: Option<(&'a DirectLights, &'a DirectPass)>,
+    diffuse: Option<(&'a DiffuseTextures, &'a DiffuseTexturePass)>,
 }
 
 /// Clears the HDR target to zero radiance, the start of light accumulation (section 7.2).

@@ -46,6 +46,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ("shaders/common/material.wgsl", material_module()),
         ("passes/depth.wgsl", DEPTH_WGSL.to_owned()),
         (
+            "passes/accumulate.wgsl",
+            crate::passes::accumulate::ACCUMULATE_WGSL.to_owned(),
+        ),
+        (
             "passes/splat.wgsl",
             with_materials(crate::passes::splat::SPLAT_WGSL),
         ),

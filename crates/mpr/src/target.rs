@@ -86,6 +86,9 @@ pub struct RenderTargets {
     pub depth: Target,
     /// Scene surface id per pixel ([`SURFACE_ID_FORMAT`], [`NO_SURFACE`] where none).
     pub surface_id: Target,
+    /// The accumulation buffer of jittered frames, in the HDR format
+    /// (Diefenbach & Badler 1997, section 7; [`crate::passes::accumulate`]).
+    pub accumulation: Target,
 }
 
 impl RenderTargets {
@@ -117,6 +120,7 @@ impl RenderTargets {
             hdr: Target::new(ctx, "hdr", width, height, hdr_format),
             depth: Target::new(ctx, "depth", width, height, ctx.depth_format()),
             surface_id: Target::new(ctx, "surface-id", width, height, SURFACE_ID_FORMAT),
+            accumulation: Target::new(ctx, "accumulation", width, height, hdr_format),
         })
     }
 

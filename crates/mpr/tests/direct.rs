@@ -8,12 +8,15 @@
 mod support;
 
 use glam::{Affine3A, Vec2, Vec3};
-use lustre_geometry::light::{Light, OrientedPointLight, PointLight, SpotLight};
+use lustre_geometry::light::{
+    Light, OrientedPointLight, PointLight, SpotLight, jittered_point_lights,
+};
+use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Rgb, Scene, WorldTriangle, builtin};
 use lustre_mpr::material::{GlossyModel, scene_materials};
 use lustre_mpr::passes::depth::DepthPass;
 use lustre_mpr::passes::direct::{
-    DirectLights, DirectPass, DirectPixel, direct_pass_cpu, direct_pixels_cpu,
+    DirectLights, DirectPass, DirectPixel, cpu_brdf, direct_pass_cpu, direct_pixels_cpu_with_lights,
 };
 use lustre_mpr::passes::shadow::{NO_OCCLUDER, ShadowSettings, shadow_cube_cpu};
 use lustre_mpr::readback::{read_rgba_f32, read_u32};
@@ -244,13 +247,15 @@ fn near_shadow_boundary(cpu: &[DirectPixel], size: u32) -> Vec<bool> {
 fn compare(
     name: &str,
     scene: &Scene,
+    lights: &[Light],
     camera: &Camera,
     glossy: GlossyModel,
     gpu: &[[f32; 4]],
     ids: &[u32],
 ) -> String {
     let bvh = Bvh::build(scene);
-    let cpu = direct_pixels_cpu(scene, &bvh, camera, SIZE, SIZE, glossy).unwrap();
+    let cpu =
+        direct_pixels_cpu_with_lights(scene, lights, &bvh, camera, SIZE, SIZE, glossy).unwrap();
     let edges = edge_distance_image(scene, camera, SIZE);
     let shadow_edges = near_shadow_boundary(&cpu, SIZE);
     let max = cpu.iter().flat_map(|p| p.radiance).fold(0.0f32, f32::max);
@@ -337,7 +342,10 @@ fn gpu_direct_light_matches_cpu_on_cornell_and_glosbox() {
             for &glossy in models {
                 let (gpu, ids) = gpu_direct(&ctx, &scene, camera, glossy, SIZE);
                 let label = format!("{name} camera {k} {glossy:?}");
-                eprintln!("{}", compare(&label, &scene, camera, glossy, &gpu, &ids));
+                eprintln!(
+                    "{}",
+                    compare(&label, &scene, scene.lights(), camera, glossy, &gpu, &ids)
+                );
                 images.push(gpu);
             }
             if let [exact, fitted] = &images[..] {
@@ -725,7 +733,7 @@ fn moved_lights_are_shaded_at_their_new_pose_after_their_shadows_are_redrawn() {
         ..target
     });
     let materials = scene_materials(&scene, GlossyModel::Exact).unwrap();
-    let mut lights = DirectLights::with_settings(
+    let lights = DirectLights::with_settings(
         &ctx,
         &direct,
         &[start],
@@ -744,6 +752,7 @@ fn moved_lights_are_shaded_at_their_new_pose_after_their_shadows_are_redrawn() {
         compare(
             "cornell, moved light",
             &scene,
+            scene.lights(),
             &camera,
             GlossyModel::Exact,
             &gpu,
@@ -752,4 +761,184 @@ fn moved_lights_are_shaded_at_their_new_pose_after_their_shadows_are_redrawn() {
     );
     let err = lights.set_lights(&direct, &ctx.queue, &[]).unwrap_err();
     assert!(matches!(err, MprError::InvalidSetting { .. }), "{err}");
+}
+
+/// Soft shadows (Diefenbach & Badler 1997, section 4.4): `cornell`'s area
+/// light as `K` jittered point lights, each with its own shadow cube, through
+/// [`DirectLights::jittered`] on the GPU against the CPU twin with the same lights.
+#[test]
+fn jittered_point_lights_on_the_gpu_match_the_cpu_twin() {
+    let Some(ctx) = gpu_or_skip("jittered_point_lights_on_the_gpu_match_the_cpu_twin") else {
+        return;
+    };
+    for name in ["cornell", "glosbox"] {
+        let scene = builtin(name).unwrap();
+        let camera = scene.camera().with_aspect(1.0);
+        let k = 16;
+        let direct = DirectPass::new(&ctx, ctx.hdr_format()).unwrap();
+        let lights = DirectLights::jittered(&ctx, &direct, &scene, GlossyModel::Exact, k).unwrap();
+        assert_eq!(
+            lights.len(),
+            k as usize,
+            "one shadow cube per jittered light"
+        );
+        let points = jittered_point_lights(scene.lights(), k, Vec2::ZERO);
+        let total: Rgb = points.iter().map(Light::power).sum();
+        let area: Rgb = scene.lights().iter().map(Light::power).sum();
+        assert!(
+            (total - area).abs().max_element() <= 1e-5 * area.max_element(),
+            "the jittered lights carry the area light's power: {total} vs {area}"
+        );
+        let (gpu, ids) = render_direct(&ctx, &scene, &camera, &direct, &lights, SIZE);
+        eprintln!(
+            "{}",
+            compare(
+                &format!("{name}, {k} jittered lights"),
+                &scene,
+                &points,
+                &camera,
+                GlossyModel::Exact,
+                &gpu,
+                &ids
+            )
+        );
+    }
+}
+
+/// A small deterministic generator for the brute-force integral (SplitMix64).
+fn splitmix(state: &mut u64) -> f32 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// The direct radiance of `cornell` by brute force: per pixel `M` stratified
+/// random points on the area light (`Light::sample_direct`, the solid-angle
+/// estimator of `∫ L f cos θᵢ dω`) with BVH shadow rays; and the fraction of them visible.
+fn brute_force_direct(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Camera,
+    size: u32,
+    m: u32,
+) -> Vec<(f64, f64)> {
+    let eps = 1e-4 * scene.bounds().extent().max_element();
+    let light = &scene.lights()[0];
+    let side = (m as f64).sqrt() as u32;
+    (0..size * size)
+        .map(|i| {
+            let (x, y) = (i % size, i / size);
+            let ray = camera.primary_ray(Camera::pixel_ndc(x, y, size, size, Vec2::splat(0.5)));
+            let Some(hit) = bvh.closest_hit(&ray) else {
+                return (0.0, 0.0);
+            };
+            let wo = -ray.direction;
+            let n = if hit.shading_normal.dot(wo) < 0.0 {
+                -hit.shading_normal
+            } else {
+                hit.shading_normal
+            };
+            let frame = Frame::from_normal(n);
+            let brdf = cpu_brdf(
+                &scene.materials()[hit.material as usize].model,
+                GlossyModel::Exact,
+            )
+            .unwrap();
+            let mut state = u64::from(i) * 0x1234_5678 + 1;
+            let (mut sum, mut seen, mut toward) = (0.0f64, 0u32, 0u32);
+            for j in 0..side * side {
+                let u = Vec2::new(
+                    ((j % side) as f32 + splitmix(&mut state)) / side as f32,
+                    ((j / side) as f32 + splitmix(&mut state)) / side as f32,
+                );
+                let Some(sample) = light.sample_direct(hit.position, u) else {
+                    continue;
+                };
+                let wi = frame.to_local(sample.direction);
+                if wi.z <= 0.0 {
+                    continue;
+                }
+                toward += 1;
+                let shadow = lustre_geometry::Ray::segment(
+                    hit.position,
+                    sample.direction,
+                    eps,
+                    sample.distance - eps,
+                );
+                if bvh.any_hit(&shadow) {
+                    continue;
+                }
+                seen += 1;
+                sum += f64::from((brdf.eval(wi, frame.to_local(wo)) * sample.weight * wi.z).x);
+            }
+            let visible = if toward == 0 {
+                0.0
+            } else {
+                f64::from(seen) / f64::from(toward)
+            };
+            (sum / f64::from(side * side), visible)
+        })
+        .collect()
+}
+
+/// Diefenbach's jittered point lights estimate the area light's direct
+/// light: in the tall box's penumbra on `cornell` the CPU twin with `K`
+/// jittered lights approaches a brute-force Monte Carlo integral over the
+/// light with shadow rays as `K` grows, while one point light (the paper's
+/// replacement) shows a hard shadow there.
+#[test]
+fn jittered_point_lights_converge_to_the_area_light_in_the_penumbra() {
+    let scene = builtin("cornell").unwrap();
+    let bvh = Bvh::build(&scene);
+    let size = 48;
+    let camera = scene.camera().with_aspect(1.0);
+    let m = 4096;
+    let reference = brute_force_direct(&scene, &bvh, &camera, size, m);
+    // Penumbra: pixels from which part of the light is hidden, away from full shadow.
+    let penumbra: Vec<usize> = (0..reference.len())
+        .filter(|&i| (0.1..=0.9).contains(&reference[i].1) && reference[i].0 > 0.0)
+        .collect();
+    assert!(penumbra.len() >= 30, "{} penumbra pixels", penumbra.len());
+    let mut errors = Vec::new();
+    for k in [1u32, 4, 16, 64, 256] {
+        let lights = jittered_point_lights(scene.lights(), k, Vec2::ZERO);
+        let cpu = direct_pixels_cpu_with_lights(
+            &scene,
+            &lights,
+            &bvh,
+            &camera,
+            size,
+            size,
+            GlossyModel::Exact,
+        )
+        .unwrap();
+        let (mut se, mut sr) = (0.0, 0.0);
+        for &i in &penumbra {
+            let d = f64::from(cpu[i].radiance[0]) - reference[i].0;
+            se += d * d;
+            sr += reference[i].0 * reference[i].0;
+        }
+        let rel_rms = (se / sr).sqrt();
+        eprintln!(
+            "K = {k}: relative RMS error {rel_rms:.4} over {} penumbra pixels",
+            penumbra.len()
+        );
+        errors.push(rel_rms);
+    }
+    // The reference's own noise: M stratified samples, visibility a step over
+    // the light, relative standard deviation below ~1/sqrt(M) per pixel.
+    let noise = 1.0 / f64::from(m).sqrt();
+    for w in errors.windows(2) {
+        assert!(w[1] < w[0], "error grows with K: {errors:?}");
+    }
+    assert!(
+        errors[0] > 0.2,
+        "one point light misses the penumbra: {errors:?}"
+    );
+    // Stratified (Hammersley) light samples over a step in visibility
+    // converge at least as K^(-1/2): 16 times the lights, 4 times smaller.
+    assert!(errors[4] * 4.0 <= errors[2], "{errors:?}");
+    assert!(errors[4] <= 0.05 + 3.0 * noise, "{errors:?}");
 }

@@ -197,23 +197,29 @@ fn temporaries(dir: &std::path::Path) -> Vec<String> {
 #[test]
 fn render_writes_the_image_and_its_sidecar_and_nothing_else() {
     let dir = scratch("render");
-    for (technique, file) in [("splat", "g.exr"), ("splat-direct", "g.png")] {
+    for (technique, file, extra) in [
+        ("splat", "g.exr", &[][..]),
+        (
+            "splat-direct",
+            "g.png",
+            &["--light-samples", "3", "--aa", "2"][..],
+        ),
+    ] {
         let out_path = dir.join(file);
-        let Some(out) = render_or_skip(
-            "render_writes_the_image_and_its_sidecar",
-            &[
-                "render",
-                "glosbox",
-                "--technique",
-                technique,
-                "--photons",
-                "5000",
-                "--size",
-                "48x32",
-                "--out",
-                out_path.to_str().unwrap(),
-            ],
-        ) else {
+        let mut args = vec![
+            "render",
+            "glosbox",
+            "--technique",
+            technique,
+            "--photons",
+            "5000",
+            "--size",
+            "48x32",
+            "--out",
+            out_path.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let Some(out) = render_or_skip("render_writes_the_image_and_its_sidecar", &args) else {
             return;
         };
         assert!(
@@ -230,6 +236,15 @@ fn render_writes_the_image_and_its_sidecar_and_nothing_else() {
         assert_eq!(sidecar["technique"], technique);
         assert_eq!(sidecar["size"], serde_json::json!([48, 32]));
         assert!(sidecar["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+        if technique == "splat-direct" {
+            // Three jittered point lights for glosbox's one area light, two AA samples.
+            assert_eq!(sidecar["light_samples"], 3, "{sidecar}");
+            assert_eq!(sidecar["direct_lights"], 3, "{sidecar}");
+            assert_eq!(sidecar["aa"], 2, "{sidecar}");
+        } else {
+            assert!(sidecar["light_samples"].is_null(), "{sidecar}");
+            assert!(sidecar["aa"].as_u64().is_some_and(|n| n >= 1), "{sidecar}");
+        }
         for phase in ["trace", "splat_setup", "frame", "total"] {
             assert!(
                 sidecar["timings_ms"][phase]
@@ -272,6 +287,14 @@ fn render_refuses_bad_options_before_writing_anything() {
         (
             vec!["render", "nosuchscene", "--out", out],
             "neither a built-in scene",
+        ),
+        (
+            vec!["render", "glosbox", "--light-samples", "0", "--out", out],
+            "--light-samples 0",
+        ),
+        (
+            vec!["render", "glosbox", "--aa", "0", "--out", out],
+            "--aa 0",
         ),
     ];
     for (args, expected) in cases {

@@ -16,19 +16,25 @@
 //! `depth.wgsl` does and both mark it `@invariant`, which keeps the depths
 //! bit-identical (checked on lavapipe by the tests).
 //!
-//! Area lights are not rendered here: the paper replaces small area lights
-//! by point lights of equal power (section 3), which
-//! `AreaLight::to_oriented_point` does; passing one is an error.
+//! Area lights are not rendered here as such: the paper replaces small area
+//! lights by point lights of equal power (section 3), which
+//! `AreaLight::to_oriented_point` does, and Diefenbach & Badler 1997 (section
+//! 4.4) by `K` jittered point lights of power `Φ/K` each, which soften the
+//! shadows (`lustre_geometry::light::jittered_point_lights`,
+//! [`DirectLights::jittered`], [`direct_pixels_cpu_with_lights`]); passing an
+//! area light itself is an error.
 //!
 //! A frame: [`DirectPass::encode_shadows`] once per light or scene pose,
 //! then per frame [`DirectPass::prepare`] and, after the depth pre-pass,
 //! [`DirectPass::encode`].
 
+use std::cell::Cell;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use lustre_brdf::models::{DiefenbachPhong, Mixture};
 use lustre_brdf::{BoxedBrdf, Fresnel};
-use lustre_geometry::light::Light;
+use lustre_geometry::light::{Light, jittered_point_lights};
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
@@ -138,7 +144,7 @@ impl GpuLight {
 /// One light's uniform block, shadow cube and bind group.
 #[derive(Debug)]
 struct LightSlot {
-    light: GpuLight,
+    light: Cell<GpuLight>,
     uniforms: wgpu::Buffer,
     cube: ShadowCube,
     bind_group: wgpu::BindGroup,
@@ -166,6 +172,25 @@ impl DirectLights {
             ctx,
             pass,
             scene.lights(),
+            &scene_materials(scene, glossy)?,
+            ShadowSettings::default(),
+        )
+    }
+
+    /// The scene's lights with each area light as `k` jittered point lights
+    /// (Diefenbach & Badler 1997, section 4.4; `k = 1`: one point light of
+    /// equal power, Stürzlinger & Bastos 1997, section 3), default [`ShadowSettings`].
+    pub fn jittered(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        scene: &Scene,
+        glossy: GlossyModel,
+        k: u32,
+    ) -> Result<Self> {
+        Self::with_settings(
+            ctx,
+            pass,
+            &jittered_point_lights(scene.lights(), k, Vec2::ZERO),
             &scene_materials(scene, glossy)?,
             ShadowSettings::default(),
         )
@@ -239,7 +264,7 @@ impl DirectLights {
             pass.shadow
                 .prepare(&ctx.queue, &cube, light.position(), settings.near);
             slots.push(LightSlot {
-                light,
+                light: Cell::new(light),
                 uniforms,
                 cube,
                 bind_group,
@@ -254,9 +279,11 @@ impl DirectLights {
     }
 
     /// Moves or changes the lights (same count as before); their shadow cubes
-    /// must then be redrawn with [`DirectPass::encode_shadows`].
+    /// must then be redrawn with [`DirectPass::encode_shadows`]. Takes `&self`
+    /// so that a frame in progress can move its jittered lights between
+    /// accumulation samples (Diefenbach & Badler 1997, section 4.4).
     pub fn set_lights(
-        &mut self,
+        &self,
         pass: &DirectPass,
         queue: &wgpu::Queue,
         lights: &[Light],
@@ -276,8 +303,8 @@ impl DirectLights {
             .enumerate()
             .map(|(i, l)| GpuLight::new(i, l, &self.settings))
             .collect::<Result<Vec<_>>>()?;
-        for (slot, light) in self.slots.iter_mut().zip(gpu_lights) {
-            slot.light = light;
+        for (slot, light) in self.slots.iter().zip(gpu_lights) {
+            slot.light.set(light);
             queue.write_buffer(&slot.uniforms, 0, bytemuck::bytes_of(&light));
             pass.shadow
                 .prepare(queue, &slot.cube, light.position(), self.settings.near);
@@ -314,8 +341,8 @@ impl DirectLights {
     }
 
     /// The lights as the GPU sees them.
-    pub fn lights(&self) -> impl Iterator<Item = &GpuLight> {
-        self.slots.iter().map(|s| &s.light)
+    pub fn lights(&self) -> impl Iterator<Item = GpuLight> + '_ {
+        self.slots.iter().map(|s| s.light.get())
     }
 
     /// The shadow cube of light `index`.
@@ -615,7 +642,21 @@ pub fn direct_pixels_cpu(
     height: u32,
     glossy: GlossyModel,
 ) -> Result<Vec<DirectPixel>> {
-    if let Some(i) = scene.lights().iter().position(|l| !l.is_delta()) {
+    direct_pixels_cpu_with_lights(scene, scene.lights(), bvh, camera, width, height, glossy)
+}
+
+/// [`direct_pixels_cpu`] lit by `lights` (point lights, e.g. an area light's
+/// jittered points, Diefenbach & Badler 1997, section 4.4) instead of the scene's.
+pub fn direct_pixels_cpu_with_lights(
+    scene: &Scene,
+    lights: &[Light],
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    glossy: GlossyModel,
+) -> Result<Vec<DirectPixel>> {
+    if let Some(i) = lights.iter().position(|l| !l.is_delta()) {
         return Err(area_light_error(i));
     }
     let brdfs = scene
@@ -656,7 +697,7 @@ pub fn direct_pixels_cpu(
             let brdf = &brdfs[hit.material as usize];
             let mut radiance = Rgb::ZERO;
             let mut visible = 0u64;
-            for (j, light) in scene.lights().iter().enumerate() {
+            for (j, light) in lights.iter().enumerate() {
                 let Some(sample) = light.sample_direct(hit.position, Vec2::ZERO) else {
                     continue;
                 };

@@ -1,5 +1,6 @@
 //! One module per pass, its WGSL beside it (DESIGN.md "Layout").
 
+pub mod accumulate;
 pub mod depth;
 pub mod diffuse_texture;
 pub mod direct;
