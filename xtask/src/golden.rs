@@ -443,7 +443,7 @@ fn bless_case(
 }
 
 /// `image` averaged over `k × k` blocks to `width × height`, when its sides are the same integer multiple `k` of those.
-fn box_downsample_to(image: &Image, width: u32, height: u32) -> Option<Image> {
+pub(crate) fn box_downsample_to(image: &Image, width: u32, height: u32) -> Option<Image> {
     let k = image.width() / width;
     if k == 0 || image.width() != k * width || image.height() != k * height {
         return None;
