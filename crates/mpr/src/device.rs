@@ -281,10 +281,20 @@ mod wayland_quiet {
     /// libwayland's message when `XDG_RUNTIME_DIR` is unset or invalid.
     pub const NOISE: &str = "error: XDG_RUNTIME_DIR is invalid or not set in the environment.";
 
+    /// Serialises the captures of concurrent device creations (parallel tests).
+    #[cfg(unix)]
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
     /// Runs `f`, filtering [`NOISE`] out of what it writes to stderr when there is no desktop session.
     pub fn run<T>(f: impl FnOnce() -> T) -> T {
         #[cfg(unix)]
         if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            // Stderr is one per process: one capture at a time, or a second
+            // thread would save the first's file as "the original" and
+            // leave stderr pointing at it.
+            let _one_at_a_time = ONE_AT_A_TIME
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
             if let Some(capture) = Capture::start() {
                 let value = f();
                 capture.finish();
