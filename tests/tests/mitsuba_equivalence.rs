@@ -28,6 +28,8 @@ const BLOCK: usize = 8;
 const ALPHA: f64 = 1e-4;
 /// Largest relative difference of the image means, per channel.
 const MEAN_TOLERANCE: f64 = 0.01;
+/// The Mitsuba release the references were rendered with (`tests/references/*.json`; `cargo xtask reference` installs it).
+const MITSUBA_VERSION: &str = "3.9.1";
 /// Mitsuba's variant for the test: the scalar one needs nothing beyond the wheel.
 const VARIANT: &str = "scalar_rgb";
 
@@ -45,13 +47,25 @@ fn mitsuba_python() -> Option<PathBuf> {
     let why = if !python.exists() {
         Some(format!("{} does not exist", python.display()))
     } else {
-        let ok = Command::new(&python)
-            .args(["-c", "import mitsuba, numpy"])
-            .stdout(Stdio::null())
+        let output = Command::new(&python)
+            .args(["-c", "import mitsuba, numpy; print(mitsuba.__version__)"])
             .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success());
-        (!ok).then(|| format!("{} cannot import mitsuba and numpy", python.display()))
+            .output();
+        match output {
+            Ok(out) if out.status.success() => {
+                let version = String::from_utf8_lossy(&out.stdout).trim().to_owned();
+                (version != MITSUBA_VERSION).then(|| {
+                    format!(
+                        "{} has Mitsuba {version}, not the references' {MITSUBA_VERSION}",
+                        python.display()
+                    )
+                })
+            }
+            _ => Some(format!(
+                "{} cannot import mitsuba and numpy",
+                python.display()
+            )),
+        }
     };
     match why {
         None => Some(python),

@@ -32,6 +32,10 @@ struct Measurement {
 /// writes beside them.
 pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     let selected = |bench: &str| filter.is_none_or(|f| bench.contains(f));
+    // Only results this run wrote count: criterion keeps every earlier run's
+    // results (another size, another bench's configuration) beside them.
+    // One second of slack for file systems with coarse timestamps.
+    let started = std::time::SystemTime::now() - std::time::Duration::from_secs(1);
     for (package, bench) in BENCHES {
         if selected(bench) {
             crate::ci::cargo(&["bench", "-p", package, "--bench", bench, "--", "--noplot"])?;
@@ -40,13 +44,16 @@ pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     let root = crate::workspace_root();
     let criterion = criterion_dir(&root);
     let mut results = Vec::new();
-    collect(&criterion, &mut results)?;
+    collect(&criterion, &mut results, started)?;
     results.sort_by(|a, b| a.id.cmp(&b.id));
     let path = root.join("BENCHMARKS.md");
     let previous = std::fs::read_to_string(&path).unwrap_or_default();
+    // The CPU tables are rewritten only when every CPU bench ran (from this
+    // run's results alone); otherwise they stay as they were.
     let cpu_ran = BENCHES
         .iter()
-        .any(|(_, bench)| !matches!(*bench, "splat" | "detp" | "quasi_static") && selected(bench));
+        .filter(|(_, bench)| !matches!(*bench, "splat" | "detp" | "quasi_static"))
+        .all(|(_, bench)| selected(bench));
     let mut text = if cpu_ran || previous.is_empty() {
         let mut text = render(&results);
         // Keep the marker-delimited sections other subcommands own (`converge`).
@@ -59,14 +66,27 @@ pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     } else {
         previous
     };
-    let splat_setups = read_splat_setups(&criterion.join(SPLAT_GROUP))?;
+    let splat_setups = read_splat_setups(&criterion.join(SPLAT_GROUP), started)?;
     if !splat_setups.is_empty() {
         let mut body = String::new();
         splat_tables(&mut body, &results, &splat_setups);
         text = replace_section(&text, SPLAT_SECTION, body.trim_start_matches('\n'));
     }
-    let density = density_tables(&results, &criterion.join(QUASI_STATIC_GROUP))?;
-    if !density.is_empty() {
+    // Both density benches write one section: rewrite it only when both ran.
+    let density_ran = ["detp", "quasi_static"].iter().all(|b| selected(b));
+    if !density_ran && ["detp", "quasi_static"].iter().any(|b| selected(b)) {
+        println!(
+            "xtask: the density section needs both the detp and quasi_static benches; left as it was"
+        );
+    }
+    let density = density_tables(
+        &results,
+        &criterion.join(QUASI_STATIC_GROUP),
+        started,
+        &machine(),
+        std::env::var_os("DETP_BENCH_FULL").is_some(),
+    )?;
+    if density_ran && !density.is_empty() {
         text = replace_section(&text, DENSITY_SECTION, density.trim_start_matches('\n'));
     }
     let tmp = path.with_extension("md.tmp");
@@ -165,8 +185,20 @@ pub fn write_section(name: &str, body: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Finds every `new/benchmark.json` + `new/estimates.json` pair under `dir`.
-fn collect(dir: &Path, out: &mut Vec<Measurement>) -> anyhow::Result<()> {
+/// Whether the file at `path` was modified at or after `since`.
+fn written_since(path: &Path, since: std::time::SystemTime) -> bool {
+    std::fs::metadata(path)
+        .and_then(|m| m.modified())
+        .is_ok_and(|t| t >= since)
+}
+
+/// Finds every `new/benchmark.json` + `new/estimates.json` pair under `dir`
+/// whose estimates were written at or after `since` (this run's results).
+fn collect(
+    dir: &Path,
+    out: &mut Vec<Measurement>,
+    since: std::time::SystemTime,
+) -> anyhow::Result<()> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Ok(());
     };
@@ -176,6 +208,9 @@ fn collect(dir: &Path, out: &mut Vec<Measurement>) -> anyhow::Result<()> {
             continue;
         }
         if path.file_name().is_some_and(|n| n == "new") {
+            if !written_since(&path.join("estimates.json"), since) {
+                continue;
+            }
             let read = |name: &str| -> anyhow::Result<Value> {
                 let p = path.join(name);
                 let text = std::fs::read_to_string(&p)
@@ -191,7 +226,7 @@ fn collect(dir: &Path, out: &mut Vec<Measurement>) -> anyhow::Result<()> {
                 elements: benchmark["throughput"]["Elements"].as_f64(),
             });
         } else {
-            collect(&path, out)?;
+            collect(&path, out, since)?;
         }
     }
     Ok(())
@@ -221,8 +256,8 @@ fn render(results: &[Measurement]) -> String {
     );
     let _ = writeln!(
         s,
-        "Machine: {}. GPU adapter: none for the CPU benches; the photon splatting section names \
-         the adapter it ran on.\n",
+        "Each section names the machine (and adapter) it ran on. The BVH, BRDF and photon \
+         tracing tables: {}, CPU only.\n",
         machine()
     );
     let _ = writeln!(s, "## BVH closest hit (lustre-geometry, obvhs CWBVH)\n");
@@ -316,11 +351,14 @@ struct SplatSetup {
     cpu_busy: Option<(f64, f64)>,
 }
 
-/// Reads every `<configuration>.json` the splat bench wrote in `dir`, in [`SPLAT_CONFIGS`] order.
-fn read_splat_setups(dir: &Path) -> anyhow::Result<Vec<SplatSetup>> {
+/// Reads every `<configuration>.json` the splat bench wrote in `dir` at or after `since`, in [`SPLAT_CONFIGS`] order.
+fn read_splat_setups(dir: &Path, since: std::time::SystemTime) -> anyhow::Result<Vec<SplatSetup>> {
     let mut setups = Vec::new();
     for name in SPLAT_CONFIGS {
         let path = dir.join(format!("{name}.json"));
+        if !written_since(&path, since) {
+            continue;
+        }
         let Ok(text) = std::fs::read_to_string(&path) else {
             continue;
         };
@@ -487,7 +525,10 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
          (3 polygons) and Office (4,072 polygons, MGF) scenes do not exist in Lustre, so only \
          the Glosbox rows have our figures. Our `glosbox` has {surfaces} surfaces ({triangles} \
          triangles). Table 1 may count photon hits rather than emitted photons (figure 3 shows \
-         \"one million photon hits\"); our `full-*` rows emit the stated number of photons.\n",
+         \"one million photon hits\"); our `full-*` rows emit the stated number of photons. C is \
+         the kernel constant of equation 3 (support h = C √(A/n)): the paper used 30 to 50, \
+         `lustre render` defaults to 16, and the splat bench uses the C of each row; the splat \
+         area, and so the fill-bound splat pass, grows about as C².\n",
         first.width,
         first.height,
         adapters.join("; ")
@@ -507,15 +548,15 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
         let _ = writeln!(s, "{title}\n");
         let _ = writeln!(
             s,
-            "| scene | polygons | {photons_header} | paper s/frame | ours | our splats | our \
+            "| scene | polygons | {photons_header} | paper s/frame | ours | our C | our splats | our \
              s/frame, surface-id | our s/frame, stencil |"
         );
-        let _ = writeln!(s, "|---|---:|---:|---:|---|---:|---:|---:|");
+        let _ = writeln!(s, "|---|---:|---:|---:|---|---:|---:|---:|---:|");
         for &(scene, polygons, photons, paper) in rows {
             if scene != "Glosbox" {
                 let _ = writeln!(
                     s,
-                    "| {scene} | {polygons} | {photons} | {paper} | no such scene in Lustre | – \
+                    "| {scene} | {polygons} | {photons} | {paper} | no such scene in Lustre | – | – \
                      | – | – |"
                 );
                 continue;
@@ -523,7 +564,7 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
             if glosbox.is_empty() {
                 let _ = writeln!(
                     s,
-                    "| {scene} | {polygons} | {photons} | {paper} | not measured | – | – | – |"
+                    "| {scene} | {polygons} | {photons} | {paper} | not measured | – | – | – | – |"
                 );
             }
             for (i, (x, t)) in glosbox.iter().enumerate() {
@@ -534,10 +575,11 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
                 };
                 let _ = writeln!(
                     s,
-                    "| {paper_cells} | `{}`: {} photons emitted, {} hit records | {} | {} | {} |",
+                    "| {paper_cells} | `{}`: {} photons emitted, {} hit records | {} | {} | {} | {} |",
                     x.name,
                     count(x.emitted),
                     count(x.hit_records),
+                    x.kernel_c,
                     count(x.splats),
                     seconds(t.frame_surface_id),
                     seconds(t.frame_stencil)
@@ -697,13 +739,22 @@ const PAPER_FRAMES: &[(u64, f64)] = &[(1_000, 0.11), (10_000, 0.46)];
 const TARGET_FRAME_MS: f64 = 40.0;
 
 /// "Quasi-static recalculation" (the quasi_static bench) and "DETP speed-ups" (the detp bench), empty when neither ran.
-fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String> {
+/// The quasi-static and DETP speed-up sections from this run's results and
+/// the quasi_static bench's JSON files in `dir` written at or after `since`,
+/// naming `machine` and the DETP bench's size (`full`: `DETP_BENCH_FULL` set).
+fn density_tables(
+    results: &[Measurement],
+    dir: &Path,
+    since: std::time::SystemTime,
+    machine: &str,
+    full: bool,
+) -> anyhow::Result<String> {
     let mut s = String::new();
     let mut setups: Vec<(String, Value)> = Vec::new();
     if let Ok(entries) = std::fs::read_dir(dir) {
         for entry in entries.flatten() {
             let path = entry.path();
-            if path.extension().is_some_and(|e| e == "json") {
+            if path.extension().is_some_and(|e| e == "json") && written_since(&path, since) {
                 let text = std::fs::read_to_string(&path)
                     .with_context(|| format!("cannot read {}", path.display()))?;
                 let value: Value = serde_json::from_str(&text)
@@ -736,8 +787,8 @@ fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String>
              figure 2.4 for Impact Count, a full estimate for Photon Maps), including each point's \
              irradiance. DETP uses the paper's radius, 1 % of the scene (0.02 m), and the tuned disc \
              index; the `detp_<speed-up>` rows use the Möller pre-test, the sorted ray cache, the \
-             segment grid (cells 2r) or brute force instead (sections 2.6–2.8); Photon Maps k = 50. Median over the frames criterion ran, on the machine above \
-             (CPU only, rayon over all cores). Memory per photon is the ray set's bytes (primary rays \
+             segment grid (cells 2r) or brute force instead (sections 2.6–2.8); Photon Maps k = 50. Median over the frames criterion ran. \
+             Machine: {machine}, CPU only (rayon over all cores). Memory per photon is the ray set's bytes (primary rays \
              and their segments) over the photons emitted. Written by `cargo xtask bench quasi_static` \
              (`LUSTRE_BENCH_DENSITY_MAX=1000000` adds 1M photons).\n"
         );
@@ -816,8 +867,13 @@ fn density_tables(results: &[Measurement], dir: &Path) -> anyhow::Result<String>
              sweep per radius in the form of table 2.2 (`leaf_r<radius>/leaf_<n>`), and the mobile \
              object's discs moved each frame (`mobile_<n>discs/...`). Written by `cargo xtask bench detp`; \
              `DETP_BENCH_FULL=1` uses the paper-sized setting (0.05 m edges, 23,979 discs, 100,000 photons, \
-             262,574 segments), where brute force runs once outside criterion and prints its time (about \
-             38 s at r = 0.05 on the machine above, 114× the tuned disc index); brute-force rows are left out.\n"
+             262,574 segments), where brute force runs once outside criterion and prints its time; \
+             brute-force rows are left out. Size of these rows: {}. Machine: {machine}, CPU only.\n",
+            if full {
+                "the paper-sized setting (`DETP_BENCH_FULL=1`)"
+            } else {
+                "the bench's small default (no `DETP_BENCH_FULL`)"
+            }
         );
         let _ = writeln!(s, "| benchmark | median |");
         let _ = writeln!(s, "|---|---:|");
@@ -889,9 +945,65 @@ mod tests {
             s.contains("Software driver: 2000 ms per 1M splats") && s.contains("missed by 8.0×"),
             "{s}"
         );
+        // The paper tables state our C.
+        assert!(
+            s.contains("`full-250k`: 250k photons emitted, 500k hit records | 4 | 500k | 2.00 |"),
+            "{s}"
+        );
         let mut empty = String::new();
         splat_tables(&mut empty, &results, &[]);
         assert!(empty.is_empty());
+    }
+
+    #[test]
+    fn only_results_written_since_the_run_began_count() {
+        let dir = std::env::temp_dir().join(format!("lustre-bench-since-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let write = |group: &str| {
+            let new = dir.join(group).join("new");
+            std::fs::create_dir_all(&new).unwrap();
+            std::fs::write(
+                new.join("benchmark.json"),
+                format!(r#"{{"full_id": "{group}", "throughput": null}}"#),
+            )
+            .unwrap();
+            std::fs::write(
+                new.join("estimates.json"),
+                r#"{"median": {"point_estimate": 1000.0}}"#,
+            )
+            .unwrap();
+        };
+        write("old");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        let started = std::time::SystemTime::now();
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        write("fresh");
+        let mut results = Vec::new();
+        collect(&dir, &mut results, started).unwrap();
+        let ids: Vec<&str> = results.iter().map(|r| r.id.as_str()).collect();
+        assert_eq!(ids, ["fresh"]);
+        let mut all = Vec::new();
+        collect(&dir, &mut all, std::time::UNIX_EPOCH).unwrap();
+        assert_eq!(all.len(), 2);
+        // Density sections name the machine and the size.
+        let text = density_tables(
+            &[Measurement {
+                id: "detp_r0.05/disc_index/none".into(),
+                median_ns: 1e6,
+                elements: None,
+            }],
+            &dir,
+            started,
+            "Test CPU, 2 cores available",
+            false,
+        )
+        .unwrap();
+        assert!(
+            text.contains("Size of these rows: the bench's small default")
+                && text.contains("Machine: Test CPU, 2 cores available, CPU only."),
+            "{text}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -21,7 +21,7 @@ pub fn cargo(args: &[&str]) -> anyhow::Result<()> {
 
 /// Format check, clippy with warnings denied, every test of the workspace
 /// (closing with one line that sums the test binaries' results), then the
-/// golden images (closing with their own summary line).
+/// golden images and the reference checks (each closing with its own summary line).
 pub fn run() -> anyhow::Result<()> {
     cargo(&["fmt", "--all", "--", "--check"])?;
     cargo(&[
@@ -33,7 +33,10 @@ pub fn run() -> anyhow::Result<()> {
         "warnings",
     ])?;
     test_workspace()?;
-    crate::golden::run(None)
+    // Both image checks run before either failure is reported.
+    let golden = crate::golden::run(None);
+    let reference = crate::reference_check::run(crate::reference_check::Args::all());
+    golden.and(reference)
 }
 
 /// Runs `cargo test --workspace`, echoing its output, and prints the totals

@@ -15,6 +15,12 @@ use lustre_image::{Image, read_exr};
 use serde_json::Value;
 
 use crate::render::{Lustre, Render, Scratch};
+use crate::surfaces::{SurfaceMap, relative_mse_over};
+
+/// The meshes whose pixels get their own relMSE column: the floor (glossy
+/// in glosbox) and the large box (gold in glosbox), where speckled glossy
+/// reflections hide in the whole-image number.
+const PER_SURFACE: &[(&str, &str)] = &[("floor", "floor"), ("large-box", "large box")];
 
 /// The seed of every convergence render.
 const SEED: &str = "1";
@@ -72,6 +78,8 @@ struct Row {
     frame_ms: Option<f64>,
     /// Relative MSE against the reference (ε = 0.01).
     rel_mse: f64,
+    /// Relative MSE over the pixels that see only each of [`PER_SURFACE`]'s meshes.
+    surface_rel_mse: Vec<Option<f64>>,
     /// Mean FLIP against the reference.
     flip_mean: f32,
     /// Render time from the sidecar's `timings_ms`.
@@ -121,8 +129,13 @@ fn measure(
     photons: u64,
     kernel_c: &str,
     render: &Render,
+    surfaces: &[Vec<usize>],
 ) -> Result<Row> {
     let rel_mse = metrics::relative_mse(&render.image, &reference.image, RELATIVE_MSE_EPSILON)?;
+    let surface_rel_mse = surfaces
+        .iter()
+        .map(|pixels| relative_mse_over(&render.image, &reference.image, pixels))
+        .collect();
     let flip = metrics::flip(&render.image, &reference.image, EXPOSURE)?;
     Ok(Row {
         scene: reference.scene.clone(),
@@ -135,6 +148,7 @@ fn measure(
             .and_then(|t| t.get("frame"))
             .and_then(Value::as_f64),
         rel_mse,
+        surface_rel_mse,
         flip_mean: flip.mean,
         time_ms: render_time_ms(&render.sidecar),
         adapter: render.adapter().to_owned(),
@@ -156,8 +170,13 @@ pub(crate) fn thousands(n: u64) -> String {
 
 /// One table row, in Markdown.
 fn table_row(row: &Row) -> String {
+    let surfaces: String = row
+        .surface_rel_mse
+        .iter()
+        .map(|r| r.map_or(" - |".to_owned(), |r| format!(" {r:.5} |")))
+        .collect();
     format!(
-        "| {} | {} | {} | {:.5} | {:.4} | {} | {} |",
+        "| {} | {} | {} | {:.5} |{surfaces} {:.4} | {} | {} |",
         row.technique,
         thousands(row.photons),
         row.kernel_c,
@@ -181,7 +200,14 @@ fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -
          with `lustre render` at the reference's size with `--seed {SEED}` and the kernel constant C of equation 3 shown. relMSE = 1/(3N) Σ (t − r)² \
          / (r² + {RELATIVE_MSE_EPSILON}) over pixels and channels (Rousselle, Knaus & Zwicker 2011); \
          FLIP is the mean LDR-FLIP of both images tone mapped at exposure {EXPOSURE} \
-         ({PIXELS_PER_DEGREE} pixels per degree). Time is the sidecar's `timings_ms.total` (or the sum of its entries).\n"
+         ({PIXELS_PER_DEGREE} pixels per degree). relMSE per surface counts only the pixels whose \
+         {rays} stratified camera rays all hit that mesh first (lustre-geometry's camera and BVH; the \
+         references are box-filtered, so edge pixels belong to no surface): the floor (glossy in \
+         glosbox) and the large box (gold in glosbox). Time is the sidecar's `timings_ms.total` (or the sum of its entries).\n",
+        rays = {
+            let n = crate::surfaces::RAYS_PER_AXIS;
+            format!("{n} × {n}")
+        }
     );
     let _ = writeln!(
         s,
@@ -203,11 +229,19 @@ fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -
             reference.image.height(),
             reference.scene
         );
+        let surfaces: String = PER_SURFACE
+            .iter()
+            .map(|(_, shown)| format!(" relMSE {shown} |"))
+            .collect();
         let _ = writeln!(
             s,
-            "| technique | photons | C | relMSE | mean FLIP | GPU frame (ms) | total (ms) |"
+            "| technique | photons | C | relMSE |{surfaces} mean FLIP | GPU frame (ms) | total (ms) |"
         );
-        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|");
+        let _ = writeln!(
+            s,
+            "|---|---:|---:|---:|{}---:|---:|---:|",
+            "---:|".repeat(PER_SURFACE.len())
+        );
         for row in rows.iter().filter(|r| r.scene == reference.scene) {
             let _ = writeln!(s, "{}", table_row(row));
         }
@@ -230,6 +264,11 @@ fn converge(
     for scene in &args.scenes {
         let reference = load_reference(references_dir, scene)?;
         let size = format!("{}x{}", reference.image.width(), reference.image.height());
+        let map = SurfaceMap::of_builtin(scene, reference.image.width(), reference.image.height())?;
+        let surfaces = PER_SURFACE
+            .iter()
+            .map(|(mesh, _)| Ok(map.pixels_of(map.mesh(mesh)?)))
+            .collect::<Result<Vec<_>>>()?;
         for technique in &args.techniques {
             for kernel_c in &args.kernel_c {
                 for &photons in &args.photons {
@@ -248,7 +287,7 @@ fn converge(
                         SEED,
                     ];
                     let result = lustre.render(scene, &render_args, &out).and_then(|render| {
-                        measure(&reference, technique, photons, kernel_c, &render)
+                        measure(&reference, technique, photons, kernel_c, &render, &surfaces)
                     });
                     match result {
                         Ok(row) => {
@@ -332,7 +371,8 @@ mod tests {
     fn converges_through_a_fake_renderer() {
         let scratch = Scratch::new("xtask-converge-fake").unwrap();
         let dir = scratch.path();
-        let reference = Image::filled(8, 6, [0.5, 0.25, 0.125]).unwrap();
+        // 32 × 24: big enough that some pixels see only the floor or the large box.
+        let reference = Image::filled(32, 24, [0.5, 0.25, 0.125]).unwrap();
         write_exr(dir.join("glosbox.exr"), &reference, Precision::F32).unwrap();
         std::fs::write(
             dir.join("glosbox.json"),
@@ -352,10 +392,9 @@ mod tests {
         let (references, rows, failures) = converge(&lustre, dir, &args, dir).unwrap();
         assert_eq!(failures, 0);
         assert_eq!(rows.len(), 4);
-        assert!(
-            rows.iter()
-                .all(|r| r.rel_mse == 0.0 && r.flip_mean.abs() < 1e-6)
-        );
+        assert!(rows.iter().all(|r| r.rel_mse == 0.0
+            && r.flip_mean.abs() < 1e-6
+            && r.surface_rel_mse.iter().all(|s| *s == Some(0.0))));
         let text = section(
             &references,
             &rows,
@@ -367,11 +406,13 @@ mod tests {
             "{text}"
         );
         assert!(
-            text.contains("### glosbox (reference: Mitsuba 3, 4,096 spp, 8x6"),
+            text.contains("### glosbox (reference: Mitsuba 3, 4,096 spp, 32x24"),
             "{text}"
         );
         assert!(
-            text.contains("| splat-direct | 2,000,000 | 16 | 0.00000 | 0.0000 | - | 12 |"),
+            text.contains(
+                "| splat-direct | 2,000,000 | 16 | 0.00000 | 0.00000 | 0.00000 | 0.0000 | - | 12 |"
+            ),
             "{text}"
         );
         assert!(!text.contains("converge:start"));

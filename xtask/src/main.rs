@@ -7,7 +7,9 @@ mod converge;
 mod density_errors;
 mod golden;
 mod reference;
+mod reference_check;
 mod render;
+mod surfaces;
 
 pub use reference::workspace_root;
 
@@ -29,6 +31,8 @@ struct Cli {
 enum Command {
     /// Render path-traced references of the built-in scenes with Mitsuba 3.
     Reference(reference::Args),
+    /// Render every technique on every scene with a reference and hold relMSE, FLIP (mean, p99) and the mean luminance to per-case bounds.
+    ReferenceCheck(reference_check::Args),
     /// Run the criterion benches and write BENCHMARKS.md from their medians.
     Bench {
         /// Only the bench targets whose name contains this.
@@ -50,13 +54,14 @@ enum Command {
     Converge(converge::Args),
     /// Error (noise, bias, total) and per-frame times of the quasi-static estimators, into BENCHMARKS.md (García et al. tables 2.1, 2.6-2.8).
     DensityErrors(density_errors::Args),
-    /// The README's test command: format check, clippy with warnings denied, all tests, golden images.
+    /// The README's test command: format check, clippy with warnings denied, all tests, golden images, reference checks.
     Ci,
 }
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
         Command::Reference(args) => reference::run(args),
+        Command::ReferenceCheck(args) => reference_check::run(args),
         Command::Bench { filter } => bench::run(filter.as_deref()),
         Command::Golden { case } => golden::run(case.as_deref()),
         Command::Bless { case } => golden::bless(case.as_deref()),

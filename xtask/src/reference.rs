@@ -3,7 +3,8 @@
 //!
 //! The Python side (`xtask/python/mitsuba_render.py`) runs in the virtual
 //! environment `.mitsuba-venv` at the workspace root, created here with
-//! `python3 -m venv` and `pip install mitsuba numpy` when missing. Each scene
+//! `python3 -m venv` and `pip install mitsuba==3.9.1 numpy` when missing
+//! (a venv with another Mitsuba is reinstalled to [`MITSUBA_VERSION`]). Each scene
 //! gives `tests/references/<scene>.exr` (linear float32 RGB) and a sidecar
 //! `tests/references/<scene>.json` with the settings and timing.
 
@@ -275,7 +276,36 @@ pub fn run_helper(python: &Path, root: &Path, args: &[&str]) -> Result<serde_jso
     serde_json::from_str(last).with_context(|| format!("reading the helper's report {last:?}"))
 }
 
-/// Makes sure `.mitsuba-venv` exists and imports Mitsuba; returns its Python.
+/// The Mitsuba 3 release the references and the Mitsuba tests use (`tests/references/*.json` say 3.9.1).
+pub const MITSUBA_VERSION: &str = "3.9.1";
+
+/// The pip requirement of Mitsuba: exactly [`MITSUBA_VERSION`].
+fn mitsuba_requirement() -> String {
+    format!("mitsuba=={MITSUBA_VERSION}")
+}
+
+/// The pip requirement of numpy: the 2.x series the venv was built with (2.4.6), which Mitsuba 3.9 supports.
+const NUMPY_REQUIREMENT: &str = "numpy>=2.0,<3";
+
+/// What the venv's Python has: Mitsuba's version, or why it cannot import Mitsuba and numpy.
+fn venv_mitsuba(python: &Path) -> std::result::Result<String, String> {
+    let output = Command::new(python)
+        .args(["-c", "import mitsuba, numpy; print(mitsuba.__version__)"])
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", python.display()))?;
+    if !output.status.success() {
+        return Err(format!(
+            "{} cannot import mitsuba and numpy",
+            python.display()
+        ));
+    }
+    Ok(String::from_utf8_lossy(&output.stdout).trim().to_owned())
+}
+
+/// Makes sure `.mitsuba-venv` exists and imports Mitsuba [`MITSUBA_VERSION`]
+/// and numpy, installing them with pip when missing and reinstalling
+/// Mitsuba when the venv has another version; returns its Python.
 fn ensure_venv(root: &Path) -> Result<PathBuf> {
     let venv = root.join(".mitsuba-venv");
     let python = venv_python(root);
@@ -285,36 +315,55 @@ fn ensure_venv(root: &Path) -> Result<PathBuf> {
             venv.display()
         );
         run_checked(Command::new("python3").args(["-m", "venv"]).arg(&venv)).context(
-            "creating the virtual environment (is python3 with the venv module installed?)",
+            "creating the virtual environment (is python3 with the venv module installed? \
+             `apt-get install python3-venv`)",
         )?;
     }
-    if imports_mitsuba(&python) {
-        return Ok(python);
+    match venv_mitsuba(&python) {
+        Ok(version) if version == MITSUBA_VERSION => return Ok(python),
+        Ok(version) => eprintln!(
+            "reference: {} has Mitsuba {version}, but the references and tests use {MITSUBA_VERSION}; \
+             reinstalling {}",
+            venv.display(),
+            mitsuba_requirement()
+        ),
+        Err(why) => eprintln!(
+            "reference: {why}; installing {} and {NUMPY_REQUIREMENT} into {}",
+            mitsuba_requirement(),
+            venv.display()
+        ),
     }
-    eprintln!(
-        "reference: installing mitsuba and numpy into {}",
-        venv.display()
-    );
     run_checked(Command::new(&python).args(["-m", "pip", "install", "--upgrade", "pip"]))
         .context("upgrading pip")?;
-    run_checked(Command::new(&python).args(["-m", "pip", "install", "mitsuba", "numpy"]))
-        .context("installing mitsuba and numpy with pip")?;
-    ensure!(
-        imports_mitsuba(&python),
-        "{} still cannot import mitsuba after pip install",
-        python.display()
-    );
+    run_checked(Command::new(&python).args([
+        "-m",
+        "pip",
+        "install",
+        &mitsuba_requirement(),
+        NUMPY_REQUIREMENT,
+    ]))
+    .with_context(|| {
+        format!(
+            "installing {} and {NUMPY_REQUIREMENT} with pip",
+            mitsuba_requirement()
+        )
+    })?;
+    check_version(&python, venv_mitsuba(&python))?;
     Ok(python)
 }
 
-/// Whether `python` can import mitsuba and numpy.
-fn imports_mitsuba(python: &Path) -> bool {
-    Command::new(python)
-        .args(["-c", "import mitsuba, numpy"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
+/// Refuses a venv whose Mitsuba is not [`MITSUBA_VERSION`] after installing, saying what to do.
+fn check_version(python: &Path, found: std::result::Result<String, String>) -> Result<()> {
+    match found {
+        Ok(version) if version == MITSUBA_VERSION => Ok(()),
+        Ok(version) => bail!(
+            "{} has Mitsuba {version} after `pip install {}`; the references need \
+             {MITSUBA_VERSION}: remove .mitsuba-venv and run `cargo xtask reference --install-only`",
+            python.display(),
+            mitsuba_requirement()
+        ),
+        Err(why) => bail!("{why} after pip install"),
+    }
 }
 
 /// Runs a command with inherited output and fails on a non-zero exit.
@@ -341,4 +390,34 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         .inspect_err(|_| {
             let _ = std::fs::remove_file(&tmp);
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pinned_mitsuba_is_the_one_the_references_name() {
+        let dir = workspace_root().join("tests").join("references");
+        for scene in ["cornell", "glosbox"] {
+            let text = std::fs::read_to_string(dir.join(format!("{scene}.json"))).unwrap();
+            let sidecar: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(sidecar["mitsuba_version"], MITSUBA_VERSION, "{scene}");
+        }
+        assert_eq!(mitsuba_requirement(), "mitsuba==3.9.1");
+    }
+
+    #[test]
+    fn another_mitsuba_is_refused_with_what_to_do() {
+        let python = Path::new("/venv/bin/python");
+        assert!(check_version(python, Ok(MITSUBA_VERSION.to_owned())).is_ok());
+        let error = check_version(python, Ok("3.5.0".to_owned()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("Mitsuba 3.5.0") && error.contains("--install-only"),
+            "{error}"
+        );
+        assert!(check_version(python, Err("cannot import".to_owned())).is_err());
+    }
 }

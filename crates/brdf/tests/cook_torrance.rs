@@ -127,10 +127,20 @@ fn mitsuba_python() -> Option<PathBuf> {
     p.exists().then_some(p)
 }
 
+/// Skips the Mitsuba comparison with `why`, or fails when the environment
+/// variable `CI` is set (CI installs Mitsuba and must not skip), as
+/// `tests/tests/mitsuba_equivalence.rs` does.
+fn skip_or_fail_under_ci(why: &str) {
+    if std::env::var_os("CI").is_some() {
+        panic!("Mitsuba is required under CI: {why}; run `cargo xtask reference --install-only`");
+    }
+    eprintln!("skipping the Mitsuba comparison: {why}");
+}
+
 #[test]
 fn rough_conductor_matches_mitsuba_roughconductor() {
     let Some(python) = mitsuba_python() else {
-        eprintln!("skipping the Mitsuba comparison: no .mitsuba-venv (or LUSTRE_MITSUBA_PYTHON)");
+        skip_or_fail_under_ci("no .mitsuba-venv (or LUSTRE_MITSUBA_PYTHON)");
         return;
     };
     let alpha = 0.3_f32;
@@ -157,10 +167,7 @@ fn rough_conductor_matches_mitsuba_roughconductor() {
         .stderr(Stdio::piped())
         .spawn();
     let Ok(mut child) = child else {
-        eprintln!(
-            "skipping the Mitsuba comparison: cannot run {}",
-            python.display()
-        );
+        skip_or_fail_under_ci(&format!("cannot run {}", python.display()));
         return;
     };
     use std::io::Write;
@@ -172,10 +179,7 @@ fn rough_conductor_matches_mitsuba_roughconductor() {
         .unwrap();
     let out = child.wait_with_output().unwrap();
     if !out.status.success() {
-        eprintln!(
-            "skipping the Mitsuba comparison: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        skip_or_fail_under_ci(&String::from_utf8_lossy(&out.stderr));
         return;
     }
     let text = String::from_utf8(out.stdout).unwrap();

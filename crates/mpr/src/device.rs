@@ -125,8 +125,12 @@ impl GpuContext {
             wgpu::Backends::from_env().unwrap_or_else(wgpu::Instance::enabled_backend_features);
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = backends;
-        let instance = wgpu::Instance::new(desc);
-        let adapter = select_adapter(&instance, backends, preference)?;
+        let (_instance, adapter) = wayland_quiet::run(|| {
+            let instance = wgpu::Instance::new(desc);
+            let adapter = select_adapter(&instance, backends, preference);
+            (instance, adapter)
+        });
+        let adapter = adapter?;
         let info = adapter.get_info();
         let summary = AdapterSummary {
             name: info.name.clone(),
@@ -255,5 +259,126 @@ impl GpuContext {
         f: impl FnOnce() -> Result<T>,
     ) -> Result<T> {
         self.checked(what, f)?
+    }
+}
+
+/// Silences libwayland's complaint about a missing desktop session during
+/// adapter enumeration, and nothing else.
+///
+/// wgpu 30 enables `VK_KHR_wayland_surface` on every Vulkan instance it
+/// creates, even without a display handle, and Mesa's implicit
+/// `VK_LAYER_MESA_device_select` layer, seeing it, asks the Wayland compositor
+/// for the default GPU on each `vkEnumeratePhysicalDevices`: without
+/// `XDG_RUNTIME_DIR` (no desktop session: CI, ssh) libwayland prints
+/// [`wayland_quiet::NOISE`] to stderr twice. Neither wgpu's instance options
+/// nor anything else short of the environment (`NODEVICE_SELECT=1`, which
+/// safe Rust cannot set in-process) turns that off, so without a session the
+/// enumeration runs with stderr captured in an unlinked temporary file, and
+/// every captured line but that one is written back to stderr afterwards.
+mod wayland_quiet {
+    use std::io::{Read, Seek, Write};
+
+    /// libwayland's message when `XDG_RUNTIME_DIR` is unset or invalid.
+    pub const NOISE: &str = "error: XDG_RUNTIME_DIR is invalid or not set in the environment.";
+
+    /// Serialises the captures of concurrent device creations (parallel tests).
+    #[cfg(unix)]
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    /// Runs `f`, filtering [`NOISE`] out of what it writes to stderr when there is no desktop session.
+    pub fn run<T>(f: impl FnOnce() -> T) -> T {
+        #[cfg(unix)]
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            // Stderr is one per process: one capture at a time, or a second
+            // thread would save the first's file as "the original" and
+            // leave stderr pointing at it.
+            let _one_at_a_time = ONE_AT_A_TIME
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            if let Some(capture) = Capture::start() {
+                let value = f();
+                capture.finish();
+                return value;
+            }
+        }
+        f()
+    }
+
+    /// The lines of `captured` to write back: all but [`NOISE`].
+    pub fn kept(captured: &str) -> impl Iterator<Item = &str> {
+        captured.lines().filter(|line| line.trim_end() != NOISE)
+    }
+
+    /// Stderr redirected into a temporary file, restored on drop.
+    #[cfg(unix)]
+    struct Capture {
+        /// The original stderr.
+        saved: std::os::fd::OwnedFd,
+        /// Where stderr goes meanwhile (already unlinked).
+        file: std::fs::File,
+    }
+
+    #[cfg(unix)]
+    impl Capture {
+        /// Redirects stderr, or `None` (leaving it alone) when anything fails.
+        fn start() -> Option<Self> {
+            use std::os::fd::AsFd;
+            let path = std::env::temp_dir().join(format!(
+                "lustre-stderr-{}-{:?}",
+                std::process::id(),
+                std::thread::current().id()
+            ));
+            let file = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create_new(true)
+                .open(&path)
+                .ok();
+            let _ = std::fs::remove_file(&path);
+            let file = file?;
+            let _ = std::io::stderr().flush();
+            let saved = rustix::io::dup(std::io::stderr().as_fd()).ok()?;
+            rustix::stdio::dup2_stderr(file.as_fd()).ok()?;
+            Some(Self { saved, file })
+        }
+
+        /// Restores stderr and writes back what was captured, less [`NOISE`].
+        fn finish(mut self) {
+            self.restore();
+            let mut captured = String::new();
+            if self.file.rewind().is_ok() {
+                let _ = self.file.read_to_string(&mut captured);
+            }
+            for line in kept(&captured) {
+                eprintln!("{line}");
+            }
+        }
+
+        /// Points stderr back at the original.
+        fn restore(&self) {
+            let _ = std::io::stderr().flush();
+            let _ = rustix::stdio::dup2_stderr(&self.saved);
+        }
+    }
+
+    #[cfg(unix)]
+    impl Drop for Capture {
+        fn drop(&mut self) {
+            self.restore();
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn only_the_wayland_line_is_dropped() {
+            let captured = format!("{NOISE}\nMESA: warning: something real\n{NOISE}\n");
+            assert_eq!(
+                kept(&captured).collect::<Vec<_>>(),
+                vec!["MESA: warning: something real"]
+            );
+        }
     }
 }

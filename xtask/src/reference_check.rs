@@ -1,0 +1,589 @@
+//! `cargo xtask reference-check`: every technique of `lustre render` on every
+//! built-in scene with a path-traced reference (Mitsuba 3, 4096 spp, box
+//! filter, `tests/references/<scene>.exr`), held to bounds in CI.
+//!
+//! Each [`Case`] renders at a small size with few photons (CI runs on two
+//! cores with lavapipe), box-filters the 256 × 256 reference down to the
+//! render's size, and measures the relative MSE (Rousselle et al. 2011),
+//! FLIP's mean and 99th percentile, and the ratio of mean luminances. Each
+//! case states its bounds with the value measured beside them; a technique
+//! that gets worse fails. `--measure` renders every case and prints the
+//! measured values with bounds from [`Bounds::from_measured`], ready to
+//! paste into [`CASES`].
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use lustre_image::metrics::{self, RELATIVE_MSE_EPSILON, luminance};
+use lustre_image::{Image, Precision, read_exr, write_exr, write_png};
+
+use crate::golden::box_downsample_to;
+use crate::render::{Lustre, NoAdapter, Scratch, gpu_required};
+
+/// Pixels whose reference luminance exceeds this are emitters, left out of the mean luminance ratio.
+const EMITTER_LUMINANCE: f64 = 1.0;
+
+/// The exposure (stops) at which FLIP tone maps both images.
+const EXPOSURE: f32 = 0.0;
+
+/// Options of `cargo xtask reference-check`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Only the case with this name.
+    #[arg(long)]
+    case: Option<String>,
+    /// Print the measured values and bounds derived from them as Rust, ready to paste into `CASES`, instead of checking.
+    #[arg(long)]
+    measure: bool,
+}
+
+impl Args {
+    /// Every case, checked (what `cargo xtask ci` runs).
+    pub fn all() -> Self {
+        Self {
+            case: None,
+            measure: false,
+        }
+    }
+}
+
+/// The largest errors a case may have against the reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Largest relative MSE (ε = 0.01).
+    pub rel_mse: f64,
+    /// Largest mean FLIP.
+    pub flip_mean: f32,
+    /// Largest 99th percentile of FLIP: an object rendered wrong shows here.
+    pub flip_p99: f32,
+    /// Smallest and largest ratio of the render's mean luminance to the reference's, emitters left out: more or less light shows here.
+    pub mean_ratio: (f64, f64),
+}
+
+/// Margins of [`Bounds::from_measured`]: a re-render with the same seed on
+/// lavapipe gives the same values to four digits; the margins leave room for
+/// other adapters' arithmetic while 5 % more light (mean ratio +0.05) or a
+/// black object covering 1 % of the image (FLIP p99 near 1, relMSE +0.01)
+/// exceeds them (`bounds_catch_more_light_and_a_black_object`).
+pub mod margin {
+    /// relMSE may grow by this factor.
+    pub const REL_MSE_FACTOR: f64 = 1.1;
+    /// relMSE may also grow by this much (for cases with tiny relMSE).
+    pub const REL_MSE_ABSOLUTE: f64 = 0.002;
+    /// Mean FLIP may grow by this much.
+    pub const FLIP_MEAN: f32 = 0.01;
+    /// FLIP p99 may grow by this much.
+    pub const FLIP_P99: f32 = 0.05;
+    /// The mean luminance ratio may move by this much either way.
+    pub const MEAN_RATIO: f64 = 0.02;
+}
+
+impl Bounds {
+    /// The bounds a case gets from its measured values and [`margin`].
+    pub fn from_measured(m: &Measured) -> Self {
+        Self {
+            rel_mse: m.rel_mse * margin::REL_MSE_FACTOR + margin::REL_MSE_ABSOLUTE,
+            flip_mean: m.flip_mean + margin::FLIP_MEAN,
+            flip_p99: m.flip_p99 + margin::FLIP_P99,
+            mean_ratio: (
+                m.mean_ratio - margin::MEAN_RATIO,
+                m.mean_ratio + margin::MEAN_RATIO,
+            ),
+        }
+    }
+
+    /// What exceeds the bounds, one phrase each; empty when nothing does.
+    pub fn violations(&self, m: &Measured) -> Vec<String> {
+        let mut out = Vec::new();
+        if !(m.rel_mse <= self.rel_mse) {
+            out.push(format!("relMSE {:.5} > {:.5}", m.rel_mse, self.rel_mse));
+        }
+        if !(m.flip_mean <= self.flip_mean) {
+            out.push(format!(
+                "FLIP mean {:.4} > {:.4}",
+                m.flip_mean, self.flip_mean
+            ));
+        }
+        if !(m.flip_p99 <= self.flip_p99) {
+            out.push(format!("FLIP p99 {:.4} > {:.4}", m.flip_p99, self.flip_p99));
+        }
+        let (lo, hi) = self.mean_ratio;
+        if !(m.mean_ratio >= lo && m.mean_ratio <= hi) {
+            out.push(format!(
+                "mean luminance ratio {:.4} outside [{lo:.4}, {hi:.4}]",
+                m.mean_ratio
+            ));
+        }
+        out
+    }
+}
+
+/// One reference case: a technique on a scene, small and fast.
+#[derive(Debug)]
+pub struct Case {
+    /// Name of the case.
+    pub name: &'static str,
+    /// The built-in scene; its reference is `tests/references/<scene>.exr`.
+    pub scene: &'static str,
+    /// Options of `lustre render` after the scene (without `--out`).
+    pub args: &'static [&'static str],
+    /// The bounds (the measured values are in a comment beside them).
+    pub bounds: Bounds,
+}
+
+/// What a render's comparison with the reference gives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measured {
+    /// Relative MSE (ε = 0.01).
+    pub rel_mse: f64,
+    /// Mean FLIP.
+    pub flip_mean: f32,
+    /// 99th percentile of FLIP.
+    pub flip_p99: f32,
+    /// The render's mean luminance over the reference's, over the pixels that are not emitters in the reference.
+    pub mean_ratio: f64,
+}
+
+/// Compares `render` with `reference`, box-filtering the reference down to the render's size when it is larger.
+pub fn measure(render: &Image, reference: &Image) -> Result<Measured> {
+    let reference = if render.width() == reference.width() && render.height() == reference.height()
+    {
+        reference.clone()
+    } else {
+        box_downsample_to(reference, render.width(), render.height()).with_context(|| {
+            format!(
+                "the render is {}x{}, which does not divide the {}x{} reference",
+                render.width(),
+                render.height(),
+                reference.width(),
+                reference.height()
+            )
+        })?
+    };
+    let flip = metrics::flip(render, &reference, EXPOSURE)?;
+    // Emitters (reference luminance above 1, white at exposure 0) are left
+    // out: the light's few pixels carry a large share of the mean, so a
+    // change in the light reflected by the scene would hide behind them.
+    let lit: Vec<usize> = (0..reference.pixels().len())
+        .filter(|&i| luminance(reference.pixels()[i]) <= EMITTER_LUMINANCE)
+        .collect();
+    let mean_y = |image: &Image| {
+        lit.iter()
+            .map(|&i| luminance(image.pixels()[i]))
+            .sum::<f64>()
+    };
+    Ok(Measured {
+        rel_mse: metrics::relative_mse(render, &reference, RELATIVE_MSE_EPSILON)?,
+        flip_mean: flip.mean,
+        flip_p99: flip.p99,
+        mean_ratio: mean_y(render) / mean_y(&reference),
+    })
+}
+
+/// Shorthand for the cases' bounds.
+const fn bounds(rel_mse: f64, flip_mean: f32, flip_p99: f32, ratio: (f64, f64)) -> Bounds {
+    Bounds {
+        rel_mse,
+        flip_mean,
+        flip_p99,
+        mean_ratio: ratio,
+    }
+}
+
+/// The options shared by every case: 128 × 128 (the reference box-filtered 2 × 2), seed 1.
+macro_rules! small {
+    ($($arg:literal),*) => {
+        &["--size", "128x128", "--seed", "1", $($arg),*]
+    };
+}
+
+/// The reference cases; the bounds come from `cargo xtask reference-check
+/// --measure` (measured on lavapipe, llvmpipe Mesa 22.3.6, 2 cores, on main at
+/// 9b4ec86; the times are wall-clock on a shared machine). Leaving the
+/// emitters out, the techniques reflect 0.94–1.05 of the reference's light;
+/// with the light's pixels counted they were 4–9 % brighter (the light
+/// itself is brighter in the renders at 128 × 128).
+pub const CASES: &[Case] = &[
+    // CASES-START (generated by `cargo xtask reference-check --measure`)
+    // measured: relMSE 0.00602, FLIP mean 0.0824, p99 0.3058, mean ratio 0.9588 (7.0 s)
+    Case {
+        name: "cornell-splat",
+        scene: "cornell",
+        args: small!("--technique", "splat", "--photons", "200000"),
+        bounds: bounds(0.00863, 0.0924, 0.3558, (0.9388, 0.9788)),
+    },
+    // measured: relMSE 0.00627, FLIP mean 0.0793, p99 0.2851, mean ratio 0.9717 (0.9 s)
+    Case {
+        name: "cornell-splat-direct",
+        scene: "cornell",
+        args: small!("--technique", "splat-direct", "--photons", "200000"),
+        bounds: bounds(0.00889, 0.0893, 0.3351, (0.9517, 0.9917)),
+    },
+    // measured: relMSE 0.00605, FLIP mean 0.0831, p99 0.2679, mean ratio 0.9857 (1.9 s)
+    Case {
+        name: "cornell-detp",
+        scene: "cornell",
+        args: small!("--technique", "detp", "--photons", "200000"),
+        bounds: bounds(0.00866, 0.0931, 0.3179, (0.9657, 1.0057)),
+    },
+    // measured: relMSE 0.00454, FLIP mean 0.0689, p99 0.1939, mean ratio 1.0065 (0.8 s)
+    Case {
+        name: "cornell-impact",
+        scene: "cornell",
+        args: small!("--technique", "impact", "--photons", "200000"),
+        bounds: bounds(0.00700, 0.0789, 0.2439, (0.9865, 1.0265)),
+    },
+    // measured: relMSE 0.02111, FLIP mean 0.1019, p99 0.5126, mean ratio 1.0467 (1.1 s)
+    Case {
+        name: "cornell-photonmap",
+        scene: "cornell",
+        args: small!("--technique", "photonmap", "--photons", "200000"),
+        bounds: bounds(0.02523, 0.1119, 0.5626, (1.0267, 1.0667)),
+    },
+    // measured: relMSE 0.01240, FLIP mean 0.0982, p99 0.3815, mean ratio 0.9640 (6.8 s)
+    Case {
+        name: "glosbox-splat",
+        scene: "glosbox",
+        args: small!("--technique", "splat", "--photons", "200000"),
+        bounds: bounds(0.01564, 0.1082, 0.4315, (0.9440, 0.9840)),
+    },
+    // measured: relMSE 0.01296, FLIP mean 0.0956, p99 0.3882, mean ratio 0.9706 (2.1 s)
+    Case {
+        name: "glosbox-splat-direct",
+        scene: "glosbox",
+        args: small!("--technique", "splat-direct", "--photons", "200000"),
+        bounds: bounds(0.01626, 0.1056, 0.4382, (0.9506, 0.9906)),
+    },
+    // measured: relMSE 0.01878, FLIP mean 0.1052, p99 0.4211, mean ratio 0.9790 (15.2 s)
+    Case {
+        name: "glosbox-detp",
+        scene: "glosbox",
+        args: small!("--technique", "detp", "--photons", "200000"),
+        bounds: bounds(0.02265, 0.1152, 0.4711, (0.9590, 0.9990)),
+    },
+    // measured: relMSE 0.02083, FLIP mean 0.1248, p99 0.8438, mean ratio 0.9392 (0.7 s)
+    Case {
+        name: "glosbox-impact",
+        scene: "glosbox",
+        args: small!("--technique", "impact", "--photons", "200000"),
+        bounds: bounds(0.02492, 0.1348, 0.8938, (0.9192, 0.9592)),
+    },
+    // measured: relMSE 0.02757, FLIP mean 0.1489, p99 0.8415, mean ratio 0.9639 (0.9 s)
+    Case {
+        name: "glosbox-photonmap",
+        scene: "glosbox",
+        args: small!("--technique", "photonmap", "--photons", "200000"),
+        bounds: bounds(0.03233, 0.1589, 0.8915, (0.9439, 0.9839)),
+    },
+    // CASES-END
+];
+
+/// The cases to run: all, or the one named.
+fn select(name: Option<&str>) -> Result<Vec<&'static Case>> {
+    match name {
+        None => Ok(CASES.iter().collect()),
+        Some(name) => match CASES.iter().find(|c| c.name == name) {
+            Some(case) => Ok(vec![case]),
+            None => bail!(
+                "no reference case `{name}`; the cases are: {}",
+                CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
+            ),
+        },
+    }
+}
+
+/// One case's outcome.
+enum Outcome {
+    /// Rendered and measured in `seconds`.
+    Measured(Measured, f64),
+    /// No adapter, and none required.
+    Skipped(String),
+}
+
+/// Renders `case` and measures it against its reference.
+fn run_case(lustre: &Lustre, case: &Case, scratch: &Path, require_gpu: bool) -> Result<Outcome> {
+    let reference_path = crate::workspace_root()
+        .join("tests")
+        .join("references")
+        .join(format!("{}.exr", case.scene));
+    let reference = read_exr(&reference_path)
+        .with_context(|| format!("reading the reference {}", reference_path.display()))?;
+    let out = scratch.join(format!("{}.exr", case.name));
+    let start = Instant::now();
+    let render = match lustre.render(case.scene, case.args, &out) {
+        Ok(render) => render,
+        Err(error) => match error.downcast_ref::<NoAdapter>() {
+            Some(no_adapter) if !require_gpu => {
+                return Ok(Outcome::Skipped(format!(
+                    "{no_adapter} (set LUSTRE_REQUIRE_GPU to make this a failure)"
+                )));
+            }
+            _ => return Err(error),
+        },
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    Ok(Outcome::Measured(
+        measure(&render.image, &reference)?,
+        seconds,
+    ))
+}
+
+/// The measured values of a case as a line.
+fn shown(m: &Measured) -> String {
+    format!(
+        "relMSE {:.5}, FLIP mean {:.4}, p99 {:.4}, mean ratio {:.4}",
+        m.rel_mse, m.flip_mean, m.flip_p99, m.mean_ratio
+    )
+}
+
+/// A case as Rust, with its measured values in the comment and bounds from them.
+fn case_source(case: &Case, m: &Measured, seconds: f64) -> String {
+    let b = Bounds::from_measured(m);
+    let args = case
+        .args
+        .iter()
+        .skip(4)
+        .map(|a| format!("{a:?}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let mut s = String::new();
+    let _ = writeln!(s, "    // measured: {} ({seconds:.1} s)", shown(m));
+    let _ = writeln!(s, "    Case {{");
+    let _ = writeln!(s, "        name: {:?},", case.name);
+    let _ = writeln!(s, "        scene: {:?},", case.scene);
+    let _ = writeln!(s, "        args: small!({args}),");
+    let _ = writeln!(
+        s,
+        "        bounds: bounds({:.5}, {:.4}, {:.4}, ({:.4}, {:.4})),",
+        b.rel_mse, b.flip_mean, b.flip_p99, b.mean_ratio.0, b.mean_ratio.1
+    );
+    let _ = writeln!(s, "    }},");
+    s
+}
+
+/// Runs `cargo xtask reference-check`: every case (or the one named), one
+/// line each, then `reference: N passed, N failed, N skipped`; with
+/// `--measure`, the cases as Rust with bounds from the measured values.
+pub fn run(args: Args) -> Result<()> {
+    let cases = select(args.case.as_deref())?;
+    let lustre = Lustre::build()?;
+    let scratch = Scratch::new("reference-check")?;
+    let require_gpu = gpu_required();
+    let (mut passed, mut failed, mut skipped) = (0, 0, 0);
+    let mut source = String::new();
+    for case in cases {
+        match run_case(&lustre, case, scratch.path(), require_gpu) {
+            Ok(Outcome::Measured(m, seconds)) if args.measure => {
+                println!("reference {:<28} {} ({seconds:.1} s)", case.name, shown(&m));
+                source.push_str(&case_source(case, &m, seconds));
+                passed += 1;
+            }
+            Ok(Outcome::Measured(m, seconds)) => {
+                let violations = case.bounds.violations(&m);
+                if violations.is_empty() {
+                    println!(
+                        "reference {:<28} pass  {} ({seconds:.1} s)",
+                        case.name,
+                        shown(&m)
+                    );
+                    passed += 1;
+                } else {
+                    let kept = keep_failure(scratch.path(), case)?;
+                    println!(
+                        "reference {:<28} FAIL  {} ({seconds:.1} s); wrote {kept}",
+                        case.name,
+                        violations.join(", ")
+                    );
+                    failed += 1;
+                }
+            }
+            Ok(Outcome::Skipped(reason)) => {
+                println!("reference {:<28} skip  {reason}", case.name);
+                skipped += 1;
+            }
+            Err(error) => {
+                println!("reference {:<28} FAIL  {error:#}", case.name);
+                failed += 1;
+            }
+        }
+    }
+    if args.measure {
+        println!("\n// Paste between CASES-START and CASES-END in xtask/src/reference_check.rs:");
+        print!("{source}");
+    }
+    println!("reference: {passed} passed, {failed} failed, {skipped} skipped");
+    if failed > 0 {
+        bail!("{failed} reference case(s) failed");
+    }
+    Ok(())
+}
+
+/// Copies a failing render out of the scratch directory to
+/// `target/reference-check/<name>.exr` and `.png`, and says where.
+fn keep_failure(scratch: &Path, case: &Case) -> Result<String> {
+    let dir = crate::workspace_root()
+        .join("target")
+        .join("reference-check");
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let image = read_exr(scratch.join(format!("{}.exr", case.name)))?;
+    let exr = dir.join(format!("{}.exr", case.name));
+    write_exr(&exr, &image, Precision::F32)?;
+    write_png(exr.with_extension("png"), &image, EXPOSURE)?;
+    Ok(exr.with_extension("png").display().to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surfaces::SurfaceMap;
+
+    /// The glosbox reference at 128 × 128 with a deterministic ±20 %
+    /// per-pixel noise: an image with a render's kind of error.
+    fn noisy_render() -> (Image, Image) {
+        let reference = read_exr(
+            crate::workspace_root()
+                .join("tests")
+                .join("references")
+                .join("glosbox.exr"),
+        )
+        .unwrap();
+        let small = box_downsample_to(&reference, 128, 128).unwrap();
+        let mut render = small.clone();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for p in render.pixels_mut() {
+            // xorshift64*: the same noise every run.
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            let u = (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32;
+            *p = p.map(|c| c * (0.8 + 0.4 * u));
+        }
+        (render, reference)
+    }
+
+    #[test]
+    fn bounds_catch_more_light_and_a_black_object() {
+        let (render, reference) = noisy_render();
+        let m = measure(&render, &reference).unwrap();
+        assert!(m.rel_mse > 0.002 && m.flip_mean > 0.01, "{m:?}");
+        let bounds = Bounds::from_measured(&m);
+        assert!(bounds.violations(&m).is_empty());
+
+        // 5 % more light everywhere.
+        let mut brighter = render.clone();
+        for p in brighter.pixels_mut() {
+            *p = p.map(|c| c * 1.05);
+        }
+        let brighter_m = measure(&brighter, &reference).unwrap();
+        eprintln!("noisy {m:?}\n5 % brighter {brighter_m:?}");
+        let violations = bounds.violations(&brighter_m);
+        assert!(
+            violations.iter().any(|v| v.contains("mean luminance")),
+            "{violations:?}"
+        );
+
+        // 5 % less light.
+        let mut darker = render.clone();
+        for p in darker.pixels_mut() {
+            *p = p.map(|c| c * 0.95);
+        }
+        assert!(
+            !bounds
+                .violations(&measure(&darker, &reference).unwrap())
+                .is_empty()
+        );
+
+        // The gold box black.
+        let map = SurfaceMap::of_builtin("glosbox", 128, 128).unwrap();
+        let gold = map.pixels_of(map.mesh("large-box").unwrap());
+        let mut black_box = render.clone();
+        for &i in &gold {
+            black_box.pixels_mut()[i] = [0.0; 3];
+        }
+        let black_m = measure(&black_box, &reference).unwrap();
+        eprintln!("gold box black {black_m:?}");
+        let violations = bounds.violations(&black_m);
+        assert!(
+            violations.iter().any(|v| v.contains("p99"))
+                && violations.iter().any(|v| v.contains("relMSE")),
+            "{violations:?}"
+        );
+
+        // The small box black: 1.6 % of the pixels.
+        let small_box = map.pixels_of(map.mesh("small-box").unwrap());
+        assert!(small_box.len() > 128 * 128 / 100, "{}", small_box.len());
+        let mut black_small = render.clone();
+        for &i in &small_box {
+            black_small.pixels_mut()[i] = [0.0; 3];
+        }
+        let small_m = measure(&black_small, &reference).unwrap();
+        eprintln!("small box black ({} pixels) {small_m:?}", small_box.len());
+        let violations = bounds.violations(&small_m);
+        assert!(
+            violations.iter().any(|v| v.contains("p99")),
+            "{violations:?}"
+        );
+    }
+
+    #[test]
+    fn measure_downsamples_the_reference_and_refuses_other_sizes() {
+        let reference = Image::filled(4, 4, [0.5; 3]).unwrap();
+        let render = Image::filled(2, 2, [0.5; 3]).unwrap();
+        let m = measure(&render, &reference).unwrap();
+        assert_eq!(m.rel_mse, 0.0);
+        assert!((m.mean_ratio - 1.0).abs() < 1e-12);
+        assert!(measure(&Image::filled(3, 3, [0.5; 3]).unwrap(), &reference).is_err());
+    }
+
+    #[test]
+    fn registry_covers_every_technique_on_every_referenced_scene() {
+        let mut names: Vec<&str> = CASES.iter().map(|c| c.name).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), CASES.len(), "case names must be unique");
+        for scene in ["cornell", "glosbox"] {
+            for technique in ["splat", "splat-direct", "detp", "impact", "photonmap"] {
+                assert!(
+                    CASES.iter().any(|c| c.scene == scene
+                        && c.args.windows(2).any(|w| w == ["--technique", technique])),
+                    "no case renders {technique} on {scene}"
+                );
+            }
+        }
+        for case in CASES {
+            let b = case.bounds;
+            assert!(
+                b.rel_mse > 0.0 && b.flip_mean > 0.0 && b.flip_p99 > 0.0,
+                "{}",
+                case.name
+            );
+            assert!(b.mean_ratio.0 < b.mean_ratio.1, "{}", case.name);
+            assert!(!case.args.contains(&"--out"), "{}", case.name);
+        }
+        assert!(select(Some("nope")).is_err());
+    }
+
+    #[test]
+    fn measured_cases_print_as_rust() {
+        let m = Measured {
+            rel_mse: 0.01,
+            flip_mean: 0.1,
+            flip_p99: 0.5,
+            mean_ratio: 0.97,
+        };
+        let text = case_source(&CASES[0], &m, 3.25);
+        assert!(
+            text.contains(
+                "measured: relMSE 0.01000, FLIP mean 0.1000, p99 0.5000, mean ratio 0.9700 (3.2 s)"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("bounds(0.01300, 0.1100, 0.5500, (0.9500, 0.9900))"),
+            "{text}"
+        );
+        assert!(!text.contains("128x128"), "{text}");
+    }
+}
