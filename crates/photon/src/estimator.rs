@@ -36,6 +36,7 @@
 use glam::{Vec2, Vec3};
 use lustre_brdf::BoxedBrdf;
 use lustre_geometry::sampling::Frame;
+use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
 
 use crate::error::{PhotonError, Result};
@@ -77,6 +78,13 @@ pub enum Support {
     Fixed(f32),
     /// `h = c √A n^(-1/6)` per surface: Silverman's (1986, section 4.3.1) rate, under which the error falls as photons are added on glossy surfaces too ([`crate::kernel::kernel_support_silverman`]).
     Silverman(f32),
+    /// Equation 3's `h = C √(A/n)` (`kernel_c`) on purely diffuse surfaces and Silverman's rate `h = c √A n^(-1/6)` (`c`) on the others: the diffuse estimate keeps equation 3's small edge bias, while the glossy surfaces, where only the photons inside the BRDF lobe count, get an error that falls as photons are added.
+    GlossySilverman {
+        /// `C` of equation 3 on diffuse surfaces.
+        kernel_c: f32,
+        /// `c` of Silverman's rate on glossy surfaces.
+        c: f32,
+    },
 }
 
 /// Settings of the splat estimator (section 2.2).
@@ -161,6 +169,14 @@ impl SplatEstimator {
                     message: format!("{c} must be positive and finite"),
                 });
             }
+            Support::GlossySilverman { kernel_c, c }
+                if !(kernel_c > 0.0 && kernel_c.is_finite() && c > 0.0 && c.is_finite()) =>
+            {
+                return Err(PhotonError::InvalidOption {
+                    option: "support",
+                    message: format!("C {kernel_c} and c {c} must be positive and finite"),
+                });
+            }
             _ => {}
         }
         let params = SurfaceParams::new(scene);
@@ -208,6 +224,19 @@ impl SplatEstimator {
                 Support::Fixed(h) => h,
                 Support::Silverman(c) => {
                     kernel_support_silverman(c, params.area(id as SurfaceId), s.points.len())
+                }
+                Support::GlossySilverman { kernel_c, c } => {
+                    let area = params.area(id as SurfaceId);
+                    let diffuse = scene
+                        .surfaces()
+                        .get(id)
+                        .and_then(|surface| scene.materials().get(surface.material as usize))
+                        .is_some_and(|m| matches!(m.model, MaterialModel::Diffuse { .. }));
+                    if diffuse {
+                        kernel_support(kernel_c, area, s.points.len())
+                    } else {
+                        kernel_support_silverman(c, area, s.points.len())
+                    }
                 }
             };
             s.grid = PointGrid::build(&s.points, s.h);

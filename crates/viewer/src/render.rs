@@ -108,6 +108,17 @@ pub enum KernelArg {
     Gaussian,
 }
 
+/// How each surface's kernel support `h` is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SupportArg {
+    /// Equation 3, `h = C √(A/n)` (`--kernel-c`) on every surface: a fixed count of photons under each kernel.
+    Equation3,
+    /// Silverman's rate `h = c √A n^(-1/6)` (`--support-c`) on every surface.
+    Silverman,
+    /// Equation 3 on diffuse surfaces, Silverman's rate on glossy ones.
+    GlossySilverman,
+}
+
 /// Photon emission sampling.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum EmissionArg {
@@ -154,6 +165,12 @@ pub struct RenderArgs {
     /// Reconstruction kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Silverman)]
     pub kernel: KernelArg,
+    /// How each surface's kernel support is chosen: equation 3, Silverman's n^(-1/6) rate, or equation 3 on diffuse and Silverman's rate on glossy surfaces.
+    #[arg(long, value_enum, default_value_t = SupportArg::GlossySilverman)]
+    pub support: SupportArg,
+    /// The constant c of Silverman's rate h = c sqrt(A) n^(-1/6).
+    #[arg(long, default_value_t = DEFAULT_SUPPORT_C, allow_negative_numbers = true)]
+    pub support_c: f32,
     /// Image width and height in pixels, `WxH`.
     #[arg(long, default_value = "640x480", value_parser = crate::parse_size)]
     pub size: (u32, u32),
@@ -236,6 +253,18 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// The splats' support rule (equation 3 or Silverman's rate, section 2.2) from `--support`, `--kernel-c` and `--support-c`.
+    pub fn support_rule(&self) -> Support {
+        match self.support {
+            SupportArg::Equation3 => Support::Scaled(self.kernel_c),
+            SupportArg::Silverman => Support::Silverman(self.support_c),
+            SupportArg::GlossySilverman => Support::GlossySilverman {
+                kernel_c: self.kernel_c,
+                c: self.support_c,
+            },
+        }
+    }
+
     /// The per-vertex techniques' settings from these options.
     pub fn density_settings(&self) -> DensitySettings {
         DensitySettings {
@@ -251,6 +280,9 @@ impl RenderArgs {
 
 /// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
 pub const DEFAULT_KERNEL_C: f32 = 16.0;
+
+/// The default `c` of Silverman's rate `h = c √A n^(-1/6)`.
+pub const DEFAULT_SUPPORT_C: f32 = 1.0;
 
 /// The default `--light-samples`, chosen by error against the Mitsuba
 /// reference and time on lavapipe: on `cornell` at 256×256 FLIP 0.066 with 1,
@@ -304,6 +336,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     if !(args.kernel_c > 0.0 && args.kernel_c.is_finite()) {
         bail!("--kernel-c {}: must be positive", args.kernel_c);
+    }
+    if !(args.support_c > 0.0 && args.support_c.is_finite()) {
+        bail!("--support-c {}: must be positive", args.support_c);
     }
     if args.photons == 0 {
         bail!("--photons 0: at least one photon is needed");
@@ -569,6 +604,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "splats": splats.as_ref().map(|s| s.count),
         "kernel": format!("{kernel:?}"),
         "kernel_c": args.kernel_c,
+        "support": format!("{:?}", args.support_rule()),
         "emission": splatting.as_ref().map(|s| format!("{:?}", s.emission)),
         "estimator": density.map(|e| format!("{e:?}")),
         "mesh_edge": density.map(|_| args.mesh_edge),
@@ -661,7 +697,7 @@ fn splat_setup(
         &map,
         EstimatorOptions {
             kernel,
-            support: Support::Scaled(args.kernel_c),
+            support: args.support_rule(),
             selection,
         },
     )

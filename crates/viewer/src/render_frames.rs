@@ -8,6 +8,7 @@ use lustre_density::{Estimator, FrameStats, QuasiStatic};
 use lustre_geometry::{ObjectId, Scene};
 use lustre_image::Image;
 use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::frame::AccumulatedSplats;
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
 };
@@ -48,6 +49,8 @@ struct Gpu {
     targets: RenderTargets,
     graph: FrameGraph,
     output: wgpu::Texture,
+    /// Jittered accumulation samples per frame (`--aa`, Diefenbach & Badler section 7).
+    aa: u32,
 }
 
 impl Gpu {
@@ -63,9 +66,12 @@ impl Gpu {
         let targets = RenderTargets::new(&ctx, width, height)?;
         let buffers = SceneBuffers::upload(&ctx, scene)?;
         let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
-        let graph = FrameGraph::new(&ctx, output_format)?
+        let mut graph = FrameGraph::new(&ctx, output_format)?
             .with_emission(&ctx, targets.hdr_format(), scene)?
             .with_gouraud(&ctx, targets.hdr_format(), &buffers)?;
+        if args.aa > 1 {
+            graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
+        }
         let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("lustre-frames-output"),
             size: wgpu::Extent3d {
@@ -85,6 +91,7 @@ impl Gpu {
             targets,
             graph,
             output,
+            aa: args.aa,
         })
     }
 
@@ -96,7 +103,7 @@ impl Gpu {
         let view = self
             .output
             .create_view(&wgpu::TextureViewDescriptor::default());
-        self.graph.render(
+        self.graph.render_accumulated(
             &self.ctx,
             &FrameInputs {
                 scene: &buffers,
@@ -108,6 +115,9 @@ impl Gpu {
                 direct: None,
                 diffuse: None,
             },
+            self.aa,
+            AccumulatedSplats::Once,
+            &mut |_| Ok(()),
         )?;
         self.ctx
             .device
