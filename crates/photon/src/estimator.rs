@@ -35,8 +35,8 @@
 
 use glam::{Vec2, Vec3};
 use lustre_brdf::BoxedBrdf;
-use lustre_geometry::sampling::Frame;
 use lustre_geometry::material::MaterialModel;
+use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
 
 use crate::error::{PhotonError, Result};

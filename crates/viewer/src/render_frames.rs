@@ -7,8 +7,8 @@ use anyhow::{Context, bail};
 use lustre_density::{Estimator, FrameStats, QuasiStatic};
 use lustre_geometry::{ObjectId, Scene};
 use lustre_image::Image;
-use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::frame::AccumulatedSplats;
+use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
 };
