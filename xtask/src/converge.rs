@@ -43,6 +43,9 @@ pub struct Args {
     /// Kernel constants C of equation 3 (`lustre render --kernel-c`, comma-separated).
     #[arg(long = "kernel-c", value_delimiter = ',', default_value = "16")]
     kernel_c: Vec<String>,
+    /// Support rules of `lustre render --support` (comma-separated): equation3, silverman, glossy-silverman.
+    #[arg(long, value_delimiter = ',', default_value = "glossy-silverman")]
+    support: Vec<String>,
     /// Name of the BENCHMARKS.md section to (re)write, between `<!-- NAME:start -->` and `<!-- NAME:end -->`.
     #[arg(long, default_value = "converge")]
     section: String,
@@ -74,6 +77,8 @@ struct Row {
     photons: u64,
     /// Kernel constant C (equation 3).
     kernel_c: String,
+    /// The support rule (`--support`).
+    support: String,
     /// GPU frame time from the sidecar's `timings_ms.frame`.
     frame_ms: Option<f64>,
     /// Relative MSE against the reference (ε = 0.01).
@@ -128,6 +133,7 @@ fn measure(
     technique: &str,
     photons: u64,
     kernel_c: &str,
+    support: &str,
     render: &Render,
     surfaces: &[Vec<usize>],
 ) -> Result<Row> {
@@ -142,6 +148,7 @@ fn measure(
         technique: technique.to_owned(),
         photons,
         kernel_c: kernel_c.to_owned(),
+        support: support.to_owned(),
         frame_ms: render
             .sidecar
             .get("timings_ms")
@@ -176,10 +183,11 @@ fn table_row(row: &Row) -> String {
         .map(|r| r.map_or(" - |".to_owned(), |r| format!(" {r:.5} |")))
         .collect();
     format!(
-        "| {} | {} | {} | {:.5} |{surfaces} {:.4} | {} | {} |",
+        "| {} | {} | {} | {} | {:.5} |{surfaces} {:.4} | {} | {} |",
         row.technique,
         thousands(row.photons),
         row.kernel_c,
+        row.support,
         row.rel_mse,
         row.flip_mean,
         row.frame_ms.map_or("-".to_owned(), |t| format!("{t:.0}")),
@@ -197,7 +205,7 @@ fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -
     let _ = writeln!(
         s,
         "Written by `cargo xtask converge`; do not edit by hand. Each technique renders the scene \
-         with `lustre render` at the reference's size with `--seed {SEED}` and the kernel constant C of equation 3 shown. relMSE = 1/(3N) Σ (t − r)² \
+         with `lustre render` at the reference's size with `--seed {SEED}` and the kernel constant C of equation 3 and support rule (`--support`) shown. relMSE = 1/(3N) Σ (t − r)² \
          / (r² + {RELATIVE_MSE_EPSILON}) over pixels and channels (Rousselle, Knaus & Zwicker 2011); \
          FLIP is the mean LDR-FLIP of both images tone mapped at exposure {EXPOSURE} \
          ({PIXELS_PER_DEGREE} pixels per degree). relMSE per surface counts only the pixels whose \
@@ -235,11 +243,11 @@ fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -
             .collect();
         let _ = writeln!(
             s,
-            "| technique | photons | C | relMSE |{surfaces} mean FLIP | GPU frame (ms) | total (ms) |"
+            "| technique | photons | C | support | relMSE |{surfaces} mean FLIP | GPU frame (ms) | total (ms) |"
         );
         let _ = writeln!(
             s,
-            "|---|---:|---:|---:|{}---:|---:|---:|",
+            "|---|---:|---:|---|---:|{}---:|---:|---:|",
             "---:|".repeat(PER_SURFACE.len())
         );
         for row in rows.iter().filter(|r| r.scene == reference.scene) {
@@ -270,9 +278,15 @@ fn converge(
             .map(|(mesh, _)| Ok(map.pixels_of(map.mesh(mesh)?)))
             .collect::<Result<Vec<_>>>()?;
         for technique in &args.techniques {
-            for kernel_c in &args.kernel_c {
+            for (kernel_c, support) in args
+                .kernel_c
+                .iter()
+                .flat_map(|c| args.support.iter().map(move |s| (c, s)))
+            {
                 for &photons in &args.photons {
-                    let out = scratch.join(format!("{scene}-{technique}-{photons}-{kernel_c}.exr"));
+                    let out = scratch.join(format!(
+                        "{scene}-{technique}-{photons}-{kernel_c}-{support}.exr"
+                    ));
                     let photons_arg = photons.to_string();
                     let render_args = [
                         "--technique",
@@ -281,13 +295,17 @@ fn converge(
                         &photons_arg,
                         "--kernel-c",
                         kernel_c.as_str(),
+                        "--support",
+                        support.as_str(),
                         "--size",
                         &size,
                         "--seed",
                         SEED,
                     ];
                     let result = lustre.render(scene, &render_args, &out).and_then(|render| {
-                        measure(&reference, technique, photons, kernel_c, &render, &surfaces)
+                        measure(
+                            &reference, technique, photons, kernel_c, support, &render, &surfaces,
+                        )
                     });
                     match result {
                         Ok(row) => {
@@ -296,7 +314,7 @@ fn converge(
                         }
                         Err(error) => {
                             println!(
-                                "converge {scene:<10} {technique} {photons} C={kernel_c}: FAILED: {error:#}"
+                                "converge {scene:<10} {technique} {photons} C={kernel_c} {support}: FAILED: {error:#}"
                             );
                             failures += 1;
                         }
@@ -386,6 +404,7 @@ mod tests {
             photons: vec![1000, 2_000_000],
             techniques: vec!["splat".into(), "splat-direct".into()],
             kernel_c: vec!["16".into()],
+            support: vec!["glossy-silverman".into()],
             section: "converge".into(),
             title: "Convergence".into(),
         };
@@ -411,7 +430,7 @@ mod tests {
         );
         assert!(
             text.contains(
-                "| splat-direct | 2,000,000 | 16 | 0.00000 | 0.00000 | 0.00000 | 0.0000 | - | 12 |"
+                "| splat-direct | 2,000,000 | 16 | glossy-silverman | 0.00000 | 0.00000 | 0.00000 | 0.0000 | - | 12 |"
             ),
             "{text}"
         );
