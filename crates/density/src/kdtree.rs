@@ -80,18 +80,42 @@ impl KdTree {
 
     /// The `k` points nearest to `query`, nearest first (fewer when the tree holds fewer; ties broken by index).
     pub fn nearest(&self, query: Vec3, k: usize) -> Vec<Neighbour> {
+        self.nearest_where(query, k, |_| true)
+    }
+
+    /// The `k` points nearest to `query` among those whose input index `keep` accepts, nearest first (Jensen 2001's photon filter: only the impacts that belong to the query's surface count).
+    pub fn nearest_where(
+        &self,
+        query: Vec3,
+        k: usize,
+        keep: impl Fn(u32) -> bool,
+    ) -> Vec<Neighbour> {
+        self.nearest_within(query, k, f32::INFINITY, keep)
+    }
+
+    /// The `k` points nearest to `query` among those `keep` accepts and at a squared distance of at most `max_squared`, nearest first (Jensen 2001's photon search with a maximum distance, which bounds the search where few points are accepted).
+    pub fn nearest_within(
+        &self,
+        query: Vec3,
+        k: usize,
+        max_squared: f32,
+        keep: impl Fn(u32) -> bool,
+    ) -> Vec<Neighbour> {
         let mut heap = BinaryHeap::with_capacity(k + 1);
         if k > 0 {
-            self.search(query, k, 0, self.points.len(), 0, &mut heap);
+            let bound = Bound { k, max_squared };
+            self.search(query, bound, &keep, 0, self.points.len(), 0, &mut heap);
         }
         heap.into_sorted_vec()
     }
 
-    /// Recursive search of the range `lo..hi` at `depth`, keeping the `k` best in a max-heap.
+    /// Recursive search of the range `lo..hi` at `depth`, keeping the `k` best accepted by `keep` in a max-heap.
+    #[allow(clippy::too_many_arguments)]
     fn search(
         &self,
         query: Vec3,
-        k: usize,
+        bound: Bound,
+        keep: &dyn Fn(u32) -> bool,
         lo: usize,
         hi: usize,
         depth: usize,
@@ -106,7 +130,10 @@ impl KdTree {
             index: self.ids[mid],
             distance_squared: p.distance_squared(query),
         };
-        if heap.len() < k {
+        let k = bound.k;
+        if candidate.distance_squared > bound.max_squared || !keep(candidate.index) {
+            // Not a candidate, but its subtrees still are.
+        } else if heap.len() < k {
             heap.push(candidate);
         } else if heap.peek().is_some_and(|worst| candidate < *worst) {
             heap.pop();
@@ -119,14 +146,24 @@ impl KdTree {
         } else {
             ((mid + 1, hi), (lo, mid))
         };
-        self.search(query, k, near.0, near.1, depth + 1, heap);
-        let reach = heap
-            .peek()
-            .map_or(f32::INFINITY, |worst| worst.distance_squared);
-        if heap.len() < k || delta * delta <= reach {
-            self.search(query, k, far.0, far.1, depth + 1, heap);
+        self.search(query, bound, keep, near.0, near.1, depth + 1, heap);
+        let reach = if heap.len() < k {
+            bound.max_squared
+        } else {
+            heap.peek()
+                .map_or(bound.max_squared, |worst| worst.distance_squared)
+        };
+        if delta * delta <= reach {
+            self.search(query, bound, keep, far.0, far.1, depth + 1, heap);
         }
     }
+}
+
+/// The limits of a search: how many points and how far.
+#[derive(Debug, Clone, Copy)]
+struct Bound {
+    k: usize,
+    max_squared: f32,
 }
 
 /// Places the median of `points` on axis `depth mod 3` in the middle, smaller before, larger after, then recurses on both halves.
@@ -144,13 +181,36 @@ fn split(points: &mut [(Vec3, u32)], depth: usize) {
 
 /// The `k` points nearest to `query` by exhaustive search, nearest first, ties broken by index (the reference the kd-tree is tested against).
 pub fn brute_force_nearest(points: &[Vec3], query: Vec3, k: usize) -> Vec<Neighbour> {
+    brute_force_nearest_where(points, query, k, |_| true)
+}
+
+/// The `k` points nearest to `query` among those whose index `keep` accepts, by exhaustive search (the reference for [`KdTree::nearest_where`]).
+pub fn brute_force_nearest_where(
+    points: &[Vec3],
+    query: Vec3,
+    k: usize,
+    keep: impl Fn(u32) -> bool,
+) -> Vec<Neighbour> {
+    brute_force_nearest_within(points, query, k, f32::INFINITY, keep)
+}
+
+/// The `k` points nearest to `query` among those `keep` accepts within the squared distance `max_squared`, by exhaustive search (the reference for [`KdTree::nearest_within`]).
+pub fn brute_force_nearest_within(
+    points: &[Vec3],
+    query: Vec3,
+    k: usize,
+    max_squared: f32,
+    keep: impl Fn(u32) -> bool,
+) -> Vec<Neighbour> {
     let mut all: Vec<Neighbour> = points
         .iter()
         .enumerate()
+        .filter(|(i, _)| keep(*i as u32))
         .map(|(i, p)| Neighbour {
             index: i as u32,
             distance_squared: p.distance_squared(query),
         })
+        .filter(|n| n.distance_squared <= max_squared)
         .collect();
     all.sort();
     all.truncate(k);

@@ -91,7 +91,10 @@ pub use kdtree::KdTree;
 pub use photon_maps::photon_maps;
 pub use points::{EstimationPoint, EstimationPoints};
 pub use quasi_static::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions};
-pub use radiance::{ImpactMap, TriangleImpacts, impact_count_radiance, photon_maps_radiance};
+pub use radiance::{
+    ImpactMap, MAX_RADIUS_FACTOR, NORMAL_FILTER_COSINE, TriangleImpacts, impact_count_radiance,
+    photon_maps_radiance,
+};
 pub use ray_set::{
     PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set, trace_ray_set_in,
 };

@@ -642,7 +642,7 @@ impl QuasiStatic {
         self.points
             .points
             .par_iter()
-            .map(|p| map.irradiance(p.position, k))
+            .map(|p| map.irradiance(p.position, p.normal, k))
             .collect()
     }
 }

@@ -12,6 +12,10 @@
 //! - Photon Maps: `L(x, ωo) = Σ_{k nearest} f_r(ωi_j, ωo) φ_j / (π r_k²)`,
 //!   Jensen's radiance estimate.
 //!
+//! Photon Maps' sums run over the `k` nearest impacts *compatible* with the
+//! vertex's surface (Jensen 2001's normal filter, beyond García et al.'s
+//! text; see [`ImpactMap`]).
+//!
 //! A diffuse `f_r = ρ/π` gives back `ρ/π E` of equation 2.2 exactly, so the
 //! diffuse part of a blended material is the one the irradiance gives. The
 //! BRDF is evaluated as `f_r(ωi, ωo)` in the vertex's shading frame, the
@@ -189,54 +193,110 @@ impl TriangleImpacts {
     }
 }
 
-/// The impacts of a ray set in a kd-tree with their powers and world incident directions (Jensen's photon map, section 1.2).
+/// Smallest cosine between an impact's surface normal (turned to the side the photon arrived on) and the vertex normal for the impact to count in a Photon Maps estimate (Jensen, "Realistic Image Synthesis Using Photon Mapping", 2001, the radiance estimate; beyond García et al.'s text).
+pub const NORMAL_FILTER_COSINE: f32 = 0.9;
+
+/// Largest radius of the filtered search, in units of the unfiltered `k`-th nearest radius (Jensen 2001's maximum search distance): where fewer than `k` compatible impacts lie within it, the estimate is their power over the area of that disc.
+pub const MAX_RADIUS_FACTOR: f32 = 3.0;
+
+/// The impacts of a ray set in a kd-tree with their powers, world incident directions and surface sides (Jensen's photon map, section 1.2).
+///
+/// The `k`-nearest search keeps only the impacts *compatible* with the
+/// query's surface: those whose geometric normal, turned towards the side the
+/// photon arrived from, makes a cosine of at least [`NORMAL_FILTER_COSINE`]
+/// with the vertex normal. This is Jensen's practice (Jensen 2001, radiance
+/// estimate: photons on other surfaces or arriving from behind are
+/// discarded), not part of García, Ureña & Lastra's section 1.2: without it
+/// the sphere around a vertex near an edge gathers the impacts of the
+/// adjoining face (the lit top of a box brightens the top of its sides, the
+/// floor brightens the foot of the walls). The search stops at
+/// [`MAX_RADIUS_FACTOR`] times the unfiltered `k`-th radius. A vertex with a
+/// zero normal keeps every impact.
 #[derive(Debug, Clone)]
 pub struct ImpactMap {
     tree: Option<KdTree>,
     powers: Vec<Rgb>,
     incident: Vec<Vec3>,
+    /// Unit geometric normal of each impact on the side its photon arrived from (`n · ωi ≥ 0`).
+    sides: Vec<Vec3>,
 }
 
 impl ImpactMap {
-    /// The map of every impact of the ray set; empty when there is none.
+    /// The map of every impact of the ray set; empty when there is none or an impact is not finite.
     pub fn build(rays: &RaySet) -> Self {
+        Self::try_build(rays).unwrap_or(Self {
+            tree: None,
+            powers: Vec::new(),
+            incident: Vec::new(),
+            sides: Vec::new(),
+        })
+    }
+
+    /// The map of every impact of the ray set; fails on a non-finite impact position.
+    pub fn try_build(rays: &RaySet) -> Result<Self> {
         let mut positions = Vec::new();
         let mut powers = Vec::new();
         let mut incident = Vec::new();
+        let mut sides = Vec::new();
         for (s, h) in rays.impacts() {
             positions.push(h.position);
             powers.push(s.power);
             incident.push(-s.direction);
+            sides.push(if h.normal.dot(s.direction) > 0.0 {
+                -h.normal
+            } else {
+                h.normal
+            });
         }
-        Self {
-            tree: KdTree::build(&positions).ok(),
+        Ok(Self {
+            tree: Some(KdTree::build(&positions)?),
             powers,
             incident,
-        }
+            sides,
+        })
     }
 
-    /// Photon Maps irradiance at `x` (section 1.2; section 2.9.1, `PME = E / (π R²)`): `Σ φ_j / (π r_k²)` over the `k` nearest impacts; zero where none lies at a positive distance.
-    pub fn irradiance(&self, x: Vec3, k: usize) -> DVec3 {
-        self.weighted(x, k, |j| self.powers[j].as_dvec3())
+    /// Photon Maps irradiance at `x` with unit normal `normal` (section 1.2; section 2.9.1, `PME = E / (π R²)`): `Σ φ_j / (π r_k²)` over the `k` nearest compatible impacts ([`ImpactMap`]); zero where none lies at a positive distance.
+    pub fn irradiance(&self, x: Vec3, normal: Vec3, k: usize) -> DVec3 {
+        self.weighted(x, normal, k, |j| self.powers[j].as_dvec3())
     }
 
-    /// Jensen's radiance estimate at `x` towards the world direction `eye − x` (section 1.2 with equation 2.1): `Σ f_r(ωi_j, ωo) φ_j / (π r_k²)` over the `k` nearest impacts, in the shading frame of `normal`; zero where no impact lies at a positive distance or the normal is degenerate.
+    /// Jensen's radiance estimate at `x` towards the world direction `eye − x` (section 1.2 with equation 2.1): `Σ f_r(ωi_j, ωo) φ_j / (π r_k²)` over the `k` nearest compatible impacts ([`ImpactMap`]), in the shading frame of `normal`; zero where no impact lies at a positive distance or the normal is degenerate.
     pub fn radiance(&self, brdf: &dyn Brdf, x: Vec3, normal: Vec3, eye: Vec3, k: usize) -> DVec3 {
         let Some((frame, wo)) = view_frame(normal, x, eye) else {
             return DVec3::ZERO;
         };
-        self.weighted(x, k, |j| {
+        self.weighted(x, normal, k, |j| {
             term(brdf, &frame, wo, self.incident[j], self.powers[j])
         })
     }
 
-    /// `Σ w(j) / (π r_k²)` over the `k` impacts `j` nearest to `x`.
-    fn weighted(&self, x: Vec3, k: usize, w: impl Fn(usize) -> DVec3) -> DVec3 {
+    /// `Σ w(j) / (π r_k²)` over the `k` impacts `j` nearest to `x` among those compatible with `normal`.
+    fn weighted(&self, x: Vec3, normal: Vec3, k: usize, w: impl Fn(usize) -> DVec3) -> DVec3 {
         let Some(tree) = &self.tree else {
             return DVec3::ZERO;
         };
-        let found = tree.nearest(x, k);
-        let r2 = found.last().map_or(0.0, |n| n.distance_squared);
+        let n = normal.normalize_or_zero();
+        let nearest = tree.nearest(x, k);
+        let (found, r2) = match nearest.last() {
+            Some(kth) if n != Vec3::ZERO => {
+                // Jensen's maximum search distance, relative to the unfiltered k-th radius: it bounds the search where few impacts are compatible (a face no photon reaches would otherwise scan every impact); fewer than k within it estimate over its whole disc.
+                let max = MAX_RADIUS_FACTOR * MAX_RADIUS_FACTOR * kth.distance_squared;
+                let found = tree.nearest_within(x, k, max, |j| {
+                    self.sides[j as usize].dot(n) >= NORMAL_FILTER_COSINE
+                });
+                let r2 = if found.len() < nearest.len() {
+                    max
+                } else {
+                    found.last().map_or(0.0, |f| f.distance_squared)
+                };
+                (found, r2)
+            }
+            _ => {
+                let r2 = nearest.last().map_or(0.0, |f| f.distance_squared);
+                (nearest, r2)
+            }
+        };
         if !(r2 > 0.0) {
             return DVec3::ZERO;
         }

@@ -4,10 +4,12 @@ use std::f64::consts::PI;
 use std::sync::OnceLock;
 
 use glam::{Affine3A, DVec2, DVec3, Vec3};
-use lustre_density::kdtree::brute_force_nearest;
+use lustre_density::kdtree::{
+    brute_force_nearest, brute_force_nearest_where, brute_force_nearest_within,
+};
 use lustre_density::{
-    DensityError, Disc, KdTree, RaySegment, RaySet, RaySetOptions, SegmentHit, detp, impact_count,
-    photon_maps, trace_ray_set,
+    DensityError, Disc, ImpactMap, KdTree, NORMAL_FILTER_COSINE, PrimaryRay, RaySegment, RaySet,
+    RaySetOptions, SegmentHit, detp, impact_count, photon_maps, trace_ray_set,
 };
 use lustre_geometry::light::PointLight;
 use lustre_geometry::meshing::subdivide;
@@ -275,7 +277,8 @@ fn photon_maps_converge_to_the_analytic_irradiance_inside_the_floor() {
     }
     eprintln!("photon maps k = {k}: {checked} vertices, worst |z| = {worst:.2}");
     assert!(checked > 100);
-    // A corner vertex (α = π/2): the k nearest impacts lie in the quarter disc inside the floor, so r_k is where the expected count in the quarter disc, ∫_quarter E dA / φ, reaches k; as above, π r_k² λ / 4 ~ Gamma(k, 1) and the estimate Σ_k φ / (π r_k²) = ¼ · Σ_k φ / (π r_k² / 4) has the mean ¼ · k/(k−1) · (mean of E over the quarter disc): α/2π = ¼ of the true value, not 0.
+    // A corner vertex (α = π/2). The normal filter (Jensen 2001) changes nothing here: every impact lies on the floor and arrives from above, so its normal turned to the photon's side is +y, the vertex normal, cosine 1 ≥ NORMAL_FILTER_COSINE; the filter removes other surfaces' impacts, it does not fill the missing part of the disc, so the border bias α/2π stays (see `normal_filter_keeps_the_impacts_of_the_vertex_surface` for a corner with a wall).
+    // The k nearest impacts lie in the quarter disc inside the floor, so r_k is where the expected count in the quarter disc, ∫_quarter E dA / φ, reaches k; as above, π r_k² λ / 4 ~ Gamma(k, 1) and the estimate Σ_k φ / (π r_k²) = ¼ · Σ_k φ / (π r_k² / 4) has the mean ¼ · k/(k−1) · (mean of E over the quarter disc): α/2π = ¼ of the true value, not 0.
     let corner = scene
         .world_positions(0)
         .iter()
@@ -317,6 +320,100 @@ fn photon_maps_converge_to_the_analytic_irradiance_inside_the_floor() {
     assert!(
         (got - expected).abs() <= SIGMAS * rel_sigma * expected,
         "corner: {got} against {expected} (E = {exact})"
+    );
+}
+
+/// A floor (y = 0) meeting a wall (x = 0) along the z axis, with impacts on the floor from above, on the floor from below, and on the wall from +x, the wall's geometric normal wound towards −x; one primary ray per impact, power 1 + j mod 3.
+fn corner_impacts() -> (RaySet, Vec<(Vec3, Vec3, bool)>) {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut rays = Vec::new();
+    // (position, arrival side, on the floor from above)
+    let mut truth = Vec::new();
+    for j in 0..3000u64 {
+        let (a, b) = (next(), 2.0 * next() - 1.0);
+        let kind = j % 3;
+        let (position, direction, normal) = match kind {
+            0 => (Vec3::new(a, 0.0, b), Vec3::NEG_Y, Vec3::Y),
+            1 => (Vec3::new(a, 0.0, b), Vec3::Y, Vec3::Y),
+            _ => (Vec3::new(0.0, a, b), Vec3::NEG_X, Vec3::NEG_X),
+        };
+        let origin = position - direction;
+        let hit = SegmentHit {
+            triangle: 0,
+            mesh: 0,
+            mobile: false,
+            position,
+            normal,
+            distance: 1.0,
+        };
+        let power = Rgb::splat(1.0 + (j % 3) as f32);
+        rays.push(PrimaryRay {
+            light: 0,
+            index: j,
+            segments: vec![RaySegment::new(origin, direction, Some(hit), power)],
+        });
+        let side = if normal.dot(direction) > 0.0 {
+            -normal
+        } else {
+            normal
+        };
+        truth.push((position, side, kind == 0));
+    }
+    (
+        RaySet {
+            rays,
+            emitted_per_light: vec![3000],
+        },
+        truth,
+    )
+}
+
+/// Jensen's normal filter (Jensen 2001, radiance estimate; beyond section 1.2): at a vertex near the floor/wall edge the estimate counts only the impacts on its own surface arriving from its front, checked against a brute-force estimate over exactly those impacts; and at the edge itself the filtered estimate of a uniform floor density sees only the half disc, the border bias α/2π = ½ of section 2.9.1, instead of gathering the wall.
+#[test]
+fn normal_filter_keeps_the_impacts_of_the_vertex_surface() {
+    let (rays, truth) = corner_impacts();
+    let map = ImpactMap::build(&rays);
+    let positions: Vec<Vec3> = truth.iter().map(|t| t.0).collect();
+    let powers: Vec<f64> = (0..truth.len()).map(|j| 1.0 + (j % 3) as f64).collect();
+    let k = 20;
+    let brute = |x: Vec3, n: Vec3| {
+        let found = brute_force_nearest_where(&positions, x, k, |j| {
+            truth[j as usize].1.dot(n) >= NORMAL_FILTER_COSINE
+        });
+        let r2 = found.last().unwrap().distance_squared as f64;
+        found.iter().map(|f| powers[f.index as usize]).sum::<f64>() / (PI * r2)
+    };
+    for (x, n) in [
+        (Vec3::new(0.02, 0.0, 0.1), Vec3::Y),
+        (Vec3::new(0.3, 0.0, -0.4), Vec3::Y),
+        (Vec3::new(0.0, 0.05, 0.2), Vec3::X),
+        (Vec3::new(0.0, 0.02, 0.0), Vec3::NEG_Y),
+    ] {
+        let got = map.irradiance(x, n, k).x;
+        let want = brute(x, n);
+        assert!(
+            (got - want).abs() <= 1e-6 * want,
+            "at {x} normal {n}: {got} against brute force {want}"
+        );
+    }
+    // The floor impacts from above (j ≡ 0 mod 3, power 1): 1000 over 2 m², λ = 500 per m², so E = 500 W/m² on the floor. At the edge, vertex normal +y, the filter keeps only them; the k nearest fill a half disc (r_k ≈ 0.5 m, inside the 1 m × 2 m floor), π r_k² λ / 2 ≈ k, so the estimate k / (π r_k²) ≈ λ/2 = E/2 with relative σ ≈ 1/√k: the border bias α/2π = ½. Unfiltered, the sphere holds three half discs of density 500 each (the floor from above, power 1; from below, power 2; the wall, power 3): k impacts in 1.5 π r² of mean power 2, so ≈ 2 · 1.5 · 500 = 3 E.
+    let k = 200;
+    let edge = map.irradiance(Vec3::new(0.0, 0.0, 0.0), Vec3::Y, k).x / 500.0;
+    let unfiltered = map.irradiance(Vec3::new(0.0, 0.0, 0.0), Vec3::ZERO, k).x / 500.0;
+    eprintln!("edge: filtered {edge:.3} E, unfiltered {unfiltered:.3} E");
+    assert!(
+        (edge - 0.5).abs() <= 5.0 * 0.5 / (k as f64).sqrt(),
+        "{edge}"
+    );
+    assert!(
+        (unfiltered - 3.0).abs() <= 5.0 * 3.0 / (k as f64).sqrt(),
+        "{unfiltered}"
     );
 }
 
@@ -471,5 +568,29 @@ proptest! {
         prop_assert_eq!(tree.len(), points.len());
         let query = Vec3::from(query);
         prop_assert_eq!(tree.nearest(query, k), brute_force_nearest(&points, query, k));
+    }
+
+    #[test]
+    fn filtered_kd_tree_agrees_with_brute_force(
+        points in prop::collection::vec(prop::array::uniform3(-10.0f32..10.0), 0..300),
+        query in prop::array::uniform3(-12.0f32..12.0),
+        k in 1usize..40,
+        modulus in 1u32..5,
+        max_squared in 0.0f32..200.0,
+        grid in any::<bool>(),
+    ) {
+        // A predicate that rejects most points, so the pruning must look past rejected subtrees' roots.
+        let points: Vec<Vec3> = points.iter().map(|&p| {
+            let p = Vec3::from(p);
+            if grid { p.round() } else { p }
+        }).collect();
+        let tree = KdTree::build(&points).unwrap();
+        let query = Vec3::from(query);
+        let keep = |i: u32| (i * 7 + 3).is_multiple_of(modulus);
+        prop_assert_eq!(tree.nearest_where(query, k, keep), brute_force_nearest_where(&points, query, k, keep));
+        prop_assert_eq!(
+            tree.nearest_within(query, k, max_squared, keep),
+            brute_force_nearest_within(&points, query, k, max_squared, keep)
+        );
     }
 }
