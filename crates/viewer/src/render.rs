@@ -208,7 +208,7 @@ pub struct RenderArgs {
     /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh.
     #[arg(long)]
     pub artifact_control: bool,
-    /// DETP's estimate on glossy surfaces (García et al. section 2.10): view-dependent from per-vertex ray lists, or only the diffuse part.
+    /// The per-vertex estimate on glossy surfaces (García et al. section 2.10): DETP's per-vertex ray lists in a list, QuadTree or summarised QuadTree (Impact Count and Photon Maps always keep plain impact lists), or `none` for only the diffuse part.
     #[arg(long, value_enum, default_value_t = GlossyEstimate::Quadtree)]
     pub glossy_estimate: GlossyEstimate,
     /// How DETP finds the rays crossing each disc (García et al. sections 2.6–2.7).
