@@ -526,20 +526,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         && args.light_samples > 1
         && args.paired_lights
         && scene.lights().iter().any(|l| !l.is_delta());
-    if paired {
-        if let (Some(lights), Some(pass)) = (&direct, &graph.direct) {
-            lights.set_lights(
-                pass,
-                &ctx.queue,
-                &jittered_point_lights(
-                    scene.lights(),
-                    args.light_samples,
-                    paired_rotation(0, args.aa, args.light_samples),
-                ),
-            )?;
-            graph.update_shadows(&ctx, &scene_buffers, lights)?;
-        }
-    }
     let start = Instant::now();
     graph.render_accumulated(
         &ctx,
@@ -567,7 +553,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             let (Some(lights), Some(pass)) = (&direct, &graph.direct) else {
                 return Ok(());
             };
-            if !paired || s == 0 {
+            if !paired {
                 return Ok(());
             }
             let rotation = paired_rotation(s, args.aa, args.light_samples);
