@@ -93,6 +93,11 @@ struct Row {
     adapter: String,
 }
 
+/// `tests/references` in the workspace: the path-traced references and their sidecars.
+pub(crate) fn references_dir() -> std::path::PathBuf {
+    crate::workspace_root().join("tests").join("references")
+}
+
 /// Reads `<dir>/<scene>.exr` and its sidecar `<dir>/<scene>.json`.
 pub(crate) fn load_reference(dir: &Path, scene: &str) -> Result<Reference> {
     let exr = dir.join(format!("{scene}.exr"));
@@ -337,7 +342,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let lustre = Lustre::build()?;
     let scratch = Scratch::new("converge")?;
-    let references_dir = crate::workspace_root().join("tests").join("references");
+    let references_dir = references_dir();
     let (references, rows, failures) = converge(&lustre, &references_dir, &args, scratch.path())?;
     if failures > 0 {
         bail!("{failures} render(s) failed; BENCHMARKS.md left as it was");
@@ -355,7 +360,7 @@ mod tests {
 
     #[test]
     fn committed_references_have_size_and_spp() {
-        let dir = crate::workspace_root().join("tests").join("references");
+        let dir = references_dir();
         for scene in ["glosbox", "cornell"] {
             let reference = load_reference(&dir, scene).unwrap();
             assert_eq!(

@@ -142,7 +142,7 @@ pub fn run(args: Args) -> Result<()> {
     let lustre = Lustre::build()?;
     let scratch = Scratch::new("density-errors")?;
     let dir = scratch.path();
-    let references_dir = crate::workspace_root().join("tests").join("references");
+    let references_dir = crate::converge::references_dir();
     let reference = load_reference(&references_dir, &args.scene)?;
     let size = format!("{}x{}", reference.image.width(), reference.image.height());
     let extra: Vec<&str> = args.extra.split_whitespace().collect();

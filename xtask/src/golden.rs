@@ -468,16 +468,7 @@ fn report_line(case: &Case, verdict: &Verdict) -> String {
 
 /// The cases to run: all, or the one named.
 fn select(name: Option<&str>) -> Result<Vec<&'static Case>> {
-    match name {
-        None => Ok(CASES.iter().collect()),
-        Some(name) => match CASES.iter().find(|c| c.name == name) {
-            Some(case) => Ok(vec![case]),
-            None => bail!(
-                "no golden case `{name}`; the cases are: {}",
-                CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
-            ),
-        },
-    }
+    crate::select_case(CASES, name, |c| c.name, "golden")
 }
 
 /// Runs `cargo xtask golden`: every case (or the one named), one line each,
@@ -518,10 +509,7 @@ pub fn bless(case: Option<&str>) -> Result<()> {
         let render = lustre
             .render(case.scene, case.args, &out)
             .with_context(|| format!("rendering golden case `{}`", case.name))?;
-        let reference = crate::workspace_root()
-            .join("tests")
-            .join("references")
-            .join(format!("{}.exr", case.scene));
+        let reference = crate::converge::references_dir().join(format!("{}.exr", case.scene));
         println!(
             "{}",
             bless_case(case, &render.image, render.adapter(), &dir, &reference)?

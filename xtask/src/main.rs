@@ -15,6 +15,25 @@ pub use reference::workspace_root;
 
 use std::process::ExitCode;
 
+/// The cases of a registry to run: all, or the one named (`kind` names the registry in the error, which lists the cases).
+pub(crate) fn select_case<'a, C>(
+    cases: &'a [C],
+    name: Option<&str>,
+    name_of: impl Fn(&C) -> &str,
+    kind: &str,
+) -> anyhow::Result<Vec<&'a C>> {
+    match name {
+        None => Ok(cases.iter().collect()),
+        Some(name) => match cases.iter().find(|c| name_of(c) == name) {
+            Some(case) => Ok(vec![case]),
+            None => anyhow::bail!(
+                "no {kind} case `{name}`; the cases are: {}",
+                cases.iter().map(&name_of).collect::<Vec<_>>().join(", ")
+            ),
+        },
+    }
+}
+
 use clap::{Parser, Subcommand};
 
 /// Lustre's project tasks.

@@ -282,16 +282,7 @@ pub const CASES: &[Case] = &[
 
 /// The cases to run: all, or the one named.
 fn select(name: Option<&str>) -> Result<Vec<&'static Case>> {
-    match name {
-        None => Ok(CASES.iter().collect()),
-        Some(name) => match CASES.iter().find(|c| c.name == name) {
-            Some(case) => Ok(vec![case]),
-            None => bail!(
-                "no reference case `{name}`; the cases are: {}",
-                CASES.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
-            ),
-        },
-    }
+    crate::select_case(CASES, name, |c| c.name, "reference")
 }
 
 /// One case's outcome.
@@ -304,12 +295,8 @@ enum Outcome {
 
 /// Renders `case` and measures it against its reference.
 fn run_case(lustre: &Lustre, case: &Case, scratch: &Path, require_gpu: bool) -> Result<Outcome> {
-    let reference_path = crate::workspace_root()
-        .join("tests")
-        .join("references")
-        .join(format!("{}.exr", case.scene));
-    let reference = read_exr(&reference_path)
-        .with_context(|| format!("reading the reference {}", reference_path.display()))?;
+    let reference =
+        crate::converge::load_reference(&crate::converge::references_dir(), case.scene)?.image;
     let out = scratch.join(format!("{}.exr", case.name));
     let start = Instant::now();
     let render = match lustre.render(case.scene, case.args, &out) {
@@ -442,13 +429,7 @@ mod tests {
     /// The glosbox reference at 128 × 128 with a deterministic ±20 %
     /// per-pixel noise: an image with a render's kind of error.
     fn noisy_render() -> (Image, Image) {
-        let reference = read_exr(
-            crate::workspace_root()
-                .join("tests")
-                .join("references")
-                .join("glosbox.exr"),
-        )
-        .unwrap();
+        let reference = read_exr(crate::converge::references_dir().join("glosbox.exr")).unwrap();
         let small = box_downsample_to(&reference, 128, 128).unwrap();
         let mut render = small.clone();
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
