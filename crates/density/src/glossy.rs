@@ -17,7 +17,7 @@ use std::cmp::Ordering;
 use glam::{DVec3, Vec3};
 use lustre_brdf::{BoxedBrdf, Brdf};
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{MaterialId, MaterialModel, MeshId, Rgb, Scene};
+use lustre_geometry::{MaterialId, MeshId, Rgb, Scene};
 use rayon::prelude::*;
 
 use crate::detp::Disc;
@@ -439,7 +439,7 @@ pub fn glossy_meshes(scene: &Scene) -> Vec<MeshId> {
             scene
                 .materials()
                 .get(m.material as usize)
-                .is_some_and(|mat| !matches!(mat.model, MaterialModel::Diffuse { .. }))
+                .is_some_and(|mat| !mat.model.is_diffuse())
         })
         .map(|(i, _)| i as MeshId)
         .collect()

@@ -109,6 +109,11 @@ pub enum MaterialModel {
 }
 
 impl MaterialModel {
+    /// Whether the model is a plain Lambertian reflector: view independent, unlike the "glossy" surfaces of Stürzlinger & Bastos 2.2.1 and García et al. 2.10.
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self, Self::Diffuse { .. })
+    }
+
     /// A short name of the model, as used in messages and `lustre info`.
     pub fn name(&self) -> String {
         match self {

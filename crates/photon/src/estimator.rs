@@ -35,7 +35,6 @@
 
 use glam::{Vec2, Vec3};
 use lustre_brdf::BoxedBrdf;
-use lustre_geometry::material::MaterialModel;
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
 
@@ -231,7 +230,7 @@ impl SplatEstimator {
                         .surfaces()
                         .get(id)
                         .and_then(|surface| scene.materials().get(surface.material as usize))
-                        .is_some_and(|m| matches!(m.model, MaterialModel::Diffuse { .. }));
+                        .is_some_and(|m| m.model.is_diffuse());
                     if diffuse {
                         kernel_support(kernel_c, area, s.points.len())
                     } else {

@@ -906,7 +906,7 @@ mod tests {
         let atlas = DiffuseAtlas::build(&scene, &est, DiffuseTextureOptions::default()).unwrap();
         for (id, surface) in scene.surfaces().iter().enumerate() {
             let model = &scene.materials()[surface.material as usize].model;
-            let diffuse = matches!(model, lustre_geometry::MaterialModel::Diffuse { .. });
+            let diffuse = model.is_diffuse();
             assert_eq!(
                 atlas.surfaces[id].is_some(),
                 diffuse,
