@@ -255,6 +255,7 @@ fn photon_splats(
             kernel: Kernel::Silverman,
             support: Support::Scaled(KERNEL_C),
             selection,
+            edges: lustre_photon::Edges::Truncated,
         },
     )
     .expect("glosbox splats build");

@@ -14,8 +14,8 @@ use lustre_mpr::passes::splat::{
 use lustre_mpr::readback::{read_rgba_f32, read_u32};
 use lustre_mpr::{GpuContext, RenderTargets, SceneBuffers};
 use lustre_photon::{
-    BounceSelection, EstimatorOptions, Kernel, NoProgress, SplatEstimator, Support, TraceOptions,
-    trace_photons,
+    BounceSelection, Edges, EstimatorOptions, Kernel, NoProgress, SplatEstimator, Support,
+    TraceOptions, trace_photons,
 };
 use support::gpu_or_skip;
 
@@ -89,7 +89,14 @@ fn render_with(
 }
 
 fn estimator(scene: &Scene, photons: u64, c: f32, selection: BounceSelection) -> SplatEstimator {
-    estimator_with(scene, photons, c, selection, Kernel::Silverman)
+    estimator_with(
+        scene,
+        photons,
+        c,
+        selection,
+        Kernel::Silverman,
+        Edges::Truncated,
+    )
 }
 
 fn estimator_with(
@@ -98,6 +105,7 @@ fn estimator_with(
     c: f32,
     selection: BounceSelection,
     kernel: Kernel,
+    edges: Edges,
 ) -> SplatEstimator {
     let bvh = Bvh::build(scene);
     let options = TraceOptions {
@@ -113,6 +121,7 @@ fn estimator_with(
             kernel,
             support: Support::Scaled(c),
             selection,
+            edges,
         },
     )
     .unwrap()
@@ -175,17 +184,18 @@ fn check_scene(
     name: &str,
     selection: BounceSelection,
     kernel: Kernel,
+    edges: Edges,
     tolerance: f32,
     mip_tolerance: f64,
 ) {
-    let test = format!("gpu_splats_match_cpu_{name}");
+    let test = format!("gpu_splats_match_cpu_{name}_{edges:?}");
     let Some(ctx) = gpu_or_skip(&test) else {
         return;
     };
     let scene = builtin(name).unwrap();
     let bvh = Bvh::build(&scene);
     let camera = scene.camera().with_aspect(1.0);
-    let est = estimator_with(&scene, 20_000, 8.0, selection, kernel);
+    let est = estimator_with(&scene, 20_000, 8.0, selection, kernel, edges);
     let cpu = splat_pass_cpu(&est, &bvh, &camera, SIZE, SIZE);
     let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
     let (gpu, gpu_ids) = gpu_splats(
@@ -267,6 +277,7 @@ fn gpu_splats_match_cpu_glosbox() {
         "glosbox",
         BounceSelection::All,
         Kernel::Silverman,
+        Edges::Truncated,
         1e-3,
         0.06,
     );
@@ -279,6 +290,7 @@ fn gpu_splats_match_cpu_cornell_indirect() {
         "cornell",
         BounceSelection::Indirect,
         Kernel::Silverman,
+        Edges::Truncated,
         1e-3,
         0.06,
     );
@@ -293,7 +305,29 @@ fn gpu_splats_match_cpu_cornell_gaussian_kernel() {
         "cornell",
         BounceSelection::All,
         Kernel::Gaussian,
+        Edges::Truncated,
         5e-3,
+        0.06,
+    );
+}
+
+/// With the estimate divided by the kernel's mass on the surface (normalised edges), the GPU reads the same bilinear grid of M as the CPU: the same tolerances hold, and the image differs from the truncated one (the rims along every edge are lifted).
+#[test]
+fn gpu_splats_match_cpu_with_normalised_edges() {
+    check_scene(
+        "glosbox",
+        BounceSelection::All,
+        Kernel::Silverman,
+        Edges::Normalised,
+        1e-3,
+        0.06,
+    );
+    check_scene(
+        "cornell",
+        BounceSelection::All,
+        Kernel::Silverman,
+        Edges::Normalised,
+        1e-3,
         0.06,
     );
 }

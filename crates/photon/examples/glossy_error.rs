@@ -44,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             kernel: Kernel::Silverman,
             support,
             selection: BounceSelection::All,
+            edges: lustre_photon::Edges::Truncated,
         },
     )?;
     let glossy: Vec<bool> = scene

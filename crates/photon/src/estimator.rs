@@ -17,7 +17,10 @@
 //! world position (the kernel then uses the straight-line distance, a good
 //! approximation of the distance along the surface while `h` is small
 //! against the curvature radius). Near a surface's edges part of the kernel
-//! falls outside the surface and the estimate is biased low, as in the paper.
+//! falls outside the surface and the estimate is biased low, as in the paper
+//! ([`Edges::Truncated`]); [`Edges::Normalised`] divides it by the kernel's
+//! mass on the surface ([`crate::edge`]), the paper's future work on the
+//! appearance of polygon edges.
 //!
 //! **Noise on glossy surfaces.** Equation 3 keeps the expected number of
 //! photons under one kernel fixed (`π C²` on a uniformly lit surface), so as
@@ -38,6 +41,7 @@ use lustre_brdf::BoxedBrdf;
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
 
+use crate::edge::KernelMass;
 use crate::error::{PhotonError, Result};
 use crate::grid::PointGrid;
 use crate::hit_record::{HitRecord, PhotonMap};
@@ -86,6 +90,16 @@ pub enum Support {
     },
 }
 
+/// How the estimate treats the edges of planar surfaces, where part of a kernel falls off the polygon (the paper's future work; [`crate::edge`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Edges {
+    /// Kernels cut at the polygon's edges, as in the paper: the estimate falls to ½ along an edge and ¼ at a square corner of a uniformly lit surface.
+    #[default]
+    Truncated,
+    /// The estimate at `x` divided by the kernel's mass on the surface around `x` ([`KernelMass`]): exact for a uniform density up to the edges.
+    Normalised,
+}
+
 /// Settings of the splat estimator (section 2.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EstimatorOptions {
@@ -95,6 +109,8 @@ pub struct EstimatorOptions {
     pub support: Support,
     /// Which photons to splat (section 2.2.1).
     pub selection: BounceSelection,
+    /// Kernels cut at polygon edges or normalised by their mass on the surface ([`crate::edge`]).
+    pub edges: Edges,
 }
 
 impl Default for EstimatorOptions {
@@ -103,6 +119,7 @@ impl Default for EstimatorOptions {
             kernel: Kernel::Silverman,
             support: Support::Scaled(40.0),
             selection: BounceSelection::All,
+            edges: Edges::Truncated,
         }
     }
 }
@@ -154,6 +171,8 @@ pub struct SplatEstimator {
     brdfs: Vec<BoxedBrdf>,
     /// Photons per surface.
     surfaces: Vec<SurfaceSplats>,
+    /// The kernel's mass on each planar surface, with [`Edges::Normalised`].
+    mass: Option<KernelMass>,
 }
 
 impl SplatEstimator {
@@ -240,12 +259,17 @@ impl SplatEstimator {
             };
             s.grid = PointGrid::build(&s.points, s.h);
         }
+        let mass = (options.edges == Edges::Normalised).then(|| {
+            let supports: Vec<f32> = surfaces.iter().map(|s| s.h).collect();
+            KernelMass::build(&params, &supports, options.kernel)
+        });
         Ok(Self {
             options,
             materials: scene.surfaces().iter().map(|s| s.material).collect(),
             brdfs: scene_brdfs(scene)?,
             params,
             surfaces,
+            mass,
         })
     }
 
@@ -257,6 +281,19 @@ impl SplatEstimator {
     /// The kernel support `h` of a surface (equation 3; 0 for a surface without photons or that does not exist).
     pub fn support(&self, surface: SurfaceId) -> f32 {
         self.surfaces.get(surface as usize).map_or(0.0, |s| s.h)
+    }
+
+    /// The kernel's mass on each planar surface ([`Edges::Normalised`]); `None` with [`Edges::Truncated`].
+    pub fn kernel_mass(&self) -> Option<&KernelMass> {
+        self.mass.as_ref()
+    }
+
+    /// The divisor of the estimate at the index-space point `q` of `surface`: the kernel's mass there with [`Edges::Normalised`] on a planar surface, else 1.
+    fn mass_at(&self, surface: SurfaceId, q: Vec3) -> f32 {
+        match (&self.mass, self.params.get(surface)) {
+            (Some(mass), Some(SurfaceParam::Planar(_))) => mass.at(surface, q.truncate()),
+            _ => 1.0,
+        }
     }
 
     /// Number of photons splatted on a surface.
@@ -315,7 +352,7 @@ impl SplatEstimator {
                 sum += brdf.eval(wi, wo_local) * s.powers[i] * k;
             }
         });
-        sum
+        sum / self.mass_at(surface, q)
     }
 
     /// Every selected photon as a [`Splat`], surface by surface (the preprocessing of section 2.2: one splat per photon hit, sized by its surface's `h`).
@@ -382,7 +419,7 @@ impl SplatEstimator {
                     * k;
             }
         });
-        sum
+        sum / self.mass_at(surface, q)
     }
 
     /// [`SplatEstimator::radiance`] at a ray hit, towards the viewer along `wo`.
@@ -410,7 +447,7 @@ impl SplatEstimator {
                 sum += brdf.eval(frame.to_local(s.directions[i]), wo_local) * s.powers[i] * k;
             }
         }
-        sum
+        sum / self.mass_at(surface, q)
     }
 
     /// Irradiance-like density `Σ φ_p K/h²` (W/m², no BRDF) at `x`: what a diffuse surface of albedo ρ turns into radiance ρ/π times this.
@@ -427,7 +464,7 @@ impl SplatEstimator {
                 sum += s.powers[i] * self.options.kernel.scaled(d2, s.h);
             }
         });
-        sum
+        sum / self.mass_at(surface, q)
     }
 
     /// The BRDF of a surface.

@@ -39,6 +39,19 @@ impl Kernel {
         }
     }
 
+    /// The radius `r ≤ 1` of the disc that holds the kernel mass `m ∈ [0, 1]`: the inverse of `1 − (1 − r²)³` (Silverman's `K₂`) or of `(1 − e^(−r²/2σ²)) / (1 − e^(−1/2σ²))` (the truncated Gaussian).
+    pub fn radius_enclosing(&self, m: f32) -> f32 {
+        let m = m.clamp(0.0, 1.0);
+        let r2 = match self {
+            Self::Silverman => 1.0 - (1.0 - m).cbrt(),
+            Self::Gaussian => {
+                let s2 = GAUSSIAN_SIGMA * GAUSSIAN_SIGMA;
+                -2.0 * s2 * (1.0 - m * (1.0 - (-0.5 / s2).exp())).ln()
+            }
+        };
+        r2.clamp(0.0, 1.0).sqrt()
+    }
+
     /// `K(x)` at a 2D offset already divided by the support `h`.
     pub fn eval(&self, x: glam::Vec2) -> f32 {
         self.eval_r2(x.length_squared())
@@ -128,6 +141,25 @@ mod tests {
         assert!((fixed - PI * c * c).abs() < 1e-2 * fixed);
         assert_eq!(kernel_support_silverman(s, area, 0), 0.0);
         assert_eq!(kernel_support_silverman(f32::NAN, area, n0), 0.0);
+    }
+
+    /// The disc of radius `radius_enclosing(m)` holds mass `m`, by a midpoint sum of `K` over rings.
+    #[test]
+    fn radius_enclosing_inverts_the_radial_mass() {
+        for kernel in [Kernel::Silverman, Kernel::Gaussian] {
+            for m in [0.1f32, 0.5, 0.9, 1.0] {
+                let r = kernel.radius_enclosing(m) as f64;
+                let n = 10_000;
+                let mass: f64 = (0..n)
+                    .map(|i| {
+                        let s = (i as f64 + 0.5) / n as f64 * r;
+                        kernel.eval_r2((s * s) as f32) as f64 * 2.0 * std::f64::consts::PI * s * r
+                            / n as f64
+                    })
+                    .sum();
+                assert!((mass - m as f64).abs() < 1e-4, "{kernel:?} {m}: {mass}");
+            }
+        }
     }
 
     #[test]

@@ -17,6 +17,7 @@
 //! | 2.2 unit-volume kernel `k`, equation 3 `h = C √(A/n)` | [`Kernel`], [`kernel_support`] |
 //! | 2.2 the kernel `k` of Silverman's book (reference 13): the `n^(-1/6)` bandwidth rate | [`kernel_support_silverman`], [`Support::Silverman`] |
 //! | 2.2 equation 2 (with `1/h²`, see [`estimator`]) | [`SplatEstimator`] |
+//! | 6 future work: the appearance of polygon edges (beyond the paper: the kernel's mass on the surface) | [`KernelMass`], [`Edges`] |
 //! | 2.2.1 direct/indirect split | [`BounceSelection`], [`HitRecord::is_indirect`] |
 //!
 //! ```
@@ -35,6 +36,7 @@
 //! ```
 
 mod crc32;
+pub mod edge;
 pub mod emission;
 mod error;
 pub mod estimator;
@@ -48,9 +50,10 @@ pub mod quantise;
 pub mod trace;
 
 pub use crc32::{Crc32, crc32};
+pub use edge::{KernelMass, MassGrid};
 pub use emission::{EmissionSampling, allocate_photons, photon_stream};
 pub use error::{PhotonError, Result};
-pub use estimator::{BounceSelection, EstimatorOptions, Splat, SplatEstimator, Support};
+pub use estimator::{BounceSelection, Edges, EstimatorOptions, Splat, SplatEstimator, Support};
 pub use file::{append_photon_file, read_photon_file, read_photon_file_for, write_photon_file};
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};

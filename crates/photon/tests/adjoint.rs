@@ -222,6 +222,7 @@ fn splat_estimate_gathers_with_the_photon_direction_as_wi() {
             kernel: Kernel::Silverman,
             support: Support::Fixed(h),
             selection: BounceSelection::Direct,
+            edges: lustre_photon::Edges::Truncated,
         },
     )
     .unwrap();

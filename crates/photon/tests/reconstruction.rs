@@ -192,6 +192,7 @@ fn point_light_irradiance_on_a_plane() {
                 kernel,
                 support: Support::Fixed(h as f32),
                 selection: BounceSelection::All,
+                edges: lustre_photon::Edges::Truncated,
             },
         )
         .unwrap();
@@ -285,4 +286,107 @@ fn quasi_random_emission_has_lower_error() {
         rms.push(r);
     }
     assert!(rms[1] < rms[0] && rms[2] < rms[0], "{rms:?}");
+}
+
+/// [`expected_irradiance`] on the square `[-half, half]²` only, where the photons can land: the truncated estimate's mean and standard deviation, and the kernel's mass on the square `M = ∫_S K_h(x - y) dy`, by the same polar midpoint rule.
+fn expected_on_square(
+    h: f64,
+    x: Vec2,
+    d: f64,
+    intensity: f64,
+    n: f64,
+    half: f64,
+) -> (f64, f64, f64) {
+    let e = |y: (f64, f64)| {
+        let r2 = y.0 * y.0 + y.1 * y.1 + d * d;
+        intensity * d / (r2 * r2.sqrt())
+    };
+    let (nr, na) = (400, 720);
+    let (mut mean, mut second, mut mass) = (0.0, 0.0, 0.0);
+    for i in 0..nr {
+        let r = (i as f64 + 0.5) / nr as f64 * h;
+        let k = f64::from(Kernel::Silverman.eval_r2(((r / h) * (r / h)) as f32)) / (h * h);
+        for j in 0..na {
+            let a = (j as f64 + 0.5) / na as f64 * 2.0 * PI;
+            let y = (f64::from(x.x) + r * a.cos(), f64::from(x.y) + r * a.sin());
+            if y.0.abs() > half || y.1.abs() > half {
+                continue;
+            }
+            let w = r * (h / nr as f64) * (2.0 * PI / na as f64);
+            mean += k * e(y) * w;
+            second += k * k * e(y) * w;
+            mass += k * w;
+        }
+    }
+    let phi = 4.0 * PI * intensity;
+    let var = (phi * second - mean * mean) / n;
+    (mean, var.max(0.0).sqrt(), mass)
+}
+
+/// A point light 0.5 m over a 1 m square: with normalised edges the estimate at the square's centre, an edge and a corner is the irradiance the photons bring there averaged over the part of the kernel on the square (`E_h / M`, within 5 σ and the 1 % of M's grid), where the truncated estimate falls to about ½ on the edge and ¼ at the corner (`E_h`).
+#[test]
+fn normalised_edges_undo_the_kernel_cut_at_a_square_s_edges() {
+    let (d, half, rho, intensity) = (0.5f64, 0.5f64, 0.6f32, 1.0f64);
+    let scene = support::point_over_plane(half as f32, d as f32, rho, intensity as f32);
+    let bvh = Bvh::build(&scene);
+    let n = 400_000u64;
+    let map = trace_photons(
+        &scene,
+        &bvh,
+        &TraceOptions {
+            photons: n,
+            seed: 5,
+            ..TraceOptions::default()
+        },
+        &NoProgress,
+    )
+    .unwrap();
+    let h = 0.2f64;
+    let build = |edges| {
+        SplatEstimator::build(
+            &scene,
+            &map,
+            EstimatorOptions {
+                support: Support::Fixed(h as f32),
+                edges,
+                ..EstimatorOptions::default()
+            },
+        )
+        .unwrap()
+    };
+    let (truncated, normalised) = (
+        build(lustre_photon::Edges::Truncated),
+        build(lustre_photon::Edges::Normalised),
+    );
+    for (x, m_expected) in [
+        (Vec2::ZERO, 1.0),
+        (Vec2::new(0.5, 0.0), 0.5),
+        (Vec2::new(0.5, 0.5), 0.25),
+        (Vec2::new(-0.45, 0.2), 0.0),
+    ] {
+        let (mean, sigma, mass) = expected_on_square(h, x, d, intensity, n as f64, half);
+        if m_expected > 0.0 {
+            assert!((mass - m_expected).abs() < 1e-3, "M at {x}: {mass}");
+        }
+        let p = Vec3::new(x.x, 0.0, x.y);
+        let radiance = |est: &SplatEstimator| f64::from(est.radiance(0, p, Vec3::Y, Vec3::Y).x);
+        let scale = f64::from(rho) / PI;
+        let (lt, ln) = (radiance(&truncated), radiance(&normalised));
+        eprintln!(
+            "at {x}: M = {mass:.4}; truncated {lt:.5} vs E[L] {:.5} ± {:.5}; normalised {ln:.5} vs {:.5} ± {:.5}",
+            scale * mean,
+            scale * sigma,
+            scale * mean / mass,
+            scale * sigma / mass,
+        );
+        assert!(
+            (lt - scale * mean).abs() <= 5.0 * scale * sigma,
+            "truncated at {x}"
+        );
+        let bound = 5.0 * scale * sigma / mass + 0.01 * scale * mean / mass;
+        assert!(
+            (ln - scale * mean / mass).abs() <= bound,
+            "normalised at {x}"
+        );
+    }
 }

@@ -49,6 +49,7 @@ fn relative_variance(photons: u64, mut support: impl FnMut(usize) -> Support) ->
             kernel: Kernel::Silverman,
             support: support(n),
             selection: BounceSelection::All,
+            edges: lustre_photon::Edges::Truncated,
         },
     )
     .unwrap();

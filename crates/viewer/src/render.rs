@@ -3,7 +3,10 @@
 //! adapter and the time of each phase (DESIGN.md "Data flow", step 4).
 //!
 //! Techniques (Stürzlinger & Bastos 1997):
-//! - `splat`: section 2.2, every photon hit splatted with the BRDF towards the viewer.
+//! - `splat`: section 2.2, every photon hit splatted with the BRDF towards the
+//!   viewer; diffuse planar surfaces from textures precomputed once from the
+//!   same estimate (section 2.2.1's last paragraph; `--diffuse splat` splats
+//!   them too).
 //! - `splat-direct`: section 2.2.1, the optimised method: direct light from
 //!   point lights with shadow maps and per-pixel BRDF, diffuse planar surfaces
 //!   from textures precomputed once, and the splats of photons with more than
@@ -43,8 +46,8 @@ use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
 };
 use lustre_photon::{
-    BounceSelection, EmissionSampling, EstimatorOptions, Kernel, Progress, SplatEstimator, Support,
-    TraceOptions, trace_photons,
+    BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, Progress, SplatEstimator,
+    Support, TraceOptions, trace_photons,
 };
 use serde_json::json;
 
@@ -119,6 +122,24 @@ pub enum SupportArg {
     GlossySilverman,
 }
 
+/// How the splat estimate treats the edges of planar surfaces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EdgesArg {
+    /// Kernels cut at the polygon's edges, as in the paper (dark rims of width h along wall joints and box edges).
+    Truncated,
+    /// The estimate divided by the kernel's mass on the surface (the paper's future work on polygon edges).
+    Normalised,
+}
+
+impl From<EdgesArg> for Edges {
+    fn from(arg: EdgesArg) -> Self {
+        match arg {
+            EdgesArg::Truncated => Edges::Truncated,
+            EdgesArg::Normalised => Edges::Normalised,
+        }
+    }
+}
+
 /// Photon emission sampling.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum EmissionArg {
@@ -171,6 +192,9 @@ pub struct RenderArgs {
     /// The constant c of Silverman's rate h = c sqrt(A) n^(-1/6).
     #[arg(long, default_value_t = DEFAULT_SUPPORT_C, allow_negative_numbers = true)]
     pub support_c: f32,
+    /// Splat estimates at polygon edges: kernels cut off as in the paper, or normalised by the kernel's mass on the surface.
+    #[arg(long, value_enum, default_value_t = EdgesArg::Normalised)]
+    pub edges: EdgesArg,
     /// Image width and height in pixels, `WxH`.
     #[arg(long, default_value = "640x480", value_parser = crate::parse_size)]
     pub size: (u32, u32),
@@ -189,10 +213,9 @@ pub struct RenderArgs {
     /// Photon emission sampling.
     #[arg(long, value_enum, default_value_t = EmissionArg::Sobol)]
     pub emission: EmissionArg,
-    /// Diffuse planar surfaces: splatted, or precomputed into textures
-    /// (default: `splat` for `--technique splat`, `texture` for `splat-direct`).
-    #[arg(long, value_enum)]
-    pub diffuse: Option<DiffuseArg>,
+    /// Diffuse planar surfaces: precomputed into textures (section 2.2.1, drawn in every antialiasing frame), or splatted like every other surface (section 2.2 as written, drawn once through the pixel centres)
+    #[arg(long, value_enum, default_value_t = DiffuseArg::Texture)]
+    pub diffuse: DiffuseArg,
     /// Glossy BRDFs on the GPU.
     #[arg(long, value_enum, default_value_t = GlossyArg::Exact)]
     pub glossy: GlossyArg,
@@ -421,10 +444,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 
     // Diffuse surfaces precomputed into textures (section 2.2.1).
     let start = Instant::now();
-    let diffuse = args.diffuse.unwrap_or(match args.technique {
-        Technique::SplatDirect => DiffuseArg::Texture,
-        _ => DiffuseArg::Splat,
-    });
+    let diffuse = args.diffuse;
     let atlas = match (diffuse, &splatting) {
         (DiffuseArg::Texture, Some(splatting)) => Some(
             DiffuseAtlas::build(
@@ -685,6 +705,7 @@ fn splat_setup(
             kernel,
             support: args.support_rule(),
             selection,
+            edges: args.edges.into(),
         },
     )
     .context("cannot build the splats")?;

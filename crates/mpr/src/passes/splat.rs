@@ -12,7 +12,7 @@ use std::ops::Range;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use lustre_geometry::{Bvh, Camera, Scene};
-use lustre_photon::{Kernel, Splat, SplatEstimator};
+use lustre_photon::{Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, SurfaceParams};
 
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
@@ -109,6 +109,74 @@ impl GpuSplat {
     }
 }
 
+/// Marks a surface without a kernel-mass grid in [`GpuMassGrid::offset`]: its estimate is not divided (`M = 1`).
+pub const NO_MASS_GRID: u32 = u32::MAX;
+
+/// One surface's grid of the kernel's mass on the surface (lustre-photon's [`KernelMass`], the paper's future work on polygon edges), as `splat.wgsl` reads it (`MassGrid`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuMassGrid {
+    /// Origin of the surface's `(u, v)` frame in m.
+    pub origin: [f32; 3],
+    /// Index of sample `(0, 0)` in the values buffer, or [`NO_MASS_GRID`].
+    pub offset: u32,
+    /// Unit `u` axis.
+    pub u_axis: [f32; 3],
+    /// Samples along `u`.
+    pub columns: u32,
+    /// Unit `v` axis.
+    pub v_axis: [f32; 3],
+    /// Samples along `v`.
+    pub rows: u32,
+    /// `(u, v)` of sample `(0, 0)` in m.
+    pub min: [f32; 2],
+    /// Sample spacing along `u` and `v` in m.
+    pub spacing: [f32; 2],
+}
+
+/// The per-surface records and the concatenated values of `mass`'s grids (every surface [`NO_MASS_GRID`] without `mass`); never empty, for binding.
+pub fn gpu_mass_grids(
+    params: &SurfaceParams,
+    mass: Option<&KernelMass>,
+) -> (Vec<GpuMassGrid>, Vec<f32>) {
+    let mut records = Vec::with_capacity(params.len().max(1));
+    let mut values = Vec::new();
+    for (id, param) in params.all().iter().enumerate() {
+        let grid = mass.and_then(|m| m.grid(id as u32));
+        let record = match (param, grid) {
+            (SurfaceParam::Planar(frame), Some(g)) => {
+                let offset = values.len() as u32;
+                values.extend_from_slice(&g.values);
+                GpuMassGrid {
+                    origin: frame.origin.to_array(),
+                    offset,
+                    u_axis: frame.u_axis.to_array(),
+                    columns: g.columns,
+                    v_axis: frame.v_axis.to_array(),
+                    rows: g.rows,
+                    min: g.min.to_array(),
+                    spacing: g.spacing.to_array(),
+                }
+            }
+            _ => GpuMassGrid {
+                offset: NO_MASS_GRID,
+                ..GpuMassGrid::zeroed()
+            },
+        };
+        records.push(record);
+    }
+    if records.is_empty() {
+        records.push(GpuMassGrid {
+            offset: NO_MASS_GRID,
+            ..GpuMassGrid::zeroed()
+        });
+    }
+    if values.is_empty() {
+        values.push(1.0);
+    }
+    (records, values)
+}
+
 /// The splats of a photon map on the GPU, grouped by surface, with the materials they are shaded with (the precomputed triangles of section 2.2).
 #[derive(Debug)]
 pub struct SplatBuffers {
@@ -118,6 +186,10 @@ pub struct SplatBuffers {
     pub surface_ranges: Vec<Range<u32>>,
     materials: wgpu::Buffer,
     surface_materials: wgpu::Buffer,
+    /// [`GpuMassGrid`] by `SurfaceId` (every one [`NO_MASS_GRID`] unless built from an estimator with normalised edges).
+    mass_grids: wgpu::Buffer,
+    /// The grids' values, concatenated.
+    mass_values: wgpu::Buffer,
     /// Number of splats.
     pub count: u32,
 }
@@ -138,7 +210,15 @@ impl SplatBuffers {
         glossy: GlossyModel,
     ) -> Result<Self> {
         let splats = estimator.splats();
-        Self::from_splats(ctx, scene, &splats, glossy)
+        Self::from_splats(ctx, scene, &splats, glossy)?.with_kernel_mass(ctx, estimator)
+    }
+
+    /// Replaces the kernel-mass grids with those of `estimator` (none with truncated edges).
+    fn with_kernel_mass(mut self, ctx: &GpuContext, estimator: &SplatEstimator) -> Result<Self> {
+        let (records, values) = gpu_mass_grids(estimator.params(), estimator.kernel_mass());
+        self.mass_grids = storage_buffer(ctx, "splat-mass-grids", bytemuck::cast_slice(&records))?;
+        self.mass_values = storage_buffer(ctx, "splat-mass-values", bytemuck::cast_slice(&values))?;
+        Ok(self)
     }
 
     /// Uploads the splats of `estimator` except those on surfaces whose `exclude` entry (by `SurfaceId`) is true: surfaces another pass renders, such as the precomputed diffuse textures of section 2.2.1. Surfaces beyond `exclude` are kept.
@@ -151,10 +231,10 @@ impl SplatBuffers {
     ) -> Result<Self> {
         let mut splats = estimator.splats();
         splats.retain(|s| !exclude.get(s.surface as usize).copied().unwrap_or(false));
-        Self::from_splats(ctx, scene, &splats, glossy)
+        Self::from_splats(ctx, scene, &splats, glossy)?.with_kernel_mass(ctx, estimator)
     }
 
-    /// Uploads `splats` (any order; they are grouped by surface here) in buffers of at most 128 MiB.
+    /// Uploads `splats` (any order; they are grouped by surface here) in buffers of at most 128 MiB, with truncated kernels at polygon edges (no kernel-mass grids).
     pub fn from_splats(
         ctx: &GpuContext,
         scene: &Scene,
@@ -242,10 +322,32 @@ impl SplatBuffers {
                 bytemuck::cast_slice(&surface_materials),
                 wgpu::BufferUsages::STORAGE,
             )?,
+            mass_grids: storage_buffer(
+                ctx,
+                "splat-mass-grids",
+                bytemuck::bytes_of(&GpuMassGrid {
+                    offset: NO_MASS_GRID,
+                    ..GpuMassGrid::zeroed()
+                }),
+            )?,
+            mass_values: storage_buffer(ctx, "splat-mass-values", bytemuck::bytes_of(&1.0f32))?,
             surface_ranges,
             count,
         })
     }
+}
+
+/// A read-only storage buffer initialised with `contents`.
+fn storage_buffer(ctx: &GpuContext, label: &str, contents: &[u8]) -> Result<wgpu::Buffer> {
+    use wgpu::util::DeviceExt;
+    ctx.checked("splat upload", || {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+    })
 }
 
 /// The splat pass's uniform block (`SplatUniforms` in `splat.wgsl`).
@@ -347,6 +449,10 @@ impl SplatPass {
                 },
                 count: None,
             };
+            let fragment_storage = |binding| wgpu::BindGroupLayoutEntry {
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ..storage(binding)
+            };
             let uniform_entry = wgpu::BindGroupLayoutEntry {
                 binding: 0,
                 visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
@@ -389,6 +495,8 @@ impl SplatPass {
                         },
                         count: None,
                     },
+                    fragment_storage(6),
+                    fragment_storage(7),
                 ],
             });
             let mask_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -577,6 +685,14 @@ impl SplatPass {
                 wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::TextureView(&targets.surface_id.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: splats.mass_grids.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: splats.mass_values.as_entire_binding(),
                 },
             ],
         });

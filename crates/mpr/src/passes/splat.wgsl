@@ -19,7 +19,12 @@
 // | h      | kernel support of the surface (equation 3)                       | m          |
 // | k      | kernel-space offset (x - x_p)/h in the tangent frame of n        | 1          |
 // | K      | unit-volume kernel: its formula, or the 64x64 mip-mapped texture | 1          |
-// | L      | phi f_r(wi, wo) K(k) / h^2, added per pixel                      | W/(m^2 sr) |
+// | M      | the kernel's mass on the surface around the fragment (MassGrid)  | 1          |
+// | L      | phi f_r(wi, wo) K(k) / (h^2 M), added per pixel                  | W/(m^2 sr) |
+// M (lustre-photon's KernelMass, beyond the paper: its future work on the
+// appearance of polygon edges) is 1 away from edges and on surfaces without a
+// grid, 1/2 along an edge, 1/4 at a square corner: dividing by it undoes the
+// part of each kernel that falls off the polygon.
 // The triangle has its right angle at k = (-1, -1) and legs of 2 + sqrt(2)
 // along the frame's axes: the smallest such triangle whose sides touch the
 // unit support disc (section 3.2, figure 1; lustre_photon::splat_triangle).
@@ -40,6 +45,27 @@ struct SplatUniforms {
 @group(0) @binding(4) var kernel_sampler: sampler;
 @group(0) @binding(5) var surface_ids: texture_2d<u32>;
 
+// One surface's grid of M (GpuMassGrid in splat.rs): sample (i, j) at
+// min + (i, j) spacing in the surface's (u, v) frame, values[offset + j columns + i].
+struct MassGrid {
+    origin: vec3f,
+    // NO_MASS_GRID: no grid, M = 1.
+    offset: u32,
+    u_axis: vec3f,
+    columns: u32,
+    v_axis: vec3f,
+    rows: u32,
+    min: vec2f,
+    spacing: vec2f,
+}
+
+@group(0) @binding(6) var<storage, read> mass_grids: array<MassGrid>;
+@group(0) @binding(7) var<storage, read> mass_values: array<f32>;
+
+const NO_MASS_GRID: u32 = 0xffffffffu;
+// lustre-photon's MIN_MASS.
+const MIN_MASS: f32 = 0.0625;
+
 // The enclosing triangle's corners in kernel units (1 + sqrt 2 = 2.41421356).
 const SPLAT_CORNERS = array<vec2f, 3>(
     vec2f(-1.0, -1.0),
@@ -52,6 +78,8 @@ struct SplatOut {
     @location(0) kernel: vec2f,
     @location(1) @interpolate(flat) colour: vec3f,
     @location(2) @interpolate(flat) surface: u32,
+    // World position of the fragment on the surface's plane.
+    @location(3) world: vec3f,
 }
 
 // material_brdf of materials[mi], reading one lobe at a time from storage
@@ -86,6 +114,7 @@ fn vs_splat(
     let world = position + h * (k.x * basis[0] + k.y * basis[1]);
     out.clip = uniforms.view_projection * vec4f(world, 1.0);
     out.kernel = k;
+    out.world = world;
     let f = splat_brdf(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
     out.colour = power * f / (h * h);
     out.surface = surface;
@@ -124,6 +153,28 @@ fn splat_kernel_centre(k: vec2f) -> f32 {
     return SPLAT_SILVERMAN * t * t;
 }
 
+// M at a world point of a surface: bilinear between the four samples around
+// its (u, v), clamped to the grid, at least MIN_MASS (KernelMass::at).
+fn splat_mass(surface: u32, world: vec3f) -> f32 {
+    let g = mass_grids[surface];
+    if g.offset == NO_MASS_GRID {
+        return 1.0;
+    }
+    let d = world - g.origin;
+    let uv = vec2f(dot(d, g.u_axis), dot(d, g.v_axis));
+    let last = vec2u(g.columns, g.rows) - 1u;
+    let s = clamp((uv - g.min) / g.spacing, vec2f(0.0), vec2f(last));
+    let i0 = min(vec2u(floor(s)), last);
+    let i1 = min(i0 + 1u, last);
+    let f = s - vec2f(i0);
+    let m00 = mass_values[g.offset + i0.y * g.columns + i0.x];
+    let m10 = mass_values[g.offset + i0.y * g.columns + i1.x];
+    let m01 = mass_values[g.offset + i1.y * g.columns + i0.x];
+    let m11 = mass_values[g.offset + i1.y * g.columns + i1.x];
+    let m = mix(mix(m00, m10, f.x), mix(m01, m11, f.x), f.y);
+    return max(m, MIN_MASS);
+}
+
 // Surface-id restriction: the splat adds only where its own surface is visible.
 // The filtering choice is uniform, so the mip-mapped branch may use derivatives;
 // the centre branch rejects other surfaces before it reads the texture.
@@ -135,24 +186,24 @@ fn fs_splat_id(in: SplatOut) -> @location(0) vec4f {
         if visible != in.surface {
             discard;
         }
-        return vec4f(in.colour * value, 0.0);
+        return vec4f(in.colour * value / splat_mass(in.surface, in.world), 0.0);
     }
     if visible != in.surface || !splat_inside(in.kernel) {
         discard;
     }
-    return vec4f(in.colour * splat_kernel_centre(in.kernel), 0.0);
+    return vec4f(in.colour * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
 // Stencil restriction: the stencil test has already limited the splat to its surface's mask.
 @fragment
 fn fs_splat_stencil(in: SplatOut) -> @location(0) vec4f {
     if uniforms.options.x != 0u {
-        return vec4f(in.colour * splat_kernel_filtered(in.kernel), 0.0);
+        return vec4f(in.colour * splat_kernel_filtered(in.kernel) / splat_mass(in.surface, in.world), 0.0);
     }
     if !splat_inside(in.kernel) {
         discard;
     }
-    return vec4f(in.colour * splat_kernel_centre(in.kernel), 0.0);
+    return vec4f(in.colour * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
 // The per-surface stencil mask: the surface's triangles drawn with an equal-depth
