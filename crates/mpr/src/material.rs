@@ -262,7 +262,23 @@ impl GpuMaterial {
             .all(|l| l.kind == LOBE_NONE || l.kind == LOBE_LAMBERT)
     }
 
-    /// The Lambertian reflectance `Σ w kd` of a diffuse material.
+    /// Whether some lobe is Lambertian with a non-zero reflectance (the part a diffuse texture can hold, section 2.2.1).
+    pub fn has_lambert(&self) -> bool {
+        self.diffuse_reflectance().max_element() > 0.0
+    }
+
+    /// The material without its Lambertian lobes: what the splats of a surface add when a diffuse texture holds `Σ w kd / π` (its other lobes, Ward's and Phong's own `kd` included, unchanged).
+    pub fn without_lambert(&self) -> Self {
+        let mut out = *self;
+        for l in &mut out.lobes {
+            if l.kind == LOBE_LAMBERT {
+                *l = GpuLobe::zeroed();
+            }
+        }
+        out
+    }
+
+    /// The Lambertian reflectance `Σ w kd` of the material's Lambertian lobes.
     pub fn diffuse_reflectance(&self) -> Rgb {
         self.lobes
             .iter()

@@ -151,12 +151,14 @@ pub enum EmissionArg {
     Sobol,
 }
 
-/// How purely diffuse planar surfaces receive their photons.
+/// How the Lambertian part of planar surfaces receives its photons.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum DiffuseArg {
     /// Splatted like every other surface.
     Splat,
-    /// Precomputed once into textures, view independent (section 2.2.1).
+    /// Purely Lambertian surfaces precomputed once into textures, view independent (section 2.2.1); the others splatted whole.
+    DiffuseSurfaces,
+    /// The Lambertian lobes of every planar surface precomputed into textures (equation 3's support), the splats of mixed surfaces carrying only their other lobes.
     Texture,
 }
 
@@ -213,7 +215,7 @@ pub struct RenderArgs {
     /// Photon emission sampling.
     #[arg(long, value_enum, default_value_t = EmissionArg::Sobol)]
     pub emission: EmissionArg,
-    /// Diffuse planar surfaces: precomputed into textures (section 2.2.1, drawn in every antialiasing frame), or splatted like every other surface (section 2.2 as written, drawn once through the pixel centres)
+    /// The Lambertian part of planar surfaces: every Lambertian lobe precomputed into textures (section 2.2.1, drawn in every antialiasing frame), only purely Lambertian surfaces so (the paper's), or splatted like every other surface (section 2.2 as written, drawn once through the pixel centres)
     #[arg(long, value_enum, default_value_t = DiffuseArg::Texture)]
     pub diffuse: DiffuseArg,
     /// Glossy BRDFs on the GPU.
@@ -304,8 +306,8 @@ impl RenderArgs {
 /// The default C of equation 3; chosen by the error against the Mitsuba reference (BENCHMARKS.md).
 pub const DEFAULT_KERNEL_C: f32 = 16.0;
 
-/// The default `c` of Silverman's rate `h = c √A n^(-1/6)`.
-pub const DEFAULT_SUPPORT_C: f32 = 1.0;
+/// The default `c` of Silverman's rate `h = c √A n^(-1/6)`: glosbox at 1M photons, 256², relMSE splat / splat-direct 0.0049 / 0.0047 at c = 1, 0.0043 / 0.0041 at 1.25, 0.0039 / 0.0038 at 1.5 (BENCHMARKS.md); larger kernels fill more, as c².
+pub const DEFAULT_SUPPORT_C: f32 = 1.25;
 
 /// The default `--light-samples`, chosen by error against the Mitsuba
 /// reference and time on lavapipe: on `cornell` at 256×256 FLIP 0.066 with 1,
@@ -446,11 +448,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let diffuse = args.diffuse;
     let atlas = match (diffuse, &splatting) {
-        (DiffuseArg::Texture, Some(splatting)) => Some(
+        (DiffuseArg::Texture | DiffuseArg::DiffuseSurfaces, Some(splatting)) => Some(
             DiffuseAtlas::build(
                 &scene,
-                &splatting.estimator,
-                DiffuseTextureOptions::default(),
+                splatting
+                    .lambertian
+                    .as_ref()
+                    .unwrap_or(&splatting.estimator),
+                DiffuseTextureOptions {
+                    lambertian_lobes: diffuse == DiffuseArg::Texture,
+                    ..DiffuseTextureOptions::default()
+                },
             )
             .context("cannot precompute the diffuse textures")?,
         ),
@@ -654,6 +662,8 @@ struct Splatting {
     emission: EmissionSampling,
     /// The splats.
     estimator: SplatEstimator,
+    /// Under `--support glossy-silverman` with `--diffuse texture`: the same photons with equation 3's support on every surface, for the Lambertian lobes of glossy surfaces in their textures (a diffuse estimate keeps equation 3's support); `None` where `estimator` serves.
+    lambertian: Option<SplatEstimator>,
 }
 
 /// Particle tracing (section 2.1) and one splat per selected hit, sized by equation 3 (section 2.2).
@@ -709,12 +719,29 @@ fn splat_setup(
         },
     )
     .context("cannot build the splats")?;
+    let lambertian = match (args.support, args.diffuse) {
+        (SupportArg::GlossySilverman, DiffuseArg::Texture) => Some(
+            SplatEstimator::build(
+                scene,
+                &map,
+                EstimatorOptions {
+                    kernel,
+                    support: Support::Scaled(args.kernel_c),
+                    selection,
+                    edges: args.edges.into(),
+                },
+            )
+            .context("cannot build the splats of the Lambertian lobes")?,
+        ),
+        _ => None,
+    };
     timings.insert("splat_setup".into(), json!(ms(start)));
     Ok(Splatting {
         emitted: map.emitted(),
         hit_records: map.len(),
         emission: options.emission,
         estimator,
+        lambertian,
     })
 }
 

@@ -16,6 +16,14 @@
 //! `L = ρ/π Σ φ K(·/h)/h²` ([`SplatEstimator::flux_density`] times
 //! [`GpuMaterial::diffuse_reflectance`]`/π`), in f32.
 //!
+//! **Lambertian lobes** ([`DiffuseTextureOptions::lambertian_lobes`],
+//! beyond the paper, which textures only diffuse surfaces): a planar surface
+//! whose material blends Lambertian lobes with others (the glossy floor:
+//! 0.7 Lambert + 0.3 rough mirror) gets a texture of its Lambertian part
+//! `Σ w ρ/π` too, and its splats are shaded without those lobes
+//! ([`GpuMaterial::without_lambert`]); the sum is the whole material, and the
+//! view-independent part is drawn antialiased with a diffuse surface's support.
+//!
 //! **Sides.** Surfaces are two-sided: the splat pass flips each splat's
 //! normal to the viewer and its BRDF is zero for photons that arrived on the
 //! other side, so a viewer in front of the plane sees the photons that
@@ -103,6 +111,8 @@ pub struct DiffuseTextureOptions {
     pub max_samples_per_side: u32,
     /// Largest atlas side in texels; default 4096 (256 MiB of `Rgba32Float` at most).
     pub max_atlas_side: u32,
+    /// Also texture the Lambertian lobes of planar surfaces whose material has other lobes too (the glossy floor's diffuse part), leaving the splats of those surfaces their other lobes ([`GpuMaterial::without_lambert`]); `false`, the default, textures only purely Lambertian surfaces as the paper does.
+    pub lambertian_lobes: bool,
 }
 
 impl Default for DiffuseTextureOptions {
@@ -111,6 +121,7 @@ impl Default for DiffuseTextureOptions {
             texel_size: TexelSize::Support(0.25),
             max_samples_per_side: 1024,
             max_atlas_side: 4096,
+            lambertian_lobes: false,
         }
     }
 }
@@ -299,7 +310,7 @@ fn lit_sides(estimator: &SplatEstimator, surfaces: usize) -> Vec<[bool; 2]> {
 }
 
 impl DiffuseAtlas {
-    /// Evaluates the textures of every planar Lambertian surface of `scene` from `estimator`'s photons and packs them (section 2.2.1 preprocessing; rayon over samples).
+    /// Evaluates the textures of every planar Lambertian surface of `scene` (with [`DiffuseTextureOptions::lambertian_lobes`], of every planar surface's Lambertian lobes) from `estimator`'s photons and packs them (section 2.2.1 preprocessing; rayon over samples).
     ///
     /// A material the GPU cannot flatten ([`GpuMaterial::from_model`] fails) is treated as not diffuse: its surfaces stay with the splat pass, which reports it.
     pub fn build(
@@ -314,7 +325,7 @@ impl DiffuseAtlas {
             .map(|m| {
                 GpuMaterial::from_model(&m.name, &m.model, GlossyModel::Exact)
                     .ok()
-                    .filter(GpuMaterial::is_diffuse)
+                    .filter(|g| g.is_diffuse() || (options.lambertian_lobes && g.has_lambert()))
                     .map(|g| g.diffuse_reflectance())
             })
             .collect();

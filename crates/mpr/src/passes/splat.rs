@@ -11,7 +11,7 @@ use std::ops::Range;
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
-use lustre_geometry::{Bvh, Camera, Scene};
+use lustre_geometry::{Bvh, Camera, Scene, SurfaceId};
 use lustre_photon::{Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, SurfaceParams};
 
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
@@ -221,17 +221,30 @@ impl SplatBuffers {
         Ok(self)
     }
 
-    /// Uploads the splats of `estimator` except those on surfaces whose `exclude` entry (by `SurfaceId`) is true: surfaces another pass renders, such as the precomputed diffuse textures of section 2.2.1. Surfaces beyond `exclude` are kept.
+    /// Uploads the splats of `estimator` for the surfaces whose Lambertian lobes another pass renders where `textured` (by `SurfaceId`) is true, such as the precomputed diffuse textures of section 2.2.1: a purely Lambertian such surface gets no splats, any other keeps its splats shaded without its Lambertian lobes ([`GpuMaterial::without_lambert`]). Surfaces beyond `textured` are splatted whole.
     pub fn new_excluding(
         ctx: &GpuContext,
         scene: &Scene,
         estimator: &SplatEstimator,
         glossy: GlossyModel,
-        exclude: &[bool],
+        textured: &[bool],
     ) -> Result<Self> {
+        let materials = scene_materials(scene, glossy)?;
+        let textured_and = |surface: SurfaceId, diffuse: bool| {
+            textured.get(surface as usize).copied().unwrap_or(false)
+                && scene
+                    .surfaces()
+                    .get(surface as usize)
+                    .and_then(|s| materials.get(s.material as usize))
+                    .is_some_and(|m| m.is_diffuse() == diffuse)
+        };
         let mut splats = estimator.splats();
-        splats.retain(|s| !exclude.get(s.surface as usize).copied().unwrap_or(false));
-        Self::from_splats(ctx, scene, &splats, glossy)?.with_kernel_mass(ctx, estimator)
+        splats.retain(|s| !textured_and(s.surface, true));
+        let glossy_part: Vec<bool> = (0..scene.surfaces().len() as SurfaceId)
+            .map(|s| textured_and(s, false))
+            .collect();
+        Self::upload(ctx, scene, &splats, glossy, 1 << 27, &glossy_part)?
+            .with_kernel_mass(ctx, estimator)
     }
 
     /// Uploads `splats` (any order; they are grouped by surface here) in buffers of at most 128 MiB, with truncated kernels at polygon edges (no kernel-mass grids).
@@ -251,6 +264,18 @@ impl SplatBuffers {
         splats: &[Splat],
         glossy: GlossyModel,
         max_chunk_bytes: u64,
+    ) -> Result<Self> {
+        Self::upload(ctx, scene, splats, glossy, max_chunk_bytes, &[])
+    }
+
+    /// [`SplatBuffers::from_splats_chunked`], the surfaces where `without_lambert` is true shaded without their Lambertian lobes.
+    fn upload(
+        ctx: &GpuContext,
+        scene: &Scene,
+        splats: &[Splat],
+        glossy: GlossyModel,
+        max_chunk_bytes: u64,
+        without_lambert: &[bool],
     ) -> Result<Self> {
         let surfaces = scene.surfaces().len();
         let mut by_surface: Vec<Vec<GpuSplat>> = vec![Vec::new(); surfaces];
@@ -281,7 +306,21 @@ impl SplatBuffers {
         if materials.is_empty() {
             materials.push(GpuMaterial::zeroed());
         }
-        let mut surface_materials: Vec<u32> = scene.surfaces().iter().map(|s| s.material).collect();
+        // Each material a surface needs without its Lambertian lobes, once, after the scene's own.
+        let mut variants: Vec<Option<u32>> = vec![None; materials.len()];
+        let mut surface_materials = Vec::with_capacity(scene.surfaces().len().max(1));
+        for (id, surface) in scene.surfaces().iter().enumerate() {
+            let m = surface.material as usize;
+            if without_lambert.get(id).copied().unwrap_or(false) && m < variants.len() {
+                let index = *variants[m].get_or_insert_with(|| {
+                    materials.push(materials[m].without_lambert());
+                    (materials.len() - 1) as u32
+                });
+                surface_materials.push(index);
+            } else {
+                surface_materials.push(surface.material);
+            }
+        }
         if surface_materials.is_empty() {
             surface_materials.push(0);
         }
