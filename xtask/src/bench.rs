@@ -333,7 +333,14 @@ const SPLAT_SECTION: &str = "splat";
 const SPLAT_GROUP: &str = "splat_glosbox";
 
 /// The configurations lustre-mpr's splat bench knows, in table order.
-const SPLAT_CONFIGS: &[&str] = &["full-250k", "full-1M", "optimised-250k", "optimised-1M"];
+const SPLAT_CONFIGS: &[&str] = &[
+    "full-250k",
+    "full-1M",
+    "full-250k-c16",
+    "optimised-250k",
+    "optimised-1M",
+    "optimised-250k-c16",
+];
 
 /// One configuration of the splat bench as it described itself (`splat_glosbox/<name>.json`).
 struct SplatSetup {
@@ -442,8 +449,9 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
     );
     let _ = writeln!(
         s,
-        "`glosbox` at {}×{}, C = {} in equation 3 (`lustre render` defaults to 16, whose splats \
-         cover 16 times the pixels: the fill-bound frames grow about as C²), Silverman's kernel \
+        "`glosbox` at {}×{}, C in equation 3 as each row says ({} unless the name ends in `-c16`: \
+         `lustre render` defaults to 16, whose splats cover 16 times the pixels, and the \
+         fill-bound frames grow about as C²), Silverman's kernel \
          evaluated at pixel centres, exact BRDFs, diffuse surfaces splatted too (no precomputed \
          textures), {} HDR target. Machine: {}. Adapter: {}.\n",
         first.width,
@@ -469,10 +477,10 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
     );
     let _ = writeln!(
         s,
-        "| configuration | photons emitted | splats | median frame, surface-id | median frame, \
+        "| configuration | C | photons emitted | splats | median frame, surface-id | median frame, \
          stencil | splat pass alone | splats/s | cores busy |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for x in setups {
         let t = SplatTimes::of(results, &x.name);
         let rate = t.splat_pass.map_or("–".into(), |ms| {
@@ -488,8 +496,9 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
         });
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {rate} | {busy} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {rate} | {busy} |",
             x.name,
+            x.kernel_c,
             count(x.emitted),
             count(x.splats),
             show(t.frame_surface_id),
@@ -590,7 +599,7 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
     };
     // Our 1M row first beside the paper's 1.0M, then the others.
     let mut full = ours("full-");
-    full.reverse();
+    full.sort_by_key(|(x, _)| !x.name.ends_with("-1M"));
     paper_table(
         s,
         "Table 1, section 2.2 (every hit splatted):",
@@ -930,11 +939,16 @@ mod tests {
         assert!(s.contains("Adapter: llvmpipe."), "{s}");
         // No stencil result: a dash; 500k splats in 1 s.
         assert!(
-            s.contains("| full-250k | 250k | 500k | 2000 ms | – | 1000 ms | 500 k | 50% / 50% |"),
+            s.contains(
+                "| full-250k | 4 | 250k | 500k | 2000 ms | – | 1000 ms | 500 k | 50% / 50% |"
+            ),
             "{s}"
         );
         assert!(
-            s.contains("Not measured: full-1M, optimised-250k, optimised-1M."),
+            s.contains(
+                "Not measured: full-1M, full-250k-c16, optimised-250k, optimised-1M, \
+                 optimised-250k-c16."
+            ),
             "{s}"
         );
         assert!(
