@@ -19,13 +19,13 @@
 //! | 3.4.2: vertex-based calculation shared by triangles of different colours | [`EstimationPoints`] |
 //! | 1.2.1, 2.6–2.8: ray cache with the sorted order reused, disc indexing tuned by radius, pre-intersection tests; a segment grid beyond the paper | [`DiscSet`], [`Acceleration`], [`PreTest`], [`SegmentGrid`] |
 //! | 1.2, 2.5.1 Impact Count: impact energy per triangle over its area, vertex mean | [`impact_count`] |
-//! | 1.2 Photon Maps (Jensen): `k` nearest impacts, `Σ φ / (π r_k²)` | [`photon_maps`], [`KdTree`] |
+//! | 1.2 Photon Maps (Jensen): `k` nearest impacts, `Σ φ / (π r_k²)`; beyond the paper, Jensen's normal filter and the disc's area taken on the vertex's surface (half on an edge, a quarter in a corner) | [`photon_maps`], [`KdTree`], [`boundary`] |
 //! | 1.2 DETP: fixed-radius disc on the tangent plane, rays crossing it | [`detp`], [`Disc`] |
 //! | 2.4, equation 2.2: `L_r = ρ/π E` | [`diffuse_radiance`] |
 //! | 2.4, equation 2.8: contributions of rays are additive | every estimator sums per-ray terms |
 //! | 1.2.1 Artifact Control: reachable area near walls and corners, rays followed through concave parts of the own mesh | [`artifact::reachable_areas`], [`artifact::extension`], [`artifact::artifact_controlled_detp`] |
 //! | 2.10, equation 2.1 on the disc: per-vertex ray lists of glossy vertices, `L = Σ f_r φ / (π r²)` | [`glossy::GlossyVertex`], [`glossy::GlossyVertices`] |
-//! | 2.10, equation 2.1 with Impact Count and Photon Maps: each impact weighted by `f_r(ωi, ωo)`, over the vertex's triangles' area or `π r_k²` (Jensen's radiance estimate); per-triangle lists updated with OldRays/NewRays | [`radiance::TriangleImpacts`], [`radiance::ImpactMap`], [`impact_count_radiance`], [`photon_maps_radiance`] |
+//! | 2.10, equation 2.1 with Impact Count and Photon Maps: each impact weighted by `f_r(ωi, ωo)`, over the vertex's triangles' area or the `k`-nearest disc's area on the surface (Jensen's radiance estimate); per-triangle lists updated with OldRays/NewRays | [`radiance::TriangleImpacts`], [`radiance::ImpactMap`], [`impact_count_radiance`], [`photon_maps_radiance`] |
 //! | 2.10.1 QuadTree without summarising (exact) and with summarising (mean-direction update) | [`quadtree::QuadTree`], [`quadtree::SummaryTree`], [`quadtree::summary_degradation`] |
 //!
 //! Each photon's bounce `n` draws from its own random stream, so a path
@@ -69,6 +69,7 @@
 
 pub mod accel;
 pub mod artifact;
+pub mod boundary;
 mod detp;
 mod error;
 pub mod glossy;

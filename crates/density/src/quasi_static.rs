@@ -24,7 +24,7 @@ use crate::world::World;
 pub enum Estimator {
     /// Impact Count (section 1.2), updated per triangle (figure 2.4).
     ImpactCount,
-    /// Photon Maps with the `k` nearest impacts (section 1.2), estimated again in full every frame (section 2.5.2).
+    /// Photon Maps with the `k` nearest impacts (section 1.2), estimated again in full every frame (section 2.5.2), each disc's area taken on the frame's surfaces, the mobile objects at their pose ([`crate::boundary`]).
     PhotonMaps {
         /// Nearest impacts per estimate.
         k: usize,
@@ -497,7 +497,7 @@ impl QuasiStatic {
         if let (State::PhotonMaps { k }, Some(map)) = (&self.state, &self.impact_map) {
             let meshes = glossy_meshes(&self.scene);
             return map
-                .mesh_radiance(&self.scene, &brdfs, &meshes, eye, *k)
+                .mesh_radiance(Some(&self.world), &self.scene, &brdfs, &meshes, eye, *k)
                 .map(Some);
         }
         let Some((fixed, moving)) = &self.glossy else {
@@ -629,7 +629,7 @@ impl QuasiStatic {
         }
     }
 
-    /// Photon Maps at every estimation point over the current impacts (section 1.2).
+    /// Photon Maps at every estimation point over the current impacts (section 1.2), the discs' areas probed in the world at the current pose ([`crate::boundary`]).
     fn photon_maps(&self, k: usize) -> Vec<DVec3> {
         let built;
         let map = match &self.impact_map {
@@ -642,7 +642,7 @@ impl QuasiStatic {
         self.points
             .points
             .par_iter()
-            .map(|p| map.irradiance(p.position, p.normal, k))
+            .map(|p| map.irradiance(Some(&self.world), p.position, p.normal, k))
             .collect()
     }
 }

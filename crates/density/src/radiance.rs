@@ -9,12 +9,14 @@
 //! - Impact Count: `L_v = Σ_{t∋v} Σ_{j∈t} f_r(ωi_j, ωo) φ_j / Σ_{t∋v} A_t`
 //!   over the impacts on the triangles meeting at the vertex, the analogue of
 //!   its irradiance `Σ_t Σ φ / Σ_t A_t`;
-//! - Photon Maps: `L(x, ωo) = Σ_{k nearest} f_r(ωi_j, ωo) φ_j / (π r_k²)`,
-//!   Jensen's radiance estimate.
+//! - Photon Maps: `L(x, ωo) = Σ_{k nearest} f_r(ωi_j, ωo) φ_j / A`,
+//!   Jensen's radiance estimate, `A` the area of the disc of radius `r_k`.
 //!
 //! Photon Maps' sums run over the `k` nearest impacts *compatible* with the
 //! vertex's surface (Jensen 2001's normal filter, beyond García et al.'s
-//! text; see [`ImpactMap`]).
+//! text; see [`ImpactMap`]), and `A` is the part of `π r_k²` that lies on
+//! compatible surfaces (the boundary correction of [`crate::boundary`],
+//! beyond both), exactly as for the irradiance.
 //!
 //! A diffuse `f_r = ρ/π` gives back `ρ/π E` of equation 2.2 exactly, so the
 //! diffuse part of a blended material is the one the irradiance gives. The
@@ -24,12 +26,13 @@
 use glam::{DVec3, Vec3};
 use lustre_brdf::{BoxedBrdf, Brdf};
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{MeshId, Rgb, Scene, triangle_area};
+use lustre_geometry::{Bvh, MeshId, Rgb, Scene, triangle_area};
 use rayon::prelude::*;
 
+use crate::boundary::{DiscPattern, Surfaces};
 use crate::error::{DensityError, Result};
 use crate::glossy::{IncidentRay, RayList, glossy_meshes};
-use crate::kdtree::KdTree;
+use crate::kdtree::{KdTree, Neighbour};
 use crate::ray_set::{RaySegment, RaySet};
 
 /// The incident ray of an impact in world coordinates (section 2.10): `ωi = −direction`, the direction back towards the light side, and the power.
@@ -211,14 +214,23 @@ pub const MAX_RADIUS_FACTOR: f32 = 3.0;
 /// adjoining face (the lit top of a box brightens the top of its sides, the
 /// floor brightens the foot of the walls). The search stops at
 /// [`MAX_RADIUS_FACTOR`] times the unfiltered `k`-th radius. A vertex with a
-/// zero normal keeps every impact.
+/// zero normal keeps every impact. The kd-tree keeps each impact's turned
+/// normal and skips the subtrees where none passes the filter
+/// ([`KdTree::nearest_facing`]).
+///
+/// The estimates divide by the area of the disc of radius `r_k` that lies on
+/// surfaces passing the same filter, measured in the scene given as
+/// [`Surfaces`] (the boundary correction, [`crate::boundary`]): half the disc
+/// on an edge against a wall, a quarter in a corner, so a vertex there is not
+/// a half or a quarter as bright as it should be. Given no surfaces they
+/// divide by `π r_k²`, García et al.'s text.
 #[derive(Debug, Clone)]
 pub struct ImpactMap {
     tree: Option<KdTree>,
+    /// The probes of the boundary correction ([`crate::boundary`]).
+    pattern: DiscPattern,
     powers: Vec<Rgb>,
     incident: Vec<Vec3>,
-    /// Unit geometric normal of each impact on the side its photon arrived from (`n · ωi ≥ 0`).
-    sides: Vec<Vec3>,
 }
 
 impl ImpactMap {
@@ -226,13 +238,13 @@ impl ImpactMap {
     pub fn build(rays: &RaySet) -> Self {
         Self::try_build(rays).unwrap_or(Self {
             tree: None,
+            pattern: DiscPattern::default(),
             powers: Vec::new(),
             incident: Vec::new(),
-            sides: Vec::new(),
         })
     }
 
-    /// The map of every impact of the ray set; fails on a non-finite impact position.
+    /// The map of every impact of the ray set; fails on a non-finite impact position or normal.
     pub fn try_build(rays: &RaySet) -> Result<Self> {
         let mut positions = Vec::new();
         let mut powers = Vec::new();
@@ -249,64 +261,103 @@ impl ImpactMap {
             });
         }
         Ok(Self {
-            tree: Some(KdTree::build(&positions)?),
+            tree: Some(KdTree::build_oriented(&positions, &sides)?),
+            pattern: DiscPattern::default(),
             powers,
             incident,
-            sides,
         })
     }
 
-    /// Photon Maps irradiance at `x` with unit normal `normal` (section 1.2; section 2.9.1, `PME = E / (π R²)`): `Σ φ_j / (π r_k²)` over the `k` nearest compatible impacts ([`ImpactMap`]); zero where none lies at a positive distance.
-    pub fn irradiance(&self, x: Vec3, normal: Vec3, k: usize) -> DVec3 {
-        self.weighted(x, normal, k, |j| self.powers[j].as_dvec3())
+    /// Photon Maps irradiance at `x` with unit normal `normal` (section 1.2; section 2.9.1, `PME = E / (π R²)`): `Σ φ_j / A` over the `k` nearest compatible impacts ([`ImpactMap`]), `A` the area of compatible surface within `r_k` probed in `surfaces` ([`crate::boundary`]), or `π r_k²` without them (García et al.'s text); zero where no impact lies at a positive distance.
+    pub fn irradiance(
+        &self,
+        surfaces: Option<&dyn Surfaces>,
+        x: Vec3,
+        normal: Vec3,
+        k: usize,
+    ) -> DVec3 {
+        self.weighted(surfaces, x, normal, k, |j| self.powers[j].as_dvec3())
     }
 
-    /// Jensen's radiance estimate at `x` towards the world direction `eye − x` (section 1.2 with equation 2.1): `Σ f_r(ωi_j, ωo) φ_j / (π r_k²)` over the `k` nearest compatible impacts ([`ImpactMap`]), in the shading frame of `normal`; zero where no impact lies at a positive distance or the normal is degenerate.
-    pub fn radiance(&self, brdf: &dyn Brdf, x: Vec3, normal: Vec3, eye: Vec3, k: usize) -> DVec3 {
+    /// Jensen's radiance estimate at `x` towards the world direction `eye − x` (section 1.2 with equation 2.1): `Σ f_r(ωi_j, ωo) φ_j / A` over the `k` nearest compatible impacts ([`ImpactMap`]), in the shading frame of `normal`, `A` as in [`ImpactMap::irradiance`]; zero where no impact lies at a positive distance or the normal is degenerate.
+    pub fn radiance(
+        &self,
+        surfaces: Option<&dyn Surfaces>,
+        brdf: &dyn Brdf,
+        x: Vec3,
+        normal: Vec3,
+        eye: Vec3,
+        k: usize,
+    ) -> DVec3 {
         let Some((frame, wo)) = view_frame(normal, x, eye) else {
             return DVec3::ZERO;
         };
-        self.weighted(x, normal, k, |j| {
+        self.weighted(surfaces, x, normal, k, |j| {
             term(brdf, &frame, wo, self.incident[j], self.powers[j])
         })
     }
 
-    /// `Σ w(j) / (π r_k²)` over the `k` impacts `j` nearest to `x` among those compatible with `normal`.
-    fn weighted(&self, x: Vec3, normal: Vec3, k: usize, w: impl Fn(usize) -> DVec3) -> DVec3 {
+    /// The `k` impacts nearest to `x` among those compatible with `normal` and the squared radius of their disc (the `k`-th's distance, or the maximum search distance where fewer lie within it).
+    fn nearest(&self, x: Vec3, normal: Vec3, k: usize) -> (Vec<Neighbour>, f32) {
         let Some(tree) = &self.tree else {
-            return DVec3::ZERO;
+            return (Vec::new(), 0.0);
         };
         let n = normal.normalize_or_zero();
-        let nearest = tree.nearest(x, k);
-        let (found, r2) = match nearest.last() {
-            Some(kth) if n != Vec3::ZERO => {
-                // Jensen's maximum search distance, relative to the unfiltered k-th radius: it bounds the search where few impacts are compatible (a face no photon reaches would otherwise scan every impact); fewer than k within it estimate over its whole disc.
-                let max = MAX_RADIUS_FACTOR * MAX_RADIUS_FACTOR * kth.distance_squared;
-                let found = tree.nearest_within(x, k, max, |j| {
-                    self.sides[j as usize].dot(n) >= NORMAL_FILTER_COSINE
-                });
-                let r2 = if found.len() < nearest.len() {
-                    max
-                } else {
-                    found.last().map_or(0.0, |f| f.distance_squared)
-                };
-                (found, r2)
-            }
-            _ => {
-                let r2 = nearest.last().map_or(0.0, |f| f.distance_squared);
-                (nearest, r2)
-            }
+        if n == Vec3::ZERO {
+            let nearest = tree.nearest(x, k);
+            let r2 = nearest.last().map_or(0.0, |f| f.distance_squared);
+            return (nearest, r2);
+        }
+        // Jensen's maximum search distance, relative to the unfiltered k-th radius: it bounds the search where few impacts are compatible (a face no photon reaches would otherwise scan every impact); fewer than k within it estimate over its whole disc.
+        let search = tree.nearest_facing(
+            x,
+            k,
+            MAX_RADIUS_FACTOR * MAX_RADIUS_FACTOR,
+            n,
+            NORMAL_FILTER_COSINE,
+        );
+        let r2 = if search.found.len() < search.unfiltered {
+            search.max_squared
+        } else {
+            search.found.last().map_or(0.0, |f| f.distance_squared)
         };
-        if !(r2 > 0.0) {
+        (search.found, r2)
+    }
+
+    /// The area the impacts within `√r2` of `x` spread over: `π r2` times the compatible fraction probed in `surfaces` ([`crate::boundary`]), or `π r2` without them.
+    fn disc_area(&self, surfaces: Option<&dyn Surfaces>, x: Vec3, normal: Vec3, r2: f32) -> f64 {
+        let full = std::f64::consts::PI * r2 as f64;
+        let Some(surfaces) = surfaces else {
+            return full;
+        };
+        let n = normal.normalize_or_zero();
+        full * self
+            .pattern
+            .fraction(surfaces, x, n, r2.sqrt())
+            .unwrap_or(1.0)
+    }
+
+    /// `Σ w(j) / A` over the `k` impacts `j` nearest to `x` among those compatible with `normal`, `A` their disc's area ([`ImpactMap::disc_area`]).
+    fn weighted(
+        &self,
+        surfaces: Option<&dyn Surfaces>,
+        x: Vec3,
+        normal: Vec3,
+        k: usize,
+        w: impl Fn(usize) -> DVec3,
+    ) -> DVec3 {
+        let (found, r2) = self.nearest(x, normal, k);
+        if !(r2 > 0.0) || found.is_empty() {
             return DVec3::ZERO;
         }
         let sum: DVec3 = found.iter().map(|n| w(n.index as usize)).sum();
-        sum / (std::f64::consts::PI * r2 as f64)
+        sum / self.disc_area(surfaces, x, normal, r2)
     }
 
-    /// Jensen's radiance estimate towards `eye` at every vertex of `meshes`, `[mesh][vertex]`, empty for the other meshes. Fails when a mesh's material has no BRDF.
+    /// Jensen's radiance estimate towards `eye` at every vertex of `meshes`, `[mesh][vertex]`, empty for the other meshes, each disc's area probed in `surfaces` as in [`ImpactMap::radiance`]. Fails when a mesh's material has no BRDF.
     pub fn mesh_radiance(
         &self,
+        surfaces: Option<&dyn Surfaces>,
         scene: &Scene,
         brdfs: &[BoxedBrdf],
         meshes: &[MeshId],
@@ -324,7 +375,7 @@ impl ImpactMap {
                 Ok(positions
                     .par_iter()
                     .zip(normals.par_iter())
-                    .map(|(&x, &n)| self.radiance(brdf, x, n, eye, k).as_vec3())
+                    .map(|(&x, &n)| self.radiance(surfaces, brdf, x, n, eye, k).as_vec3())
                     .collect())
             })
             .collect()
@@ -337,7 +388,7 @@ pub fn impact_count_radiance(scene: &Scene, rays: &RaySet, eye: Vec3) -> Result<
     TriangleImpacts::build(scene, rays, &glossy_meshes(scene))?.radiance(scene, &brdfs, eye)
 }
 
-/// Jensen's radiance estimate with the `k` nearest impacts towards `eye` at every vertex of the glossy meshes ([`glossy_meshes`]), `[mesh][vertex]`, empty for the other meshes (section 1.2 with equation 2.1; see [`ImpactMap::radiance`]). Fails when `k` is zero or a material has no BRDF.
+/// Jensen's radiance estimate with the `k` nearest impacts towards `eye` at every vertex of the glossy meshes ([`glossy_meshes`]), `[mesh][vertex]`, empty for the other meshes, each disc's area taken on the scene's compatible surfaces (section 1.2 with equation 2.1; see [`ImpactMap::radiance`] and [`crate::boundary`]). Fails when `k` is zero or a material has no BRDF.
 pub fn photon_maps_radiance(
     scene: &Scene,
     rays: &RaySet,
@@ -351,5 +402,6 @@ pub fn photon_maps_radiance(
         });
     }
     let brdfs = lustre_photon::trace::scene_brdfs(scene)?;
-    ImpactMap::build(rays).mesh_radiance(scene, &brdfs, &glossy_meshes(scene), eye, k)
+    let bvh = Bvh::build(scene);
+    ImpactMap::build(rays).mesh_radiance(Some(&bvh), scene, &brdfs, &glossy_meshes(scene), eye, k)
 }

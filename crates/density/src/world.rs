@@ -182,6 +182,18 @@ impl World {
         }
     }
 
+    /// Calls `f` with the corners of every triangle of the static scene and of the mobile objects at their current pose whose bounding box overlaps the box `min..=max`.
+    pub fn triangles_near(&self, min: Vec3, max: Vec3, f: &mut dyn FnMut([Vec3; 3])) {
+        for part in [&self.static_part, &self.mobile_part] {
+            let b = &part.bounds;
+            if part.ids.is_empty() || b.min.cmpgt(max).any() || b.max.cmplt(min).any() {
+                continue;
+            }
+            part.bvh
+                .overlapping(min, max, |t| f(part.bvh.triangles()[t as usize].positions));
+        }
+    }
+
     /// Whether a mesh belongs to a mobile object.
     pub fn is_mobile_mesh(&self, mesh: MeshId) -> bool {
         self.mobile_mesh

@@ -3,7 +3,7 @@
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
-use glam::{Affine3A, DVec2, DVec3, Vec3};
+use glam::{Affine3A, DVec2, DVec3, Vec2, Vec3};
 use lustre_density::kdtree::{
     brute_force_nearest, brute_force_nearest_where, brute_force_nearest_within,
 };
@@ -13,7 +13,7 @@ use lustre_density::{
 };
 use lustre_geometry::light::PointLight;
 use lustre_geometry::meshing::subdivide;
-use lustre_geometry::{Bvh, Camera, Light, Material, Mesh, Object, Rgb, Scene};
+use lustre_geometry::{Bvh, Camera, Light, Material, Mesh, Object, Rgb, Scene, WorldTriangle};
 use proptest::prelude::*;
 
 /// Half-size of the floor (y = 0, facing +y).
@@ -277,8 +277,7 @@ fn photon_maps_converge_to_the_analytic_irradiance_inside_the_floor() {
     }
     eprintln!("photon maps k = {k}: {checked} vertices, worst |z| = {worst:.2}");
     assert!(checked > 100);
-    // A corner vertex (α = π/2). The normal filter (Jensen 2001) changes nothing here: every impact lies on the floor and arrives from above, so its normal turned to the photon's side is +y, the vertex normal, cosine 1 ≥ NORMAL_FILTER_COSINE; the filter removes other surfaces' impacts, it does not fill the missing part of the disc, so the border bias α/2π stays (see `normal_filter_keeps_the_impacts_of_the_vertex_surface` for a corner with a wall).
-    // The k nearest impacts lie in the quarter disc inside the floor, so r_k is where the expected count in the quarter disc, ∫_quarter E dA / φ, reaches k; as above, π r_k² λ / 4 ~ Gamma(k, 1) and the estimate Σ_k φ / (π r_k²) = ¼ · Σ_k φ / (π r_k² / 4) has the mean ¼ · k/(k−1) · (mean of E over the quarter disc): α/2π = ¼ of the true value, not 0.
+    // A corner vertex (α = π/2). The normal filter (Jensen 2001) changes nothing here: every impact lies on the floor and arrives from above, so its normal turned to the photon's side is +y, the vertex normal, cosine 1 ≥ NORMAL_FILTER_COSINE; it removes other surfaces' impacts, it does not fill the missing part of the disc. The k nearest impacts lie in the quarter disc inside the floor, so r_k is where the expected count in the quarter disc, ∫_quarter E dA / φ, reaches k; π r_k² λ / 4 ~ Gamma(k, 1). García et al.'s `Σ_k φ / (π r_k²)` would be ¼ · k/(k−1) · (mean of E over the quarter disc), the border bias α/2π = ¼; the boundary correction (`lustre_density::boundary`) divides by the area of the disc on the floor, ¼ π r_k² here up to rounding (the probe directions are symmetric under quarter turns and none runs along the floor's edges), so the estimate's mean is k/(k−1) times the quarter disc's mean of E, as inside the floor.
     let corner = scene
         .world_positions(0)
         .iter()
@@ -308,7 +307,7 @@ fn photon_maps_converge_to_the_analytic_irradiance_inside_the_floor() {
         }
     }
     let quarter_mean = quarter(hi) / (0.25 * PI * hi * hi);
-    let expected = 0.25 * kf / (kf - 1.0) * quarter_mean;
+    let expected = kf / (kf - 1.0) * quarter_mean;
     let got = e[0][corner].x as f64;
     let exact = analytic(c);
     eprintln!(
@@ -320,6 +319,14 @@ fn photon_maps_converge_to_the_analytic_irradiance_inside_the_floor() {
     assert!(
         (got - expected).abs() <= SIGMAS * rel_sigma * expected,
         "corner: {got} against {expected} (E = {exact})"
+    );
+    // The same impacts over π r_k² (no surfaces to probe): exactly a quarter of it.
+    let plain = ImpactMap::build(rays)
+        .irradiance(None, scene.world_positions(0)[corner], Vec3::Y, k)
+        .x;
+    assert!(
+        (plain / got - 0.25).abs() <= 1e-6,
+        "the plain corner estimate {plain} is not a quarter of {got}"
     );
 }
 
@@ -395,18 +402,23 @@ fn normal_filter_keeps_the_impacts_of_the_vertex_surface() {
         (Vec3::new(0.0, 0.05, 0.2), Vec3::X),
         (Vec3::new(0.0, 0.02, 0.0), Vec3::NEG_Y),
     ] {
-        let got = map.irradiance(x, n, k).x;
+        let got = map.irradiance(None, x, n, k).x;
         let want = brute(x, n);
         assert!(
             (got - want).abs() <= 1e-6 * want,
             "at {x} normal {n}: {got} against brute force {want}"
         );
     }
-    // The floor impacts from above (j ≡ 0 mod 3, power 1): 1000 over 2 m², λ = 500 per m², so E = 500 W/m² on the floor. At the edge, vertex normal +y, the filter keeps only them; the k nearest fill a half disc (r_k ≈ 0.5 m, inside the 1 m × 2 m floor), π r_k² λ / 2 ≈ k, so the estimate k / (π r_k²) ≈ λ/2 = E/2 with relative σ ≈ 1/√k: the border bias α/2π = ½. Unfiltered, the sphere holds three half discs of density 500 each (the floor from above, power 1; from below, power 2; the wall, power 3): k impacts in 1.5 π r² of mean power 2, so ≈ 2 · 1.5 · 500 = 3 E.
+    // The floor impacts from above (j ≡ 0 mod 3, power 1): 1000 over 2 m², λ = 500 per m², so E = 500 W/m² on the floor. At the edge, vertex normal +y, the filter keeps only them; the k nearest fill a half disc (r_k ≈ 0.5 m, inside the 1 m × 2 m floor), π r_k² λ / 2 ≈ k, so the plain estimate k / (π r_k²) ≈ λ/2 = E/2 with relative σ ≈ 1/√k: the border bias α/2π = ½. Unfiltered, the sphere holds three half discs of density 500 each (the floor from above, power 1; from below, power 2; the wall, power 3): k impacts in 1.5 π r² of mean power 2, so ≈ 2 · 1.5 · 500 = 3 E. With the floor and the wall to probe, the boundary correction divides by the half disc on the floor (up to rounding: the probe directions are point symmetric), so the estimate is twice the plain one, ≈ E.
     let k = 200;
-    let edge = map.irradiance(Vec3::new(0.0, 0.0, 0.0), Vec3::Y, k).x / 500.0;
-    let unfiltered = map.irradiance(Vec3::new(0.0, 0.0, 0.0), Vec3::ZERO, k).x / 500.0;
-    eprintln!("edge: filtered {edge:.3} E, unfiltered {unfiltered:.3} E");
+    let origin = Vec3::new(0.0, 0.0, 0.0);
+    let edge = map.irradiance(None, origin, Vec3::Y, k).x / 500.0;
+    let unfiltered = map.irradiance(None, origin, Vec3::ZERO, k).x / 500.0;
+    let surfaces = floor_and_wall();
+    let corrected = map.irradiance(Some(&surfaces), origin, Vec3::Y, k).x / 500.0;
+    eprintln!(
+        "edge: filtered {edge:.3} E, unfiltered {unfiltered:.3} E, corrected {corrected:.3} E"
+    );
     assert!(
         (edge - 0.5).abs() <= 5.0 * 0.5 / (k as f64).sqrt(),
         "{edge}"
@@ -415,6 +427,51 @@ fn normal_filter_keeps_the_impacts_of_the_vertex_surface() {
         (unfiltered - 3.0).abs() <= 5.0 * 3.0 / (k as f64).sqrt(),
         "{unfiltered}"
     );
+    assert!(
+        (corrected / edge - 2.0).abs() <= 1e-6,
+        "{corrected} / {edge}"
+    );
+    // On the wall the filter keeps its impacts (power 3, 1000 over 2 m²: E = 1500 W/m²); the vertex on its foot sees half a disc of them too.
+    let wall = map
+        .irradiance(Some(&surfaces), Vec3::new(0.0, 0.0, 0.3), Vec3::X, k)
+        .x
+        / 1500.0;
+    assert!(
+        (wall - 1.0).abs() <= 5.0 / (k as f64).sqrt(),
+        "wall foot: {wall} E"
+    );
+}
+
+/// The geometry of [`corner_impacts`]: the floor `0 ≤ x ≤ 1`, `|z| ≤ 1` at `y = 0` and the wall `0 ≤ y ≤ 1`, `|z| ≤ 1` at `x = 0`, two triangles each.
+fn floor_and_wall() -> Bvh {
+    let quad = |corners: [Vec3; 4], normal: Vec3| {
+        [[0, 1, 2], [2, 3, 0]].map(|idx: [usize; 3]| WorldTriangle {
+            positions: idx.map(|i| corners[i]),
+            normals: [normal; 3],
+            uvs: [Vec2::ZERO; 3],
+            surface: 0,
+            material: 0,
+        })
+    };
+    let floor = quad(
+        [
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ],
+        Vec3::Y,
+    );
+    let wall = quad(
+        [
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(0.0, 1.0, -1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ],
+        Vec3::NEG_X,
+    );
+    Bvh::from_triangles(floor.into_iter().chain(wall).collect())
 }
 
 #[test]
@@ -470,6 +527,8 @@ fn invalid_options_are_errors() {
         assert!(detp(scene, rays, r).is_err());
     }
     assert!(KdTree::build(&[Vec3::ZERO, Vec3::NAN]).is_err());
+    assert!(KdTree::build_oriented(&[Vec3::ZERO], &[]).is_err());
+    assert!(KdTree::build_oriented(&[Vec3::ZERO], &[Vec3::NAN]).is_err());
     // An empty ray set gives zero everywhere.
     let empty = RaySet::default();
     assert!(
@@ -592,5 +651,40 @@ proptest! {
             tree.nearest_within(query, k, max_squared, keep),
             brute_force_nearest_within(&points, query, k, max_squared, keep)
         );
+    }
+
+    #[test]
+    fn facing_kd_tree_agrees_with_brute_force(
+        points in prop::collection::vec(
+            (prop::array::uniform3(-10.0f32..10.0), 0usize..8, prop::array::uniform3(-1.0f32..1.0)),
+            0..300,
+        ),
+        query in prop::array::uniform3(-12.0f32..12.0),
+        normal in prop::array::uniform3(-1.0f32..1.0),
+        k in 1usize..40,
+        factor in 1.0f32..4.0,
+        grid in any::<bool>(),
+    ) {
+        // Impacts on planes (axis normals, many equal coordinates when snapped) and on curved surfaces (random normals), so the normal boxes are tight on some subtrees and loose on others.
+        let positions: Vec<Vec3> = points.iter().map(|&(p, _, _)| {
+            let p = Vec3::from(p);
+            if grid { p.round() } else { p }
+        }).collect();
+        let normals: Vec<Vec3> = points.iter().map(|&(_, axis, random)| match axis {
+            0..6 => Vec3::AXES[axis % 3] * if axis < 3 { 1.0 } else { -1.0 },
+            _ => Vec3::from(random).try_normalize().unwrap_or(Vec3::Y),
+        }).collect();
+        let normal = Vec3::from(normal).try_normalize().unwrap_or(Vec3::Y);
+        let tree = KdTree::build_oriented(&positions, &normals).unwrap();
+        let got = tree.nearest_facing(query.into(), k, factor * factor, normal, NORMAL_FILTER_COSINE);
+        let all = brute_force_nearest(&positions, query.into(), k);
+        let max_squared = all.last().map_or(0.0, |n| factor * factor * n.distance_squared);
+        // The tree keeps its normals normalised (a no-op here but for rounding).
+        let found = brute_force_nearest_within(&positions, query.into(), k, max_squared, |j| {
+            normals[j as usize].normalize_or_zero().dot(normal) >= NORMAL_FILTER_COSINE
+        });
+        prop_assert_eq!(got.unfiltered, all.len());
+        prop_assert_eq!(got.max_squared, max_squared);
+        prop_assert_eq!(got.found, found);
     }
 }

@@ -2,7 +2,7 @@
 //! with PLOC (Meister & Bittner 2018): closest hit and any hit, single rays
 //! and rayon-parallel batches.
 
-use glam::{Vec3, Vec3A};
+use glam::{UVec2, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -11,7 +11,7 @@ use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
 use crate::ray::{Hit, Ray, intersect_triangle_a};
-use crate::scene::{Scene, WorldTriangle};
+use crate::scene::{Scene, TriangleId, WorldTriangle};
 
 /// A BVH over every triangle of a scene in world space.
 ///
@@ -159,6 +159,30 @@ impl Bvh {
             intersect_triangle_a(r.origin, r.direction, r.tmin, r.tmax, &self.ordered[id])
                 .map_or(f32::INFINITY, |h| h.t)
         })
+    }
+
+    /// Calls `f` with the scene-wide id of every triangle whose bounding box overlaps the box `min..=max` (each once, in no particular order).
+    pub fn overlapping(&self, min: Vec3, max: Vec3, mut f: impl FnMut(TriangleId)) {
+        let Some(bvh) = &self.cwbvh else {
+            return;
+        };
+        let query = obvhs::aabb::Aabb::new(Vec3A::from(min), Vec3A::from(max));
+        let (min, max) = (Vec3A::from(min), Vec3A::from(max));
+        let mut state = bvh.new_traversal(Vec3A::ONE);
+        let mut node;
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            node.intersect_aabb(&query, state.oct_inv4),
+            {
+                let slot = state.primitive_id as usize;
+                let [a, b, c] = self.ordered[slot];
+                if a.min(b).min(c).cmple(max).all() && a.max(b).max(c).cmpge(min).all() {
+                    f(bvh.primitive_indices[slot]);
+                }
+            }
+        );
     }
 
     /// Closest hits of many rays, in parallel.

@@ -132,6 +132,29 @@ proptest! {
             prop_assert_eq!(bvh.any_hit(&ray), expected.is_some());
         }
     }
+
+    #[test]
+    fn bvh_overlapping_matches_brute_force(
+        tris in prop::collection::vec(triangle(), 1..200),
+        boxes in prop::collection::vec((vec3(), (0.0f32..0.5, 0.0f32..0.5, 0.0f32..0.5)), 1..20),
+    ) {
+        let bvh = Bvh::from_triangles(world(&tris));
+        for (centre, (x, y, z)) in boxes {
+            let (min, max) = (centre - Vec3::new(x, y, z), centre + Vec3::new(x, y, z));
+            let mut got = Vec::new();
+            bvh.overlapping(min, max, |t| got.push(t as usize));
+            got.sort_unstable();
+            let expected: Vec<usize> = tris
+                .iter()
+                .enumerate()
+                .filter(|(_, [a, b, c])| {
+                    a.min(*b).min(*c).cmple(max).all() && a.max(*b).max(*c).cmpge(min).all()
+                })
+                .map(|(i, _)| i)
+                .collect();
+            prop_assert_eq!(got, expected);
+        }
+    }
 }
 
 #[test]

@@ -25,7 +25,8 @@
 //! (section 2.4) beside the emitters' own radiance:
 //! - `detp`: Density Estimation on the Tangent Plane, disc radius `--radius`.
 //! - `impact`: Impact Count.
-//! - `photonmap`: Photon Maps, `--k` nearest impacts.
+//! - `photonmap`: Photon Maps, `--k` nearest impacts over the part of their
+//!   disc on the vertex's surface.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -227,7 +228,7 @@ pub struct RenderArgs {
     /// DETP disc radius in m (`--technique detp`).
     #[arg(long, default_value_t = DEFAULT_DETP_RADIUS)]
     pub radius: f32,
-    /// Nearest impacts of Photon Maps (`--technique photonmap`).
+    /// Nearest impacts of Photon Maps (`--technique photonmap`); their power is divided by the part of their disc that lies on the vertex's surface (half on an edge against a wall, a quarter in a corner).
     #[arg(long, default_value_t = DEFAULT_PHOTONMAP_K)]
     pub k: usize,
     /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh.

@@ -16,8 +16,8 @@ use lustre_mpr::passes::gouraud::corner_radiance;
 
 /// Default DETP disc radius in m (section 1.2): 2.5 % of the 2 m Cornell box, half the default mesh edge (the paper's reference uses 1 % of the scene with 100 M rays; at 100k photons 0.1 m has less noise and more bias near corners).
 pub const DEFAULT_DETP_RADIUS: f32 = 0.05;
-/// Default number `k` of nearest impacts of Photon Maps (section 1.2, Jensen): with the normal filter, 200 at the default 1 M photons gives `cornell` relMSE 0.0055 against the reference (k = 50: 0.0076, k = 400: 0.0053) and `glosbox` 0.012 (k = 50: 0.033), at about 3 s of estimation.
-pub const DEFAULT_PHOTONMAP_K: usize = 200;
+/// Default number `k` of nearest impacts of Photon Maps (section 1.2, Jensen): with the normal filter and the boundary correction (`lustre_density::boundary`), 300 at the default 1 M photons gives `cornell` relMSE 0.0022 against the reference and `glosbox` 0.0085 (0.0083–0.0085 over seeds 1–3), the smallest k tried under 0.0050 and 0.0100 with a margin (k = 200: 0.0024 and 0.0101; k = 400: 0.0022 and 0.0065); `glosbox`'s error is the variance of the glossy floor's and gold box's view-dependent estimate. About 1.1 s of CPU for `cornell`'s estimate, less than half of what k = 200 cost before the kd-tree split on the widest axis and skipped subtrees by their normals.
+pub const DEFAULT_PHOTONMAP_K: usize = 300;
 /// Default longest edge in m after subdivision for per-vertex lighting (section 2.9 meshes into 0.02 m squares; 0.1 m gives `cornell` about 6,500 vertices, keeping DETP's every-segment-at-every-vertex cost near ten seconds on two cores).
 pub const DEFAULT_MESH_EDGE: f32 = 0.1;
 
