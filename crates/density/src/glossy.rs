@@ -20,6 +20,7 @@ use lustre_geometry::sampling::Frame;
 use lustre_geometry::{MaterialId, MeshId, Rgb, Scene};
 use rayon::prelude::*;
 
+use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::quadtree::{QuadTree, QuadTreeOptions, SummaryTree};
@@ -413,6 +414,16 @@ impl GlossyVertex {
         }
     }
 
+    /// The radiance of the BRDF's non-diffuse part, `Σ_j (f_r(ω_j, ωo) − ρ/π) φ_j / A` towards the world direction `wo`, with `ρ` the Lambertian reflectance of its diffuse part (beyond the paper: equation 2.1 with `f_r − ρ/π` in place of `f_r`, so that the diffuse part `ρ/π E` can come from another disc); clamped at zero, since `f_r ≥ ρ/π` makes every term non-negative. Its bound is [`GlossyVertex::estimate`]'s.
+    pub fn lobe_estimate(&self, brdf: &dyn Brdf, wo: Vec3, diffuse: Rgb) -> Estimate {
+        let full = self.estimate(brdf, wo);
+        let lambert = diffuse * std::f32::consts::FRAC_1_PI * self.irradiance();
+        Estimate {
+            value: (full.value - lambert).max(Rgb::ZERO),
+            ..full
+        }
+    }
+
     /// The radiance of [`GlossyVertex::estimate`] alone (equation 2.1 on the DETP disc).
     pub fn radiance(&self, brdf: &dyn Brdf, wo: Vec3) -> Rgb {
         self.estimate(brdf, wo).value
@@ -450,10 +461,12 @@ pub fn glossy_meshes(scene: &Scene) -> Vec<MeshId> {
 pub struct GlossyVertices {
     meshes: Vec<Vec<Option<GlossyVertex>>>,
     materials: Vec<MaterialId>,
+    /// The Lambertian reflectance of each mesh's material ([`lustre_geometry::MaterialModel::diffuse_reflectance`]), for [`GlossyVertices::lobe_radiance`].
+    diffuse: Vec<Rgb>,
 }
 
 impl GlossyVertices {
-    /// Builds the ray lists of every vertex of the given meshes from the whole ray set (section 2.10, first frame), with discs of `radius` on the tangent planes of the meshes' world normals as [`crate::detp`] does, in parallel. Fails on a bad radius, mode or mesh id.
+    /// Builds the ray lists of every vertex of the given meshes from the whole ray set (section 2.10, first frame), with discs of `radius` on the tangent planes of the meshes' world normals as [`crate::detp`] does; the crossing rays are found with disc indexing (section 2.7, [`DiscSet::crossings`]: exactly the rays [`Disc::is_crossed_by`] accepts), the stores built in parallel. Fails on a bad radius, mode or mesh id.
     pub fn build(
         scene: &Scene,
         rays: &RaySet,
@@ -476,35 +489,70 @@ impl GlossyVertices {
         }
         let slack = crate::accel::scene_slack(scene);
         let segments: Vec<RaySegment> = rays.segments().copied().collect();
-        let out = (0..scene.meshes().len() as MeshId)
-            .map(|m| {
-                if !meshes.contains(&m) {
-                    return Ok(Vec::new());
+        // One disc per vertex with a usable normal, and where it goes.
+        let mut meshes = meshes.to_vec();
+        meshes.sort_unstable();
+        meshes.dedup();
+        let mut discs = Vec::new();
+        let mut slots = Vec::new();
+        for &m in &meshes {
+            let positions = scene.world_positions(m);
+            let normals = scene.world_normals(m);
+            for (v, (&centre, &normal)) in positions.iter().zip(&normals).enumerate() {
+                let normal = normal.normalize_or_zero();
+                if normal != Vec3::ZERO {
+                    discs.push(Disc {
+                        centre,
+                        normal,
+                        radius,
+                        mesh: Some(m),
+                    });
+                    slots.push((m, v));
                 }
-                let positions = scene.world_positions(m);
-                let normals = scene.world_normals(m);
-                positions
-                    .par_iter()
-                    .zip(normals.par_iter())
-                    .map(|(&centre, &normal)| {
-                        let normal = normal.normalize_or_zero();
-                        if normal == Vec3::ZERO {
-                            return Ok(None);
-                        }
-                        let disc = Disc {
-                            centre,
-                            normal,
-                            radius,
-                            mesh: Some(m),
-                        };
-                        GlossyVertex::build(disc, slack, mode, &segments).map(Some)
-                    })
-                    .collect::<Result<Vec<_>>>()
+            }
+        }
+        let set = DiscSet::new(
+            discs,
+            DiscSetOptions {
+                slack,
+                acceleration: Acceleration::default(),
+                pretest: PreTest::None,
+            },
+        )?;
+        let crossings = set.crossings(&segments)?;
+        let built = set
+            .discs()
+            .par_iter()
+            .zip(crossings.par_iter())
+            .map(|(&disc, ids)| {
+                GlossyVertex::build(
+                    disc,
+                    slack,
+                    mode,
+                    ids.iter().map(|&i| &segments[i as usize]),
+                )
             })
             .collect::<Result<Vec<_>>>()?;
+        let mut out: Vec<Vec<Option<GlossyVertex>>> = vec![Vec::new(); scene.meshes().len()];
+        for &m in &meshes {
+            out[m as usize] = vec![None; scene.meshes()[m as usize].positions.len()];
+        }
+        for ((m, v), vertex) in slots.into_iter().zip(built) {
+            out[m as usize][v] = Some(vertex);
+        }
         Ok(Self {
             meshes: out,
             materials: scene.meshes().iter().map(|m| m.material).collect(),
+            diffuse: scene
+                .meshes()
+                .iter()
+                .map(|m| {
+                    scene
+                        .materials()
+                        .get(m.material as usize)
+                        .map_or(Rgb::ZERO, |mat| mat.model.diffuse_reflectance())
+                })
+                .collect(),
         })
     }
 
@@ -554,10 +602,27 @@ impl GlossyVertices {
 
     /// The radiance of every vertex towards the eye (equation 2.1 per vertex, recomputed when the camera moves), `[mesh][vertex]`, with `brdfs` one per material (`lustre_photon::trace::scene_brdfs`); empty for meshes not built. Fails when a mesh's material has no BRDF.
     pub fn radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+        self.per_vertex(brdfs, |v, brdf, _| v.radiance(brdf, eye - v.disc().centre))
+    }
+
+    /// The radiance of the non-diffuse part of every vertex's BRDF towards the eye, [`GlossyVertex::lobe_estimate`] with the mesh material's Lambertian reflectance (beyond the paper: the diffuse part `ρ/π E` is left to the diffuse estimate), `[mesh][vertex]`; empty for meshes not built. Fails when a mesh's material has no BRDF.
+    pub fn lobe_radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+        self.per_vertex(brdfs, |v, brdf, diffuse| {
+            v.lobe_estimate(brdf, eye - v.disc().centre, diffuse).value
+        })
+    }
+
+    /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex, zero for a vertex without one.
+    fn per_vertex(
+        &self,
+        brdfs: &[BoxedBrdf],
+        f: impl Fn(&GlossyVertex, &dyn Brdf, Rgb) -> Rgb + Sync,
+    ) -> Result<Vec<Vec<Rgb>>> {
         self.meshes
             .iter()
             .zip(&self.materials)
-            .map(|(vertices, &material)| {
+            .zip(&self.diffuse)
+            .map(|((vertices, &material), &diffuse)| {
                 if vertices.is_empty() {
                     return Ok(Vec::new());
                 }
@@ -571,9 +636,8 @@ impl GlossyVertices {
                 Ok(vertices
                     .par_iter()
                     .map(|v| {
-                        v.as_ref().map_or(Rgb::ZERO, |v| {
-                            v.radiance(brdf.as_ref(), eye - v.disc().centre)
-                        })
+                        v.as_ref()
+                            .map_or(Rgb::ZERO, |v| f(v, brdf.as_ref(), diffuse))
                     })
                     .collect())
             })

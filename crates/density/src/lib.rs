@@ -80,6 +80,7 @@ pub mod quadtree;
 mod quasi_static;
 pub mod radiance;
 mod ray_set;
+pub mod triangle_grid;
 mod update;
 mod world;
 

@@ -18,7 +18,7 @@ use lustre_photon::trace::scene_brdfs;
 use lustre_photon::{allocate_photons, photon_stream};
 use rayon::prelude::*;
 
-use crate::artifact::{extension, mesh_triangles};
+use crate::artifact::{extension, is_concave, mesh_triangles};
 use crate::error::{DensityError, Result};
 use crate::world::{World, WorldHit};
 
@@ -250,6 +250,8 @@ pub(crate) struct Tracer<'a> {
     world: &'a dyn Intersector,
     /// The static scene with scene-wide triangle ids, for the concave extension (section 1.2.1).
     statics: Option<&'a Bvh>,
+    /// Per mesh, whether the concave extension is measured on it ([`crate::artifact::is_concave`]); empty without extension.
+    concave: Vec<bool>,
     brdfs: Vec<BoxedBrdf>,
     epsilon: f32,
     pub(crate) counts: Vec<u64>,
@@ -270,6 +272,12 @@ impl<'a> Tracer<'a> {
             scene,
             world,
             statics,
+            concave: match statics {
+                Some(_) if options.extension > 0.0 => (0..scene.meshes().len() as MeshId)
+                    .map(|m| is_concave(scene, m, epsilon))
+                    .collect(),
+                _ => Vec::new(),
+            },
             brdfs: scene_brdfs(scene)?,
             epsilon,
             counts: allocate_photons(&powers, options.photons),
@@ -345,7 +353,14 @@ impl<'a> Tracer<'a> {
                 }),
                 power,
             );
-            if let Some(statics) = self.statics.filter(|_| self.options.extension > 0.0) {
+            if let Some(statics) = self.statics.filter(|_| {
+                self.options.extension > 0.0
+                    && self
+                        .concave
+                        .get(found.mesh as usize)
+                        .copied()
+                        .unwrap_or(true)
+            }) {
                 let own = mesh_triangles(self.scene, found.mesh);
                 segment.extension = extension(statics, &segment, own, self.options.extension);
             }

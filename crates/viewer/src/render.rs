@@ -202,11 +202,20 @@ pub struct RenderArgs {
     /// DETP disc radius in m (`--technique detp`).
     #[arg(long, default_value_t = DEFAULT_DETP_RADIUS)]
     pub radius: f32,
+    /// DETP disc radius in m for the non-diffuse part of glossy surfaces' view-dependent estimate (García et al. section 2.10); their diffuse part keeps `--radius`. Defaults to `--radius`.
+    #[arg(long)]
+    pub glossy_radius: Option<f32>,
     /// Nearest impacts of Photon Maps (`--technique photonmap`).
     #[arg(long, default_value_t = DEFAULT_PHOTONMAP_K)]
     pub k: usize,
-    /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh.
-    #[arg(long)]
+    /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh. On by default; `--artifact-control false` gives the plain estimator of section 1.2.
+    #[arg(
+        long,
+        default_value_t = true,
+        num_args = 0..=1,
+        default_missing_value = "true",
+        action = clap::ArgAction::Set
+    )]
     pub artifact_control: bool,
     /// The per-vertex estimate on glossy surfaces (García et al. section 2.10): DETP's per-vertex ray lists in a list, QuadTree or summarised QuadTree (Impact Count and Photon Maps always keep plain impact lists), or `none` for only the diffuse part.
     #[arg(long, value_enum, default_value_t = GlossyEstimate::Quadtree)]
@@ -271,6 +280,7 @@ impl RenderArgs {
             photons: self.photons,
             seed: self.seed,
             artifact_control: self.artifact_control,
+            glossy_radius: self.glossy_radius,
             glossy: self.glossy_estimate,
             acceleration: self.detp_acceleration,
             pretest: self.pretest,

@@ -188,6 +188,8 @@ pub struct DensitySettings {
     pub seed: u64,
     /// DETP artifact control (section 1.2.1).
     pub artifact_control: bool,
+    /// DETP's disc radius for the non-diffuse part of glossy meshes (section 2.10); `None` for the estimator's radius.
+    pub glossy_radius: Option<f32>,
     /// DETP's estimate on glossy meshes (section 2.10).
     pub glossy: GlossyEstimate,
     /// How DETP finds crossing rays (sections 2.6–2.7).
@@ -204,6 +206,7 @@ impl DensitySettings {
             photons,
             seed,
             artifact_control: false,
+            glossy_radius: None,
             glossy: GlossyEstimate::Quadtree,
             acceleration: DetpAcceleration::DiscIndex,
             pretest: PreTestArg::None,
@@ -218,6 +221,7 @@ impl DensitySettings {
         if let Estimator::Detp { radius } = estimator {
             options.artifact = self.artifact_control.then(ArtifactOptions::default);
             options.glossy = self.glossy.mode();
+            options.glossy_radius = self.glossy_radius;
             options.acceleration = acceleration(self.acceleration, radius);
             options.pretest = pretest(self.pretest);
         }
