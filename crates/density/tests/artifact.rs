@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 use glam::{Affine3A, Vec3};
 use lustre_density::artifact::{
     ArtifactOptions, artifact_controlled_detp, extend_ray_set, extension, inward_directions,
-    mesh_triangles, reachable_area, reachable_area_near, reachable_areas,
+    is_concave, mesh_triangles, reachable_area, reachable_area_near, reachable_areas,
 };
 use lustre_density::triangle_grid::TriangleGrid;
 use lustre_density::{
@@ -376,6 +376,50 @@ fn grid_shortcut_gives_the_areas_of_the_paths() {
             "r {r}: the grid skips only {skipped} of {compared}"
         );
     }
+}
+
+/// The concave rule (section 1.2.1) cannot change a crossing on a mesh that is not concave ([`is_concave`]): on the Cornell box, whose walls and boxes are all flat or convex, the ray set leaves every segment unextended, and DETP over it equals DETP over the same segments extended through their meshes; the grooved mesh is concave and its segments are extended.
+#[test]
+fn convex_meshes_need_no_concave_extension() {
+    let base = builtin("cornell").unwrap();
+    let meshes = base
+        .meshes()
+        .iter()
+        .map(|m| lustre_geometry::meshing::subdivide(m, 0.25).unwrap())
+        .collect();
+    let scene = base.with_meshes(meshes).unwrap();
+    let epsilon = 2e-5;
+    for m in 0..scene.meshes().len() as u32 {
+        assert!(
+            !is_concave(&scene, m, epsilon),
+            "{}",
+            scene.meshes()[m as usize].name
+        );
+    }
+    let bvh = Bvh::build(&scene);
+    let r = 0.2;
+    let options = RaySetOptions {
+        photons: 20_000,
+        seed: 5,
+        max_segments: 8,
+        extension: 4.0 * r,
+    };
+    let rays = trace_ray_set(&scene, &bvh, &options).unwrap();
+    assert!(rays.segments().all(|s| s.extension == 0.0));
+    let mut extended = rays.clone();
+    extend_ray_set(&scene, &bvh, &mut extended, 4.0 * r).unwrap();
+    let longer = extended.segments().filter(|s| s.extension > 0.0).count();
+    assert!(longer > 10_000, "only {longer} segments extended");
+    assert_eq!(
+        detp(&scene, &rays, r).unwrap(),
+        detp(&scene, &extended, r).unwrap()
+    );
+    // A groove is concave, and the ray set extends the segments that hit it.
+    let groove = black_scene(vec![groove_mesh()], Vec3::new(0.0, 1.0, 0.0));
+    assert!(is_concave(&groove, 0, epsilon));
+    let bvh = Bvh::build(&groove);
+    let rays = trace_ray_set(&groove, &bvh, &options).unwrap();
+    assert!(rays.segments().any(|s| s.extension > 0.0));
 }
 
 #[test]

@@ -24,6 +24,8 @@ use lustre_photon::trace::scene_brdfs;
 const SLACK: f32 = 2e-4;
 /// Radius of the test disc.
 const RADIUS: f32 = 0.25;
+/// The built-in Cornell boxes' white reflectance (`lustre_geometry::builtin`).
+const WHITE: Rgb = Rgb::new(0.885809, 0.698859, 0.666422);
 
 /// A disc on the glossy floor of the glosbox, clear of both boxes.
 fn floor_disc() -> Disc {
@@ -658,6 +660,56 @@ fn glossy_vertices_of_a_scene() {
     for (a, b) in quartered[0].iter().zip(&l[0]) {
         assert!(close(*a, *b * 4.0, 1e-5, 0.0), "{a} {b}");
     }
+}
+
+/// The scene's glossy vertices, whose crossing rays disc indexing finds, hold exactly the rays that testing every segment against each vertex's disc finds (section 2.10); the lobe radiance is the full radiance less the diffuse part `ρ/π E` on the same disc (the floor's `ρ` is 0.7 · white; the gold box has none).
+#[test]
+fn glossy_vertices_hold_the_rays_of_a_brute_force_search() {
+    let (scene, brdfs, rays) = shared();
+    let meshes = glossy_meshes(scene);
+    let radius = 0.3;
+    let vertices = GlossyVertices::build(scene, rays, radius, GlossyMode::List, &meshes).unwrap();
+    let eye = scene.camera().position;
+    let full = vertices.radiance(brdfs, eye).unwrap();
+    let lobe = vertices.lobe_radiance(brdfs, eye).unwrap();
+    let mut held = 0;
+    for &m in &meshes {
+        let positions = scene.world_positions(m);
+        let normals = scene.world_normals(m);
+        let rho = scene.materials()[scene.meshes()[m as usize].material as usize]
+            .model
+            .diffuse_reflectance();
+        for (v, vertex) in vertices.vertices(m).iter().enumerate() {
+            let vertex = vertex.as_ref().unwrap();
+            let disc = Disc {
+                centre: positions[v],
+                normal: normals[v].normalize(),
+                radius,
+                mesh: Some(m),
+            };
+            let brute =
+                GlossyVertex::build(disc, SLACK, GlossyMode::List, rays.segments()).unwrap();
+            assert_eq!(vertex.rays(), brute.rays(), "mesh {m} vertex {v}");
+            held += vertex.len();
+            let diffuse = diffuse_radiance(rho, vertex.irradiance());
+            let expected = (full[m as usize][v] - diffuse).max(Rgb::ZERO);
+            assert!(
+                close(lobe[m as usize][v], expected, 1e-5, 1e-7),
+                "mesh {m} vertex {v}: {} against {expected}",
+                lobe[m as usize][v]
+            );
+        }
+    }
+    assert!(held > 1000, "only {held} rays held");
+    let floor_rho = scene.materials()[scene.meshes()[0].material as usize]
+        .model
+        .diffuse_reflectance();
+    // The blend of 0.7 white Lambert and 0.3 Beckmann; the gold conductor has no diffuse part.
+    assert!(close(floor_rho, 0.7 * WHITE, 1e-6, 0.0), "{floor_rho}");
+    let gold = scene.materials()[scene.meshes()[7].material as usize]
+        .model
+        .diffuse_reflectance();
+    assert_eq!(gold, Rgb::ZERO);
 }
 
 #[test]
