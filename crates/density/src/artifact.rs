@@ -35,6 +35,13 @@
 //! through triangles of the mesh it hit until it meets any other triangle,
 //! capped at `max`; stored in [`RaySegment::extension`], it lets
 //! [`Disc::reach`] count such crossings for discs of that mesh.
+//!
+//! **Shortcuts** (beyond the paper, same results). A disc that no triangle
+//! of another mesh comes near is wholly reachable ([`reachable_area_near`]
+//! asks a [`TriangleGrid`] before casting any path), and a mesh that is not
+//! concave ([`is_concave`]: no vertex in front of another's tangent plane,
+//! such as a wall or a box) cannot have a disc crossed past a hit on it, so
+//! the ray set measures the extension only on concave meshes.
 
 use std::collections::HashMap;
 use std::f32::consts::PI;

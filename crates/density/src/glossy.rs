@@ -7,6 +7,17 @@
 //! [`crate::artifact`]). The cosine of equation 2.1 is already in the flux
 //! crossing the disc. A diffuse `f_r = ρ/π` gives back `ρ/π E` (equation 2.2).
 //!
+//! Beyond the paper, which uses one disc for both, the glossy disc may be
+//! larger than the diffuse one: only the rays inside a narrow lobe count
+//! towards `f_r`'s non-diffuse part, so its estimate on the diffuse disc is
+//! speckled. [`GlossyVertices::lobe_radiance`] gives
+//! `Σ_j (f_r − ρ/π) φ_j / A` on the glossy disc, with `ρ` the Lambertian
+//! reflectance of the material's diffuse part
+//! ([`lustre_geometry::MaterialModel::diffuse_reflectance`]), and
+//! [`crate::QuasiStatic::glossy_radiance`] adds `ρ/π E` from the diffuse discs.
+//! The rays crossing each disc are found with disc indexing (section 2.7,
+//! [`DiscSet::crossings`]), exactly those [`Disc::is_crossed_by`] accepts.
+//!
 //! The rays of a vertex are kept in one of three stores ([`GlossyMode`]): a
 //! plain list, the QuadTree of section 2.10.1 without summarising (exact,
 //! faster estimates), or with summarising (the variant the paper proposes

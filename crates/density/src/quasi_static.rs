@@ -55,7 +55,7 @@ pub struct QuasiStaticOptions {
     pub rays: RaySetOptions,
     /// The density estimator.
     pub estimator: Estimator,
-    /// Artifact control of DETP (section 1.2.1): reachable disc areas and the concave extension of [`RaySetOptions::extension`] (set to `max_extension · radius`); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
+    /// Artifact control of DETP (section 1.2.1): reachable disc areas (of the diffuse discs, and of the glossy discs of glossy vertices) and the concave extension of [`RaySetOptions::extension`] (set to `max_extension` times the larger radius); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
     pub artifact: Option<ArtifactOptions>,
     /// DETP's disc radius for the ray lists of glossy vertices (section 2.10; beyond the paper, which uses one radius): the non-diffuse part of their BRDF is estimated on discs of this radius ([`GlossyVertices::lobe_radiance`]), the diffuse part `ρ/π E` from the irradiance on the estimator's discs; `None` uses the estimator's radius for both. Positive and finite.
     pub glossy_radius: Option<f32>,
@@ -517,7 +517,7 @@ impl QuasiStatic {
         Ok(vertices)
     }
 
-    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1: on DETP's disc, over Impact Count's triangles, or over Photon Maps' `k` nearest impacts), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
+    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1: on DETP's discs, `ρ/π E` from the diffuse disc plus the non-diffuse part of `f_r` on the glossy disc of [`QuasiStaticOptions::glossy_radius`], over Impact Count's triangles, or over Photon Maps' `k` nearest impacts), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
     pub fn glossy_radiance(&self, eye: Vec3) -> Result<Option<Vec<Vec<Rgb>>>> {
         if self.options.glossy.is_none() {
             return Ok(None);

@@ -31,7 +31,7 @@ pub struct RaySetOptions {
     pub seed: u64,
     /// Largest number of segments per primary ray (1 or more).
     pub max_segments: u32,
-    /// Artifact control on concave surfaces (section 1.2.1): the longest [`RaySegment::extension`] in metres measured for each segment through the mesh it hit, against the static scene; 0 turns it off.
+    /// Artifact control on concave surfaces (section 1.2.1): the longest [`RaySegment::extension`] in metres measured for each segment through the mesh it hit, against the static scene, when that mesh is concave ([`crate::artifact::is_concave`]; on any other the extension could change no crossing and stays 0); 0 turns it off.
     pub extension: f32,
 }
 
@@ -74,7 +74,7 @@ pub struct RaySegment {
     pub hit: Option<SegmentHit>,
     /// Power `φ` (W, RGB) carried along the segment and delivered at its hit.
     pub power: Rgb,
-    /// Artifact control on concave surfaces (section 1.2.1): how far the segment may be followed past its hit, through the mesh it hit, before it meets any other part of the scene; zero when artifact control is off.
+    /// Artifact control on concave surfaces (section 1.2.1): how far the segment may be followed past its hit, through the mesh it hit, before it meets any other part of the scene; zero when artifact control is off or the mesh is not concave.
     pub extension: f32,
 }
 
