@@ -289,10 +289,26 @@ impl GlossyVertex {
             });
         }
         mode.validate()?;
+        Self::from_crossing(
+            disc,
+            slack,
+            mode,
+            segments
+                .into_iter()
+                .filter(|s| disc.is_crossed_by(s, slack)),
+        )
+    }
+
+    /// [`GlossyVertex::build`] from segments already known to cross the disc, with the disc, slack and mode already checked.
+    fn from_crossing<'a>(
+        disc: Disc,
+        slack: f32,
+        mode: GlossyMode,
+        crossing: impl IntoIterator<Item = &'a RaySegment>,
+    ) -> Result<Self> {
         let frame = Frame::from_normal(disc.normal);
-        let rays: Vec<IncidentRay> = segments
+        let rays: Vec<IncidentRay> = crossing
             .into_iter()
-            .filter(|s| disc.is_crossed_by(s, slack))
             .map(|s| IncidentRay::from_segment(&frame, s))
             .collect();
         let store = match mode {
@@ -536,7 +552,8 @@ impl GlossyVertices {
             .par_iter()
             .zip(crossings.par_iter())
             .map(|(&disc, ids)| {
-                GlossyVertex::build(
+                // DiscSet::new checked the discs, and its crossings are exactly the segments `is_crossed_by` accepts.
+                GlossyVertex::from_crossing(
                     disc,
                     slack,
                     mode,
