@@ -406,6 +406,26 @@ impl GlossyVertex {
     pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
         let old: Vec<IncidentRay> = old.iter().filter_map(|s| self.incident(s)).collect();
         let new: Vec<IncidentRay> = new.iter().filter_map(|s| self.incident(s)).collect();
+        self.apply(old, new)
+    }
+
+    /// [`GlossyVertex::update`] with the Old and New Rays already known to cross the disc.
+    fn update_crossing<'a>(
+        &mut self,
+        old: impl Iterator<Item = &'a RaySegment>,
+        new: impl Iterator<Item = &'a RaySegment>,
+    ) -> Result<UpdateStats> {
+        let old = old
+            .map(|s| IncidentRay::from_segment(&self.frame, s))
+            .collect();
+        let new = new
+            .map(|s| IncidentRay::from_segment(&self.frame, s))
+            .collect();
+        self.apply(old, new)
+    }
+
+    /// Removes the Old Rays, then inserts the New Rays (section 2.10).
+    fn apply(&mut self, old: Vec<IncidentRay>, new: Vec<IncidentRay>) -> Result<UpdateStats> {
         let mut stats = UpdateStats {
             removed: old.len(),
             inserted: new.len(),
@@ -484,12 +504,25 @@ pub fn glossy_meshes(scene: &Scene) -> Vec<MeshId> {
 }
 
 /// The glossy vertices of a scene (section 2.10), indexed `[mesh][vertex]`; meshes not asked for hold no vertex, and a vertex without a valid normal is `None`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct GlossyVertices {
     meshes: Vec<Vec<Option<GlossyVertex>>>,
     materials: Vec<MaterialId>,
     /// The Lambertian reflectance of each mesh's material ([`lustre_geometry::MaterialModel::diffuse_reflectance`]), for [`GlossyVertices::lobe_radiance`].
     diffuse: Vec<Rgb>,
+    /// The vertices' discs with their disc index (section 2.7), for finding which Old and New Rays cross each.
+    discs: DiscSet,
+    /// The disc of each vertex in `discs`, `[mesh][vertex]`.
+    disc_of: Vec<Vec<Option<u32>>>,
+}
+
+impl PartialEq for GlossyVertices {
+    /// Equal vertices and materials (the disc set follows from the vertices).
+    fn eq(&self, other: &Self) -> bool {
+        self.meshes == other.meshes
+            && self.materials == other.materials
+            && self.diffuse == other.diffuse
+    }
 }
 
 impl GlossyVertices {
@@ -562,11 +595,14 @@ impl GlossyVertices {
             })
             .collect::<Result<Vec<_>>>()?;
         let mut out: Vec<Vec<Option<GlossyVertex>>> = vec![Vec::new(); scene.meshes().len()];
+        let mut disc_of: Vec<Vec<Option<u32>>> = vec![Vec::new(); scene.meshes().len()];
         for &m in &meshes {
             out[m as usize] = vec![None; scene.meshes()[m as usize].positions.len()];
+            disc_of[m as usize] = vec![None; scene.meshes()[m as usize].positions.len()];
         }
-        for ((m, v), vertex) in slots.into_iter().zip(built) {
+        for (d, ((m, v), vertex)) in slots.into_iter().zip(built).enumerate() {
             out[m as usize][v] = Some(vertex);
+            disc_of[m as usize][v] = Some(d as u32);
         }
         Ok(Self {
             meshes: out,
@@ -581,6 +617,8 @@ impl GlossyVertices {
                         .map_or(Rgb::ZERO, |mat| mat.model.diffuse_reflectance())
                 })
                 .collect(),
+            discs: set,
+            disc_of,
         })
     }
 
@@ -598,11 +636,23 @@ impl GlossyVertices {
 
     /// One frame's update of every vertex's list from the frame's Old and New Rays (section 2.10), in parallel; the statistics are summed over vertices. The Old Rays must be the segments exactly as they were inserted (same direction, power and extension). On an error (a summary losing more rays than it holds) the other vertices keep their update.
     pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
+        // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept.
+        let old_crossing = self.discs.crossings(old)?;
+        let new_crossing = self.discs.crossings(new)?;
         let per_vertex: Vec<UpdateStats> = self
             .meshes
             .par_iter_mut()
-            .flat_map(|v| v.par_iter_mut())
-            .filter_map(|v| v.as_mut().map(|v| v.update(old, new)))
+            .zip(self.disc_of.par_iter())
+            .flat_map(|(v, d)| v.par_iter_mut().zip(d.par_iter()))
+            .filter_map(|(v, d)| {
+                let (v, &Some(d)) = (v.as_mut()?, d) else {
+                    return None;
+                };
+                Some(v.update_crossing(
+                    old_crossing[d as usize].iter().map(|&i| &old[i as usize]),
+                    new_crossing[d as usize].iter().map(|&i| &new[i as usize]),
+                ))
+            })
             .collect::<Result<_>>()?;
         let mut total = UpdateStats::default();
         per_vertex.into_iter().for_each(|s| total += s);
