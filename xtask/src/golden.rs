@@ -173,6 +173,8 @@ pub const CASES: &[Case] = &[
         args: &[
             "--technique",
             "detp",
+            "--artifact-control",
+            "false",
             "--photons",
             "5000",
             "--radius",

@@ -221,12 +221,12 @@ pub const CASES: &[Case] = &[
         args: small!("--technique", "splat-direct", "--photons", "200000"),
         bounds: bounds(0.00169, 0.0557, 0.2028, (0.9738, 1.0138)),
     },
-    // measured: relMSE 0.00379, FLIP mean 0.0772, p99 0.2581, mean ratio 0.9796 (1.0 s)
+    // measured: relMSE 0.00219, FLIP mean 0.0632, p99 0.1691, mean ratio 0.9986 (3.7 s)
     Case {
         name: "cornell-detp",
         scene: "cornell",
         args: small!("--technique", "detp", "--photons", "200000"),
-        bounds: bounds(0.00467, 0.0872, 0.3081, (0.9596, 0.9996)),
+        bounds: bounds(0.00290, 0.0732, 0.2191, (0.9786, 1.0186)),
     },
     // measured: relMSE 0.00187, FLIP mean 0.0597, p99 0.1610, mean ratio 0.9974 (0.6 s)
     Case {
@@ -256,12 +256,12 @@ pub const CASES: &[Case] = &[
         args: small!("--technique", "splat-direct", "--photons", "200000"),
         bounds: bounds(0.00544, 0.0752, 0.3627, (0.9768, 1.0168)),
     },
-    // measured: relMSE 0.01427, FLIP mean 0.0982, p99 0.3948, mean ratio 0.9738 (8.2 s)
+    // measured: relMSE 0.00536, FLIP mean 0.0794, p99 0.3192, mean ratio 1.0003 (7.1 s)
     Case {
         name: "glosbox-detp",
         scene: "glosbox",
         args: small!("--technique", "detp", "--photons", "200000"),
-        bounds: bounds(0.01620, 0.1082, 0.4448, (0.9538, 0.9938)),
+        bounds: bounds(0.00640, 0.0894, 0.3692, (0.9803, 1.0203)),
     },
     // measured: relMSE 0.01336, FLIP mean 0.0843, p99 0.4129, mean ratio 0.9997 (0.5 s)
     Case {

@@ -35,6 +35,13 @@
 //! through triangles of the mesh it hit until it meets any other triangle,
 //! capped at `max`; stored in [`RaySegment::extension`], it lets
 //! [`Disc::reach`] count such crossings for discs of that mesh.
+//!
+//! **Shortcuts** (beyond the paper, same results). A disc that no triangle
+//! of another mesh comes near is wholly reachable ([`reachable_area_near`]
+//! asks a [`TriangleGrid`] before casting any path), and a mesh that is not
+//! concave ([`is_concave`]: no vertex in front of another's tangent plane,
+//! such as a wall or a box) cannot have a disc crossed past a hit on it, so
+//! the ray set measures the extension only on concave meshes.
 
 use std::collections::HashMap;
 use std::f32::consts::PI;
@@ -49,9 +56,13 @@ use crate::VertexIrradiance;
 use crate::detp::{Disc, detp};
 use crate::error::{DensityError, Result};
 use crate::ray_set::{RaySegment, RaySet};
+use crate::triangle_grid::TriangleGrid;
 
 /// Most triangles of the own mesh a query steps through before it gives up.
 const MAX_STEPS: usize = 256;
+
+/// How far behind a visibility path's start its BVH queries begin (m): obvhs 0.4's wide-BVH traversal clamps each child box's entry distance to at least `10⁻⁴` (`cwbvh::node::EPSILON`), so a thin box, such as a wall's, that the ray leaves within `10⁻⁴` of its origin is culled and a wall that close is missed; paths start `offset · r` from walls through the vertex (`5 · 10⁻⁵` at `r` = 0.05), which with discs of 0.04 m let half of a corner's blocked paths through. Querying from further back keeps every hit of the path past that clamp.
+const BACK_OFF: f32 = 4e-4;
 
 /// Settings of Artifact Control (section 1.2.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -124,15 +135,18 @@ fn blocked(
     own: &Range<TriangleId>,
     near: f32,
 ) -> bool {
-    if !bvh.any_hit(&Ray::segment(origin, dir, 0.0, length)) {
+    // Queried from `BACK_OFF` behind the origin, distances shifted by it (see `BACK_OFF`).
+    let from = origin - BACK_OFF * dir;
+    let end = length + BACK_OFF;
+    if !bvh.any_hit(&Ray::segment(from, dir, BACK_OFF, end)) {
         return false;
     }
-    let mut t = 0.0;
+    let mut t = BACK_OFF;
     for _ in 0..MAX_STEPS {
-        let Some(h) = bvh.closest_hit(&Ray::segment(origin, dir, t, length)) else {
+        let Some(h) = bvh.closest_hit(&Ray::segment(from, dir, t, end)) else {
             return false;
         };
-        let leaving = h.t <= near && dir.dot(h.geometric_normal) >= 0.0;
+        let leaving = h.t - BACK_OFF <= near && dir.dot(h.geometric_normal) >= 0.0;
         if !own.contains(&h.triangle) && !leaving {
             return true;
         }
@@ -149,6 +163,12 @@ pub fn reachable_area(
     inward: Vec3,
     options: &ArtifactOptions,
 ) -> Result<f32> {
+    check_area_inputs(disc, inward, options)?;
+    Ok(reachable_area_unchecked(bvh, disc, &own, inward, options))
+}
+
+/// Fails on a bad disc, `inward` or options (the checks of [`reachable_area`]).
+fn check_area_inputs(disc: &Disc, inward: Vec3, options: &ArtifactOptions) -> Result<()> {
     options.validate()?;
     check_disc(disc)?;
     if !inward.is_finite() || inward.length() > 1.0 + 1e-3 {
@@ -157,7 +177,7 @@ pub fn reachable_area(
             message: format!("{inward} is not a unit or zero direction"),
         });
     }
-    Ok(reachable_area_unchecked(bvh, disc, &own, inward, options))
+    Ok(())
 }
 
 /// For each vertex of a mesh, the unit direction along its tangent plane into the mesh when the vertex is on the mesh's border (the angles of its triangles, welded by position, sum to less than 2π: the border angle of section 2.9.1), else zero; input to [`reachable_area`].
@@ -216,6 +236,42 @@ pub(crate) fn check_disc(disc: &Disc) -> Result<()> {
     }
 }
 
+/// [`reachable_area`] that first asks `grid` (built over `bvh`'s triangles) whether any triangle outside `own` comes near the disc, and returns `π r²` without casting a path when none does: the same area, since only such triangles block a path ([`crate::triangle_grid`]). Fails as [`reachable_area`] does.
+pub fn reachable_area_near(
+    bvh: &Bvh,
+    grid: &TriangleGrid,
+    disc: &Disc,
+    own: Range<TriangleId>,
+    inward: Vec3,
+    options: &ArtifactOptions,
+) -> Result<f32> {
+    check_area_inputs(disc, inward, options)?;
+    Ok(reachable_area_gridded(
+        bvh, grid, disc, &own, inward, options,
+    ))
+}
+
+/// [`reachable_area_near`] without the checks.
+fn reachable_area_gridded(
+    bvh: &Bvh,
+    grid: &TriangleGrid,
+    disc: &Disc,
+    own: &Range<TriangleId>,
+    inward: Vec3,
+    options: &ArtifactOptions,
+) -> f32 {
+    if grid.foreign_near(disc.centre, path_reach(disc, options), own) {
+        reachable_area_unchecked(bvh, disc, own, inward, options)
+    } else {
+        PI * disc.radius * disc.radius
+    }
+}
+
+/// Half-edge of a cube around the disc's centre that holds every visibility path of [`reachable_area`] (they stay within `r + 3.01 · offset · r` of the centre), with a margin of 1 % of `r` for rounding.
+fn path_reach(disc: &Disc, options: &ArtifactOptions) -> f32 {
+    disc.radius * (1.01 + 4.0 * options.offset)
+}
+
 fn reachable_area_unchecked(
     bvh: &Bvh,
     disc: &Disc,
@@ -261,6 +317,7 @@ pub fn reachable_areas(
     options: &ArtifactOptions,
 ) -> Result<Vec<Vec<f32>>> {
     check_common(scene, bvh, radius, options)?;
+    let grid = TriangleGrid::new(bvh, 2.0 * radius);
     Ok((0..scene.meshes().len() as MeshId)
         .map(|m| {
             let own = mesh_triangles(scene, m);
@@ -283,7 +340,7 @@ pub fn reachable_areas(
                         radius,
                         mesh: Some(m),
                     };
-                    reachable_area_unchecked(bvh, &disc, &own, inward, options)
+                    reachable_area_gridded(bvh, &grid, &disc, &own, inward, options)
                 })
                 .collect()
         })
@@ -329,6 +386,28 @@ pub fn extension(bvh: &Bvh, segment: &RaySegment, own: Range<TriangleId>, max: f
         }
     }
     (t - hit.distance).clamp(0.0, max)
+}
+
+/// Most vertices of a mesh that [`is_concave`] tests (the test is quadratic); a larger mesh counts as concave.
+pub const MAX_CONVEXITY_VERTICES: usize = 4096;
+
+/// Whether the concave rule (section 1.2.1) can matter on a mesh: some vertex lies more than `tolerance` in front of another vertex's tangent plane. A ray followed past its hit on a mesh that is not concave (a flat wall, a box) only goes further behind every tangent plane of the mesh, so its extension could only add crossings within `tolerance / |cos|` past the hit, which the slack of [`Disc::is_crossed_by`] already covers unless the ray runs almost along the plane; the ray set leaves such segments unextended. A mesh that does not exist or has more than [`MAX_CONVEXITY_VERTICES`] vertices counts as concave.
+pub fn is_concave(scene: &Scene, mesh: MeshId, tolerance: f32) -> bool {
+    let Some(m) = scene.meshes().get(mesh as usize) else {
+        return true;
+    };
+    if m.positions.len() > MAX_CONVEXITY_VERTICES {
+        return true;
+    }
+    let positions = scene.world_positions(mesh);
+    let normals = scene.world_normals(mesh);
+    positions
+        .par_iter()
+        .zip(normals.par_iter())
+        .any(|(&v, &n)| {
+            let n = n.normalize_or_zero();
+            n != Vec3::ZERO && positions.iter().any(|&x| (x - v).dot(n) > tolerance)
+        })
 }
 
 /// Sets [`RaySegment::extension`] of every segment of a ray set (section 1.2.1, concave surfaces), in parallel, through the mesh each segment hit, capped at `max`. Fails on a `max` that is negative or not finite, or a BVH of another scene.

@@ -7,6 +7,17 @@
 //! [`crate::artifact`]). The cosine of equation 2.1 is already in the flux
 //! crossing the disc. A diffuse `f_r = ρ/π` gives back `ρ/π E` (equation 2.2).
 //!
+//! Beyond the paper, which uses one disc for both, the glossy disc may be
+//! larger than the diffuse one: only the rays inside a narrow lobe count
+//! towards `f_r`'s non-diffuse part, so its estimate on the diffuse disc is
+//! speckled. [`GlossyVertices::lobe_radiance`] gives
+//! `Σ_j (f_r − ρ/π) φ_j / A` on the glossy disc, with `ρ` the Lambertian
+//! reflectance of the material's diffuse part
+//! ([`lustre_geometry::MaterialModel::diffuse_reflectance`]), and
+//! [`crate::QuasiStatic::glossy_radiance`] adds `ρ/π E` from the diffuse discs.
+//! The rays crossing each disc are found with disc indexing (section 2.7,
+//! [`DiscSet::crossings`]), exactly those [`Disc::is_crossed_by`] accepts.
+//!
 //! The rays of a vertex are kept in one of three stores ([`GlossyMode`]): a
 //! plain list, the QuadTree of section 2.10.1 without summarising (exact,
 //! faster estimates), or with summarising (the variant the paper proposes
@@ -20,6 +31,7 @@ use lustre_geometry::sampling::Frame;
 use lustre_geometry::{MaterialId, MeshId, Rgb, Scene};
 use rayon::prelude::*;
 
+use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::quadtree::{QuadTree, QuadTreeOptions, SummaryTree};
@@ -277,10 +289,26 @@ impl GlossyVertex {
             });
         }
         mode.validate()?;
+        Self::from_crossing(
+            disc,
+            slack,
+            mode,
+            segments
+                .into_iter()
+                .filter(|s| disc.is_crossed_by(s, slack)),
+        )
+    }
+
+    /// [`GlossyVertex::build`] from segments already known to cross the disc, with the disc, slack and mode already checked.
+    fn from_crossing<'a>(
+        disc: Disc,
+        slack: f32,
+        mode: GlossyMode,
+        crossing: impl IntoIterator<Item = &'a RaySegment>,
+    ) -> Result<Self> {
         let frame = Frame::from_normal(disc.normal);
-        let rays: Vec<IncidentRay> = segments
+        let rays: Vec<IncidentRay> = crossing
             .into_iter()
-            .filter(|s| disc.is_crossed_by(s, slack))
             .map(|s| IncidentRay::from_segment(&frame, s))
             .collect();
         let store = match mode {
@@ -378,6 +406,26 @@ impl GlossyVertex {
     pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
         let old: Vec<IncidentRay> = old.iter().filter_map(|s| self.incident(s)).collect();
         let new: Vec<IncidentRay> = new.iter().filter_map(|s| self.incident(s)).collect();
+        self.apply(old, new)
+    }
+
+    /// [`GlossyVertex::update`] with the Old and New Rays already known to cross the disc.
+    fn update_crossing<'a>(
+        &mut self,
+        old: impl Iterator<Item = &'a RaySegment>,
+        new: impl Iterator<Item = &'a RaySegment>,
+    ) -> Result<UpdateStats> {
+        let old = old
+            .map(|s| IncidentRay::from_segment(&self.frame, s))
+            .collect();
+        let new = new
+            .map(|s| IncidentRay::from_segment(&self.frame, s))
+            .collect();
+        self.apply(old, new)
+    }
+
+    /// Removes the Old Rays, then inserts the New Rays (section 2.10).
+    fn apply(&mut self, old: Vec<IncidentRay>, new: Vec<IncidentRay>) -> Result<UpdateStats> {
         let mut stats = UpdateStats {
             removed: old.len(),
             inserted: new.len(),
@@ -410,6 +458,16 @@ impl GlossyVertex {
             value: sum.value / self.area,
             bound: sum.bound / self.area,
             evaluations: sum.evaluations,
+        }
+    }
+
+    /// The radiance of the BRDF's non-diffuse part, `Σ_j (f_r(ω_j, ωo) − ρ/π) φ_j / A` towards the world direction `wo`, with `ρ` the Lambertian reflectance of its diffuse part (beyond the paper: equation 2.1 with `f_r − ρ/π` in place of `f_r`, so that the diffuse part `ρ/π E` can come from another disc); clamped at zero, since `f_r ≥ ρ/π` makes every term non-negative. Its bound is [`GlossyVertex::estimate`]'s.
+    pub fn lobe_estimate(&self, brdf: &dyn Brdf, wo: Vec3, diffuse: Rgb) -> Estimate {
+        let full = self.estimate(brdf, wo);
+        let lambert = diffuse * std::f32::consts::FRAC_1_PI * self.irradiance();
+        Estimate {
+            value: (full.value - lambert).max(Rgb::ZERO),
+            ..full
         }
     }
 
@@ -446,14 +504,29 @@ pub fn glossy_meshes(scene: &Scene) -> Vec<MeshId> {
 }
 
 /// The glossy vertices of a scene (section 2.10), indexed `[mesh][vertex]`; meshes not asked for hold no vertex, and a vertex without a valid normal is `None`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct GlossyVertices {
     meshes: Vec<Vec<Option<GlossyVertex>>>,
     materials: Vec<MaterialId>,
+    /// The Lambertian reflectance of each mesh's material ([`lustre_geometry::MaterialModel::diffuse_reflectance`]), for [`GlossyVertices::lobe_radiance`].
+    diffuse: Vec<Rgb>,
+    /// The vertices' discs with their disc index (section 2.7), for finding which Old and New Rays cross each.
+    discs: DiscSet,
+    /// The disc of each vertex in `discs`, `[mesh][vertex]`.
+    disc_of: Vec<Vec<Option<u32>>>,
+}
+
+impl PartialEq for GlossyVertices {
+    /// Equal vertices and materials (the disc set follows from the vertices).
+    fn eq(&self, other: &Self) -> bool {
+        self.meshes == other.meshes
+            && self.materials == other.materials
+            && self.diffuse == other.diffuse
+    }
 }
 
 impl GlossyVertices {
-    /// Builds the ray lists of every vertex of the given meshes from the whole ray set (section 2.10, first frame), with discs of `radius` on the tangent planes of the meshes' world normals as [`crate::detp`] does, in parallel. Fails on a bad radius, mode or mesh id.
+    /// Builds the ray lists of every vertex of the given meshes from the whole ray set (section 2.10, first frame), with discs of `radius` on the tangent planes of the meshes' world normals as [`crate::detp`] does; the crossing rays are found with disc indexing (section 2.7, [`DiscSet::crossings`]: exactly the rays [`Disc::is_crossed_by`] accepts), the stores built in parallel. Fails on a bad radius, mode or mesh id.
     pub fn build(
         scene: &Scene,
         rays: &RaySet,
@@ -476,35 +549,76 @@ impl GlossyVertices {
         }
         let slack = crate::accel::scene_slack(scene);
         let segments: Vec<RaySegment> = rays.segments().copied().collect();
-        let out = (0..scene.meshes().len() as MeshId)
-            .map(|m| {
-                if !meshes.contains(&m) {
-                    return Ok(Vec::new());
+        // One disc per vertex with a usable normal, and where it goes.
+        let mut meshes = meshes.to_vec();
+        meshes.sort_unstable();
+        meshes.dedup();
+        let mut discs = Vec::new();
+        let mut slots = Vec::new();
+        for &m in &meshes {
+            let positions = scene.world_positions(m);
+            let normals = scene.world_normals(m);
+            for (v, (&centre, &normal)) in positions.iter().zip(&normals).enumerate() {
+                let normal = normal.normalize_or_zero();
+                if normal != Vec3::ZERO {
+                    discs.push(Disc {
+                        centre,
+                        normal,
+                        radius,
+                        mesh: Some(m),
+                    });
+                    slots.push((m, v));
                 }
-                let positions = scene.world_positions(m);
-                let normals = scene.world_normals(m);
-                positions
-                    .par_iter()
-                    .zip(normals.par_iter())
-                    .map(|(&centre, &normal)| {
-                        let normal = normal.normalize_or_zero();
-                        if normal == Vec3::ZERO {
-                            return Ok(None);
-                        }
-                        let disc = Disc {
-                            centre,
-                            normal,
-                            radius,
-                            mesh: Some(m),
-                        };
-                        GlossyVertex::build(disc, slack, mode, &segments).map(Some)
-                    })
-                    .collect::<Result<Vec<_>>>()
+            }
+        }
+        let set = DiscSet::new(
+            discs,
+            DiscSetOptions {
+                slack,
+                acceleration: Acceleration::default(),
+                pretest: PreTest::None,
+            },
+        )?;
+        let crossings = set.crossings(&segments)?;
+        let built = set
+            .discs()
+            .par_iter()
+            .zip(crossings.par_iter())
+            .map(|(&disc, ids)| {
+                // DiscSet::new checked the discs, and its crossings are exactly the segments `is_crossed_by` accepts.
+                GlossyVertex::from_crossing(
+                    disc,
+                    slack,
+                    mode,
+                    ids.iter().map(|&i| &segments[i as usize]),
+                )
             })
             .collect::<Result<Vec<_>>>()?;
+        let mut out: Vec<Vec<Option<GlossyVertex>>> = vec![Vec::new(); scene.meshes().len()];
+        let mut disc_of: Vec<Vec<Option<u32>>> = vec![Vec::new(); scene.meshes().len()];
+        for &m in &meshes {
+            out[m as usize] = vec![None; scene.meshes()[m as usize].positions.len()];
+            disc_of[m as usize] = vec![None; scene.meshes()[m as usize].positions.len()];
+        }
+        for (d, ((m, v), vertex)) in slots.into_iter().zip(built).enumerate() {
+            out[m as usize][v] = Some(vertex);
+            disc_of[m as usize][v] = Some(d as u32);
+        }
         Ok(Self {
             meshes: out,
             materials: scene.meshes().iter().map(|m| m.material).collect(),
+            diffuse: scene
+                .meshes()
+                .iter()
+                .map(|m| {
+                    scene
+                        .materials()
+                        .get(m.material as usize)
+                        .map_or(Rgb::ZERO, |mat| mat.model.diffuse_reflectance())
+                })
+                .collect(),
+            discs: set,
+            disc_of,
         })
     }
 
@@ -522,11 +636,23 @@ impl GlossyVertices {
 
     /// One frame's update of every vertex's list from the frame's Old and New Rays (section 2.10), in parallel; the statistics are summed over vertices. The Old Rays must be the segments exactly as they were inserted (same direction, power and extension). On an error (a summary losing more rays than it holds) the other vertices keep their update.
     pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
+        // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept.
+        let old_crossing = self.discs.crossings(old)?;
+        let new_crossing = self.discs.crossings(new)?;
         let per_vertex: Vec<UpdateStats> = self
             .meshes
             .par_iter_mut()
-            .flat_map(|v| v.par_iter_mut())
-            .filter_map(|v| v.as_mut().map(|v| v.update(old, new)))
+            .zip(self.disc_of.par_iter())
+            .flat_map(|(v, d)| v.par_iter_mut().zip(d.par_iter()))
+            .filter_map(|(v, d)| {
+                let (v, &Some(d)) = (v.as_mut()?, d) else {
+                    return None;
+                };
+                Some(v.update_crossing(
+                    old_crossing[d as usize].iter().map(|&i| &old[i as usize]),
+                    new_crossing[d as usize].iter().map(|&i| &new[i as usize]),
+                ))
+            })
             .collect::<Result<_>>()?;
         let mut total = UpdateStats::default();
         per_vertex.into_iter().for_each(|s| total += s);
@@ -554,10 +680,27 @@ impl GlossyVertices {
 
     /// The radiance of every vertex towards the eye (equation 2.1 per vertex, recomputed when the camera moves), `[mesh][vertex]`, with `brdfs` one per material (`lustre_photon::trace::scene_brdfs`); empty for meshes not built. Fails when a mesh's material has no BRDF.
     pub fn radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+        self.per_vertex(brdfs, |v, brdf, _| v.radiance(brdf, eye - v.disc().centre))
+    }
+
+    /// The radiance of the non-diffuse part of every vertex's BRDF towards the eye, [`GlossyVertex::lobe_estimate`] with the mesh material's Lambertian reflectance (beyond the paper: the diffuse part `ρ/π E` is left to the diffuse estimate), `[mesh][vertex]`; empty for meshes not built. Fails when a mesh's material has no BRDF.
+    pub fn lobe_radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
+        self.per_vertex(brdfs, |v, brdf, diffuse| {
+            v.lobe_estimate(brdf, eye - v.disc().centre, diffuse).value
+        })
+    }
+
+    /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex, zero for a vertex without one.
+    fn per_vertex(
+        &self,
+        brdfs: &[BoxedBrdf],
+        f: impl Fn(&GlossyVertex, &dyn Brdf, Rgb) -> Rgb + Sync,
+    ) -> Result<Vec<Vec<Rgb>>> {
         self.meshes
             .iter()
             .zip(&self.materials)
-            .map(|(vertices, &material)| {
+            .zip(&self.diffuse)
+            .map(|((vertices, &material), &diffuse)| {
                 if vertices.is_empty() {
                     return Ok(Vec::new());
                 }
@@ -571,9 +714,8 @@ impl GlossyVertices {
                 Ok(vertices
                     .par_iter()
                     .map(|v| {
-                        v.as_ref().map_or(Rgb::ZERO, |v| {
-                            v.radiance(brdf.as_ref(), eye - v.disc().centre)
-                        })
+                        v.as_ref()
+                            .map_or(Rgb::ZERO, |v| f(v, brdf.as_ref(), diffuse))
                     })
                     .collect())
             })

@@ -25,6 +25,8 @@
 //! | 2.4, equation 2.8: contributions of rays are additive | every estimator sums per-ray terms |
 //! | 1.2.1 Artifact Control: reachable area near walls and corners, rays followed through concave parts of the own mesh | [`artifact::reachable_areas`], [`artifact::extension`], [`artifact::artifact_controlled_detp`] |
 //! | 2.10, equation 2.1 on the disc: per-vertex ray lists of glossy vertices, `L = Σ f_r φ / (π r²)` | [`glossy::GlossyVertex`], [`glossy::GlossyVertices`] |
+//! | beyond the paper: the glossy discs larger than the diffuse ones, `L = ρ/π E(r) + Σ (f_r − ρ/π) φ / (π r_g²)` | [`QuasiStaticOptions::glossy_radius`], [`glossy::GlossyVertices::lobe_radiance`] |
+//! | beyond the paper: artifact control's shortcuts, discs no other mesh comes near and convex meshes | [`triangle_grid::TriangleGrid`], [`artifact::reachable_area_near`], [`artifact::is_concave`] |
 //! | 2.10, equation 2.1 with Impact Count and Photon Maps: each impact weighted by `f_r(ωi, ωo)`, over the vertex's triangles' area or the `k`-nearest disc's area on the surface (Jensen's radiance estimate); per-triangle lists updated with OldRays/NewRays | [`radiance::TriangleImpacts`], [`radiance::ImpactMap`], [`impact_count_radiance`], [`photon_maps_radiance`] |
 //! | 2.10.1 QuadTree without summarising (exact) and with summarising (mean-direction update) | [`quadtree::QuadTree`], [`quadtree::SummaryTree`], [`quadtree::summary_degradation`] |
 //!
@@ -81,6 +83,7 @@ pub mod quadtree;
 mod quasi_static;
 pub mod radiance;
 mod ray_set;
+pub mod triangle_grid;
 mod update;
 mod world;
 

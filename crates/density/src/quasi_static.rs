@@ -9,13 +9,14 @@ use rayon::prelude::*;
 
 use crate::VertexIrradiance;
 use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
-use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area};
+use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area_near};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
 use crate::points::{EstimationPoint, EstimationPoints};
 use crate::radiance::{ImpactMap, TriangleImpacts};
 use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
+use crate::triangle_grid::TriangleGrid;
 use crate::update::{RayUpdate, update_ray_set};
 use crate::world::World;
 
@@ -54,8 +55,10 @@ pub struct QuasiStaticOptions {
     pub rays: RaySetOptions,
     /// The density estimator.
     pub estimator: Estimator,
-    /// Artifact control of DETP (section 1.2.1): reachable disc areas and the concave extension of [`RaySetOptions::extension`] (set to `max_extension · radius`); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
+    /// Artifact control of DETP (section 1.2.1): reachable disc areas (of the diffuse discs, and of the glossy discs of glossy vertices) and the concave extension of [`RaySetOptions::extension`] (set to `max_extension` times the larger radius); `None` for plain DETP. Static vertices' areas are measured once against the static scene, the mobile objects' every frame.
     pub artifact: Option<ArtifactOptions>,
+    /// DETP's disc radius for the ray lists of glossy vertices (section 2.10; beyond the paper, which uses one radius): the non-diffuse part of their BRDF is estimated on discs of this radius ([`GlossyVertices::lobe_radiance`]), the diffuse part `ρ/π E` from the irradiance on the estimator's discs; `None` uses the estimator's radius for both. Positive and finite.
+    pub glossy_radius: Option<f32>,
     /// View-dependent estimate of glossy vertices (section 2.10): DETP's per-vertex ray lists in the given store, updated with OldRays and NewRays on static vertices and rebuilt on mobile ones; Impact Count's per-triangle impact lists updated with OldRays and NewRays, and Photon Maps' radiance estimate over the frame's impacts (these two take [`GlossyMode::List`] only); `None` keeps only the irradiance.
     pub glossy: Option<GlossyMode>,
     /// How DETP finds the rays crossing each disc (sections 2.6–2.7, and the segment grid beyond the paper); `None` picks disc indexing tuned by the radius and the scene's mean edge ([`Acceleration::tuned_disc_index`]), which suits both the frame's few changed rays against every static disc and every ray against the mobile object's discs.
@@ -74,6 +77,7 @@ impl QuasiStaticOptions {
             },
             estimator,
             artifact: None,
+            glossy_radius: None,
             glossy: None,
             acceleration: None,
             pretest: PreTest::None,
@@ -153,6 +157,14 @@ impl QuasiStatic {
             }
             _ => {}
         }
+        if let Some(r) = options.glossy_radius
+            && !(r > 0.0 && r.is_finite())
+        {
+            return Err(DensityError::InvalidOption {
+                option: "glossy_radius",
+                message: format!("{r} is not a positive finite disc radius"),
+            });
+        }
         let mut options = options;
         if let Some(mode) = options.glossy
             && !matches!(options.estimator, Estimator::Detp { .. })
@@ -177,7 +189,9 @@ impl QuasiStatic {
                 });
             };
             artifact.validate()?;
-            options.rays.extension = artifact.max_extension * radius;
+            // Followed far enough for the larger of the two discs (section 1.2.1, concave surfaces).
+            let reach = options.glossy_radius.map_or(radius, |g| g.max(radius));
+            options.rays.extension = artifact.max_extension * reach;
         }
         let world = World::new(&scene, mobile)?;
         let t0 = Instant::now();
@@ -461,31 +475,49 @@ impl QuasiStatic {
         Ok(())
     }
 
-    /// The glossy vertices of the static (`mobile` false) or mobile glossy meshes from the whole current ray set (section 2.10), with the points' disc areas.
+    /// The glossy vertices of the static (`mobile` false) or mobile glossy meshes from the whole current ray set (section 2.10), on discs of the glossy radius with their areas: `π r²`, or under artifact control their reachable areas against the static scene (section 1.2.1).
     fn build_glossy(&self, mobile: bool) -> Result<GlossyVertices> {
-        let (Some(mode), State::Detp { radius, areas, .. }) = (self.options.glossy, &self.state)
-        else {
+        let (Some(mode), State::Detp { radius, .. }) = (self.options.glossy, &self.state) else {
             return Err(DensityError::InvalidOption {
                 option: "glossy",
                 message: "the view-dependent glossy estimate needs DETP".into(),
             });
         };
+        let radius = self.options.glossy_radius.unwrap_or(*radius);
         let meshes: Vec<MeshId> = glossy_meshes(&self.scene)
             .into_iter()
             .filter(|&m| self.world.is_mobile_mesh(m) == mobile)
             .collect();
-        let mut vertices = GlossyVertices::build(&self.scene, &self.rays, *radius, mode, &meshes)?;
-        let per_vertex: Vec<Vec<f32>> = self
-            .points
-            .vertex_point
-            .iter()
-            .map(|map| map.iter().map(|&p| areas[p as usize] as f32).collect())
-            .collect();
-        vertices.set_areas(&per_vertex)?;
+        let mut vertices = GlossyVertices::build(&self.scene, &self.rays, radius, mode, &meshes)?;
+        if let Some(options) = self.options.artifact {
+            let bvh = self.world.static_scene_bvh(&self.scene);
+            let grid = TriangleGrid::new(bvh, 2.0 * radius);
+            let mut areas: Vec<Vec<f32>> = vec![Vec::new(); self.scene.meshes().len()];
+            for &m in &meshes {
+                let own = mesh_triangles(&self.scene, m);
+                let inward = inward_directions(
+                    &self.scene.world_positions(m),
+                    &self.scene.world_normals(m),
+                    &self.scene.meshes()[m as usize].indices,
+                );
+                areas[m as usize] = vertices
+                    .vertices(m)
+                    .par_iter()
+                    .zip(inward.par_iter())
+                    .map(|(v, &inward)| match v {
+                        Some(v) => {
+                            reachable_area_near(bvh, &grid, v.disc(), own.clone(), inward, &options)
+                        }
+                        None => Ok(0.0),
+                    })
+                    .collect::<Result<_>>()?;
+            }
+            vertices.set_areas(&areas)?;
+        }
         Ok(vertices)
     }
 
-    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1: on DETP's disc, over Impact Count's triangles, or over Photon Maps' `k` nearest impacts), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
+    /// Radiance towards `eye` of every vertex of a glossy mesh (section 2.10, equation 2.1: on DETP's discs, `ρ/π E` from the diffuse disc plus the non-diffuse part of `f_r` on the glossy disc of [`QuasiStaticOptions::glossy_radius`], over Impact Count's triangles, or over Photon Maps' `k` nearest impacts), `[mesh][vertex]`, empty for the other meshes; `None` without the glossy option.
     pub fn glossy_radiance(&self, eye: Vec3) -> Result<Option<Vec<Vec<Rgb>>>> {
         if self.options.glossy.is_none() {
             return Ok(None);
@@ -503,12 +535,23 @@ impl QuasiStatic {
         let Some((fixed, moving)) = &self.glossy else {
             return Ok(None);
         };
-        let a = fixed.radiance(&brdfs, eye)?;
-        let b = moving.radiance(&brdfs, eye)?;
+        // ρ/π E on the diffuse discs plus the non-diffuse part on the glossy discs.
+        let a = fixed.lobe_radiance(&brdfs, eye)?;
+        let b = moving.lobe_radiance(&brdfs, eye)?;
+        let irradiance = self.irradiance();
         Ok(Some(
             a.into_iter()
                 .zip(b)
-                .map(|(a, b)| if a.is_empty() { b } else { a })
+                .enumerate()
+                .map(|(m, (a, b))| {
+                    let lobe = if a.is_empty() { b } else { a };
+                    let rho = self.scene.meshes()[m].material as usize;
+                    let rho = self.scene.materials()[rho].model.diffuse_reflectance();
+                    lobe.iter()
+                        .zip(&irradiance[m])
+                        .map(|(&l, &e)| l + crate::diffuse_radiance(rho, e))
+                        .collect()
+                })
                 .collect(),
         ))
     }
@@ -542,6 +585,7 @@ impl QuasiStatic {
             return Ok(vec![full; range.len()]);
         };
         let bvh = self.world.static_scene_bvh(&self.scene);
+        let grid = TriangleGrid::new(bvh, 2.0 * radius);
         // Each point's inward direction (border vertices), from the first vertex that maps to it.
         let mut inward: Vec<Option<Vec3>> = vec![None; range.len()];
         for (m, mesh) in self.scene.meshes().iter().enumerate() {
@@ -569,7 +613,8 @@ impl QuasiStatic {
                     mesh: Some(p.mesh),
                 };
                 let own = mesh_triangles(&self.scene, p.mesh);
-                let area = reachable_area(bvh, &disc, own, inward.unwrap_or(Vec3::ZERO), &options)?;
+                let inward = inward.unwrap_or(Vec3::ZERO);
+                let area = reachable_area_near(bvh, &grid, &disc, own, inward, &options)?;
                 Ok(area as f64)
             })
             .collect()

@@ -18,7 +18,7 @@ use lustre_photon::trace::scene_brdfs;
 use lustre_photon::{allocate_photons, photon_stream};
 use rayon::prelude::*;
 
-use crate::artifact::{extension, mesh_triangles};
+use crate::artifact::{extension, is_concave, mesh_triangles};
 use crate::error::{DensityError, Result};
 use crate::world::{World, WorldHit};
 
@@ -31,7 +31,7 @@ pub struct RaySetOptions {
     pub seed: u64,
     /// Largest number of segments per primary ray (1 or more).
     pub max_segments: u32,
-    /// Artifact control on concave surfaces (section 1.2.1): the longest [`RaySegment::extension`] in metres measured for each segment through the mesh it hit, against the static scene; 0 turns it off.
+    /// Artifact control on concave surfaces (section 1.2.1): the longest [`RaySegment::extension`] in metres measured for each segment through the mesh it hit, against the static scene, when that mesh is concave ([`crate::artifact::is_concave`]; on any other the extension could change no crossing and stays 0); 0 turns it off.
     pub extension: f32,
 }
 
@@ -74,7 +74,7 @@ pub struct RaySegment {
     pub hit: Option<SegmentHit>,
     /// Power `φ` (W, RGB) carried along the segment and delivered at its hit.
     pub power: Rgb,
-    /// Artifact control on concave surfaces (section 1.2.1): how far the segment may be followed past its hit, through the mesh it hit, before it meets any other part of the scene; zero when artifact control is off.
+    /// Artifact control on concave surfaces (section 1.2.1): how far the segment may be followed past its hit, through the mesh it hit, before it meets any other part of the scene; zero when artifact control is off or the mesh is not concave.
     pub extension: f32,
 }
 
@@ -250,6 +250,8 @@ pub(crate) struct Tracer<'a> {
     world: &'a dyn Intersector,
     /// The static scene with scene-wide triangle ids, for the concave extension (section 1.2.1).
     statics: Option<&'a Bvh>,
+    /// Per mesh, whether the concave extension is measured on it ([`crate::artifact::is_concave`]); empty without extension.
+    concave: Vec<bool>,
     brdfs: Vec<BoxedBrdf>,
     epsilon: f32,
     pub(crate) counts: Vec<u64>,
@@ -270,6 +272,12 @@ impl<'a> Tracer<'a> {
             scene,
             world,
             statics,
+            concave: match statics {
+                Some(_) if options.extension > 0.0 => (0..scene.meshes().len() as MeshId)
+                    .map(|m| is_concave(scene, m, epsilon))
+                    .collect(),
+                _ => Vec::new(),
+            },
             brdfs: scene_brdfs(scene)?,
             epsilon,
             counts: allocate_photons(&powers, options.photons),
@@ -345,7 +353,14 @@ impl<'a> Tracer<'a> {
                 }),
                 power,
             );
-            if let Some(statics) = self.statics.filter(|_| self.options.extension > 0.0) {
+            if let Some(statics) = self.statics.filter(|_| {
+                self.options.extension > 0.0
+                    && self
+                        .concave
+                        .get(found.mesh as usize)
+                        .copied()
+                        .unwrap_or(true)
+            }) {
                 let own = mesh_triangles(self.scene, found.mesh);
                 segment.extension = extension(statics, &segment, own, self.options.extension);
             }

@@ -4,9 +4,10 @@ use std::f64::consts::PI;
 
 use glam::{Affine3A, Vec3};
 use lustre_density::artifact::{
-    ArtifactOptions, artifact_controlled_detp, extend_ray_set, extension, mesh_triangles,
-    reachable_area, reachable_areas,
+    ArtifactOptions, artifact_controlled_detp, extend_ray_set, extension, inward_directions,
+    is_concave, mesh_triangles, reachable_area, reachable_area_near, reachable_areas,
 };
+use lustre_density::triangle_grid::TriangleGrid;
 use lustre_density::{
     DensityError, Disc, RaySegment, RaySet, RaySetOptions, SegmentHit, detp, trace_ray_set,
 };
@@ -199,6 +200,60 @@ fn reachable_area_matches_a_disc_cut_by_one_wall() {
     );
 }
 
+/// A wall standing on the floor through the vertex, facing −x: `x = 0`, `y ∈ [0, 3]`.
+fn wall_at_vertex() -> Mesh {
+    quad(
+        "wall-foot",
+        [
+            Vec3::new(0.0, 0.0, -2.0),
+            Vec3::new(0.0, 0.0, 2.0),
+            Vec3::new(0.0, 3.0, 2.0),
+            Vec3::new(0.0, 3.0, -2.0),
+        ],
+    )
+}
+
+/// Small discs on the foot of a wall keep half their area, and in a corner a quarter: the visibility paths start `offset · r` from the walls (`4 · 10⁻⁵` m at r = 0.04), closer than the `10⁻⁴` within which the BVH's traversal culls thin boxes (the queries start further back for that reason).
+#[test]
+fn small_discs_at_a_wall_foot_lose_the_half_behind_it() {
+    for r in [0.005f32, 0.02, 0.04, 0.05, 0.1] {
+        let one = black_scene(
+            vec![floor_fan(Vec3::ZERO), wall_at_vertex()],
+            Vec3::new(-1.0, 1.0, 0.0),
+        );
+        let mut back = quad(
+            "wall-back",
+            [
+                Vec3::new(-2.0, 0.0, 0.0),
+                Vec3::new(-2.0, 3.0, 0.0),
+                Vec3::new(2.0, 3.0, 0.0),
+                Vec3::new(2.0, 0.0, 0.0),
+            ],
+        );
+        back.name = "wall-back".into();
+        let corner = black_scene(
+            vec![floor_fan(Vec3::ZERO), wall_at_vertex(), back],
+            Vec3::new(-1.0, 1.0, -1.0),
+        );
+        for (scene, expected) in [(one, 0.5), (corner, 0.25)] {
+            let bvh = Bvh::build(&scene);
+            let area = reachable_area(
+                &bvh,
+                &floor_disc(Vec3::ZERO, r),
+                mesh_triangles(&scene, 0),
+                Vec3::ZERO,
+                &ArtifactOptions::default(),
+            )
+            .unwrap();
+            let fraction = area / (std::f32::consts::PI * r * r);
+            assert!(
+                (fraction - expected).abs() < 0.01,
+                "r {r}: {fraction} of the disc reachable, expected {expected}"
+            );
+        }
+    }
+}
+
 #[test]
 fn reachable_area_matches_a_disc_cut_by_a_corner() {
     let r = 0.3f32;
@@ -259,6 +314,112 @@ fn cornell_floor_corners_lose_what_lies_behind_the_walls() {
             assert!(a / full >= 0.49, "{p}: {}", a / full);
         }
     }
+}
+
+/// The triangle grid's shortcut (a disc no triangle of another mesh comes near keeps `π r²` without casting a path) gives the area the paths give, at every vertex of the Cornell box meshed at 0.1 m, for radii below, at and above the mesh edge; and it does skip the paths of most vertices.
+#[test]
+fn grid_shortcut_gives_the_areas_of_the_paths() {
+    let base = builtin("cornell").unwrap();
+    let meshes = base
+        .meshes()
+        .iter()
+        .map(|m| lustre_geometry::meshing::subdivide(m, 0.1).unwrap())
+        .collect();
+    let scene = base.with_meshes(meshes).unwrap();
+    let bvh = Bvh::build(&scene);
+    let options = ArtifactOptions {
+        samples_per_axis: 8,
+        ..ArtifactOptions::default()
+    };
+    for r in [0.03f32, 0.04, 0.05, 0.1, 0.15] {
+        let grid = TriangleGrid::new(&bvh, 2.0 * r);
+        let full = std::f32::consts::PI * r * r;
+        let (mut cut, mut compared) = (0, 0);
+        for m in 0..scene.meshes().len() as u32 {
+            let own = mesh_triangles(&scene, m);
+            let positions = scene.world_positions(m);
+            let normals = scene.world_normals(m);
+            let inward =
+                inward_directions(&positions, &normals, &scene.meshes()[m as usize].indices);
+            for ((&centre, &normal), &inward) in positions.iter().zip(&normals).zip(&inward) {
+                let disc = Disc {
+                    centre,
+                    normal: normal.normalize(),
+                    radius: r,
+                    mesh: Some(m),
+                };
+                let paths = reachable_area(&bvh, &disc, own.clone(), inward, &options).unwrap();
+                let gridded =
+                    reachable_area_near(&bvh, &grid, &disc, own.clone(), inward, &options).unwrap();
+                assert_eq!(gridded, paths, "mesh {m} vertex {centre} r {r}");
+                cut += usize::from(paths < full);
+                compared += 1;
+            }
+        }
+        let skipped = (0..scene.meshes().len() as u32)
+            .flat_map(|m| {
+                let own = mesh_triangles(&scene, m);
+                scene
+                    .world_positions(m)
+                    .into_iter()
+                    .map(move |c| (c, own.clone()))
+            })
+            .filter(|(c, own)| !grid.foreign_near(*c, 1.02 * r, own))
+            .count();
+        eprintln!("r {r}: {cut} of {compared} discs cut, {skipped} skipped by the grid");
+        assert!(
+            cut > 100,
+            "r {r}: only {cut} discs are cut; the test proves little"
+        );
+        assert!(
+            2 * skipped > compared,
+            "r {r}: the grid skips only {skipped} of {compared}"
+        );
+    }
+}
+
+/// The concave rule (section 1.2.1) cannot change a crossing on a mesh that is not concave ([`is_concave`]): on the Cornell box, whose walls and boxes are all flat or convex, the ray set leaves every segment unextended, and DETP over it equals DETP over the same segments extended through their meshes; the grooved mesh is concave and its segments are extended.
+#[test]
+fn convex_meshes_need_no_concave_extension() {
+    let base = builtin("cornell").unwrap();
+    let meshes = base
+        .meshes()
+        .iter()
+        .map(|m| lustre_geometry::meshing::subdivide(m, 0.25).unwrap())
+        .collect();
+    let scene = base.with_meshes(meshes).unwrap();
+    let epsilon = 2e-5;
+    for m in 0..scene.meshes().len() as u32 {
+        assert!(
+            !is_concave(&scene, m, epsilon),
+            "{}",
+            scene.meshes()[m as usize].name
+        );
+    }
+    let bvh = Bvh::build(&scene);
+    let r = 0.2;
+    let options = RaySetOptions {
+        photons: 20_000,
+        seed: 5,
+        max_segments: 8,
+        extension: 4.0 * r,
+    };
+    let rays = trace_ray_set(&scene, &bvh, &options).unwrap();
+    assert!(rays.segments().all(|s| s.extension == 0.0));
+    let mut extended = rays.clone();
+    extend_ray_set(&scene, &bvh, &mut extended, 4.0 * r).unwrap();
+    let longer = extended.segments().filter(|s| s.extension > 0.0).count();
+    assert!(longer > 10_000, "only {longer} segments extended");
+    assert_eq!(
+        detp(&scene, &rays, r).unwrap(),
+        detp(&scene, &extended, r).unwrap()
+    );
+    // A groove is concave, and the ray set extends the segments that hit it.
+    let groove = black_scene(vec![groove_mesh()], Vec3::new(0.0, 1.0, 0.0));
+    assert!(is_concave(&groove, 0, epsilon));
+    let bvh = Bvh::build(&groove);
+    let rays = trace_ray_set(&groove, &bvh, &options).unwrap();
+    assert!(rays.segments().any(|s| s.extension > 0.0));
 }
 
 #[test]

@@ -7,7 +7,8 @@ use glam::{Affine3A, DVec3, Vec3};
 use lustre_brdf::models::Phong;
 use lustre_brdf::{BoxedBrdf, Brdf, from_model};
 use lustre_density::glossy::{
-    GlossyMode, GlossyVertex, GlossyVertices, IncidentRay, RayList, glossy_meshes, ray_difference,
+    GlossyMode, GlossyVertex, GlossyVertices, IncidentRay, RayList, UpdateStats, glossy_meshes,
+    ray_difference,
 };
 use lustre_density::quadtree::{
     QuadTree, QuadTreeOptions, Summary, SummaryTree, hemisphere_to_square, square_to_hemisphere,
@@ -24,6 +25,8 @@ use lustre_photon::trace::scene_brdfs;
 const SLACK: f32 = 2e-4;
 /// Radius of the test disc.
 const RADIUS: f32 = 0.25;
+/// The built-in Cornell boxes' white reflectance (`lustre_geometry::builtin`).
+const WHITE: Rgb = Rgb::new(0.885809, 0.698859, 0.666422);
 
 /// A disc on the glossy floor of the glosbox, clear of both boxes.
 fn floor_disc() -> Disc {
@@ -658,6 +661,78 @@ fn glossy_vertices_of_a_scene() {
     for (a, b) in quartered[0].iter().zip(&l[0]) {
         assert!(close(*a, *b * 4.0, 1e-5, 0.0), "{a} {b}");
     }
+}
+
+/// The scene's glossy vertices, whose crossing rays disc indexing finds, hold exactly the rays that testing every segment against each vertex's disc finds (section 2.10), before and after a frame's Old and New Rays; the lobe radiance is the full radiance less the diffuse part `ρ/π E` on the same disc (the floor's `ρ` is 0.7 · white; the gold box has none).
+#[test]
+fn glossy_vertices_hold_the_rays_of_a_brute_force_search() {
+    let (scene, brdfs, rays) = shared();
+    let meshes = glossy_meshes(scene);
+    let radius = 0.3;
+    let mut vertices =
+        GlossyVertices::build(scene, rays, radius, GlossyMode::List, &meshes).unwrap();
+    let eye = scene.camera().position;
+    // A frame's update: some of the held rays leave, rays of another trace arrive.
+    let segments: Vec<RaySegment> = rays.segments().copied().collect();
+    let old = &segments[..20_000];
+    let other = trace_ray_set(
+        scene,
+        &Bvh::build(scene),
+        &RaySetOptions {
+            photons: 5_000,
+            seed: 9,
+            max_segments: 16,
+            extension: 0.0,
+        },
+    )
+    .unwrap();
+    let new: Vec<RaySegment> = other.segments().copied().collect();
+    let stats = vertices.update(old, &new).unwrap();
+    let mut expected_stats = UpdateStats::default();
+    let full = vertices.radiance(brdfs, eye).unwrap();
+    let lobe = vertices.lobe_radiance(brdfs, eye).unwrap();
+    let mut held = 0;
+    for &m in &meshes {
+        let positions = scene.world_positions(m);
+        let normals = scene.world_normals(m);
+        let rho = scene.materials()[scene.meshes()[m as usize].material as usize]
+            .model
+            .diffuse_reflectance();
+        for (v, vertex) in vertices.vertices(m).iter().enumerate() {
+            let vertex = vertex.as_ref().unwrap();
+            let disc = Disc {
+                centre: positions[v],
+                normal: normals[v].normalize(),
+                radius,
+                mesh: Some(m),
+            };
+            let mut brute =
+                GlossyVertex::build(disc, SLACK, GlossyMode::List, rays.segments()).unwrap();
+            expected_stats += brute.update(old, &new).unwrap();
+            assert_eq!(vertex.rays(), brute.rays(), "mesh {m} vertex {v}");
+            held += vertex.len();
+            let diffuse = diffuse_radiance(rho, vertex.irradiance());
+            let expected = (full[m as usize][v] - diffuse).max(Rgb::ZERO);
+            assert!(
+                close(lobe[m as usize][v], expected, 1e-5, 1e-7),
+                "mesh {m} vertex {v}: {} against {expected}",
+                lobe[m as usize][v]
+            );
+        }
+    }
+    assert!(held > 1000, "only {held} rays held");
+    assert_eq!(stats, expected_stats);
+    assert!(stats.removed > 100 && stats.inserted > 100, "{stats:?}");
+    assert_eq!(stats.missing, 0);
+    let floor_rho = scene.materials()[scene.meshes()[0].material as usize]
+        .model
+        .diffuse_reflectance();
+    // The blend of 0.7 white Lambert and 0.3 Beckmann; the gold conductor has no diffuse part.
+    assert!(close(floor_rho, 0.7 * WHITE, 1e-6, 0.0), "{floor_rho}");
+    let gold = scene.materials()[scene.meshes()[7].material as usize]
+        .model
+        .diffuse_reflectance();
+    assert_eq!(gold, Rgb::ZERO);
 }
 
 #[test]

@@ -21,7 +21,8 @@ use std::sync::OnceLock;
 use glam::{Affine3A, DVec2, DVec3, Vec3};
 use lustre_density::glossy::{GlossyMode, GlossyVertices};
 use lustre_density::{
-    RaySet, RaySetOptions, impact_count_radiance, photon_maps_radiance, trace_ray_set,
+    Estimator, QuasiStatic, QuasiStaticOptions, RaySet, RaySetOptions, impact_count_radiance,
+    photon_maps_radiance, trace_ray_set,
 };
 use lustre_geometry::light::PointLight;
 use lustre_geometry::meshing::subdivide;
@@ -355,4 +356,127 @@ fn impact_count_and_photon_maps_agree_with_detp_glossy() {
         }
         eprintln!("{name} against DETP: worst |difference − expected| / (σ + σ_DETP) {worst:.2}");
     }
+}
+
+/// The modified Phong plane's diffuse reflectance, specular coefficient and exponent (`MaterialModel::Phong`: `kd/π + ks (n+2)/(2π) cos^n α`).
+const MODIFIED: (f64, f64, f64) = (0.3, 0.4, 20.0);
+
+/// The plane of [`plane_scene`] with `MaterialModel::Phong`, whose diffuse part `kd` the glossy estimate takes from the diffuse discs.
+fn modified_phong_scene() -> Scene {
+    let scene = plane_scene();
+    let (kd, ks, n) = MODIFIED;
+    let material = Material::new(
+        "modified-phong",
+        MaterialModel::Phong {
+            diffuse: Rgb::splat(kd as f32),
+            specular: Rgb::splat(ks as f32),
+            exponent: n as f32,
+        },
+    );
+    Scene::new(
+        "modified-phong-plane",
+        scene.meshes().to_vec(),
+        vec![material],
+        scene.objects().to_vec(),
+        scene.lights().to_vec(),
+        *scene.camera(),
+    )
+    .expect("valid scene")
+}
+
+/// The non-diffuse part of the modified Phong BRDF, `ks (n+2)/(2π) cos^n α`, written out independently of `lustre-brdf`.
+fn modified_lobe(wi: DVec3, wo: DVec3) -> f64 {
+    let (_, ks, n) = MODIFIED;
+    if wi.y <= 0.0 || wo.y <= 0.0 {
+        return 0.0;
+    }
+    let mirror = DVec3::new(-wo.x, wo.y, -wo.z);
+    ks * (n + 2.0) / (2.0 * PI) * wi.dot(mirror).max(0.0).powf(n)
+}
+
+/// Where a segment crosses the plane `y = 0` from above, within its length (plus a slack for the segments that end on it), written out independently of `Disc`.
+fn plane_crossing(s: &lustre_density::RaySegment) -> Option<DVec2> {
+    let (o, d) = (s.origin.as_dvec3(), s.direction.as_dvec3());
+    if !(d.y < 0.0) {
+        return None;
+    }
+    let t = -o.y / d.y;
+    (t >= 0.0 && t <= s.length() as f64 + 1e-3).then(|| DVec2::new(o.x + t * d.x, o.z + t * d.z))
+}
+
+/// DETP's glossy estimate with a glossy disc larger than the diffuse one (section 2.10 with `QuasiStaticOptions::glossy_radius`): `kd/π E` on discs of radius `r_d` plus `Σ f_lobe φ / (π r_g²)` on discs of `r_g`. Against a brute-force sum over the ray set's segments (each vertex, up to rounding), and against the expectation of both sums by quadrature (`(kd/π)·∫_d E dA / (π r_d²) + ∫_g f_lobe E dA / (π r_g²)`, σ at most the sum of the two sums' σ).
+#[test]
+fn detp_glossy_radius_splits_the_diffuse_part_from_the_lobe() {
+    let scene = modified_phong_scene();
+    let (r_d, r_g) = (0.08f64, 0.25f64);
+    let mut options = QuasiStaticOptions::new(Estimator::Detp { radius: r_d as f32 }, PHOTONS);
+    options.rays.seed = 11;
+    options.rays.max_segments = 4;
+    options.glossy = Some(GlossyMode::List);
+    options.glossy_radius = Some(r_g as f32);
+    let sim = QuasiStatic::new(scene.clone(), &[], options).expect("simulation");
+    let l = sim
+        .glossy_radiance(EYE)
+        .expect("radiance")
+        .expect("glossy on");
+    let vertices = checked_vertices(&scene);
+    assert!(vertices.len() >= 25, "{}", vertices.len());
+    let (kd, ..) = MODIFIED;
+    let crossings: Vec<(DVec2, DVec3, f64)> = sim
+        .rays()
+        .segments()
+        .filter_map(|s| plane_crossing(s).map(|p| (p, -s.direction.as_dvec3(), s.power.x as f64)))
+        .collect();
+    let eye = EYE.as_dvec3();
+    let (mut got, mut expected, mut exacts) = (Vec::new(), Vec::new(), Vec::new());
+    for &(v, c, wo) in &vertices {
+        // Brute force over the segments.
+        let (mut diffuse, mut lobe) = (0.0, 0.0);
+        for &(p, wi, phi) in &crossings {
+            let d = p.distance(c);
+            if d <= r_d {
+                diffuse += phi;
+            }
+            if d <= r_g {
+                lobe += modified_lobe(wi, (eye - point(c)).normalize()) * phi;
+            }
+        }
+        let brute = kd / PI * diffuse / (PI * r_d * r_d) + lobe / (PI * r_g * r_g);
+        let g = l[0][v].x as f64;
+        assert!(
+            (g - brute).abs() <= 1e-4 * brute,
+            "vertex at {c}: {g} against the brute-force sum {brute}"
+        );
+        // Expectation by quadrature of the two discs.
+        let (e_d, _, _) = disc_moments(c, r_d, wo);
+        let phong_weight = |y: DVec2| {
+            let wi = (DVec3::new(0.0, HEIGHT, 0.0) - point(y)).normalize();
+            modified_lobe(wi, (eye - point(y)).normalize())
+        };
+        let (nr, na) = (40, 80);
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for i in 0..nr {
+            let rho = (i as f64 + 0.5) / nr as f64 * r_g;
+            for j in 0..na {
+                let a = (j as f64 + 0.5) / na as f64 * 2.0 * PI;
+                let y = c + rho * DVec2::new(a.cos(), a.sin());
+                let (f, e) = (phong_weight(y), irradiance(y));
+                m1 += f * e * rho;
+                m2 += f * f * e * rho;
+            }
+        }
+        let da = (r_g / nr as f64) * (2.0 * PI / na as f64);
+        let (area_d, area_g) = (PI * r_d * r_d, PI * r_g * r_g);
+        let mean = kd / PI * e_d / area_d + m1 * da / area_g;
+        let sigma = (photon_power() * e_d).sqrt() * kd / PI / area_d
+            + (photon_power() * m2 * da).sqrt() / area_g;
+        got.push(g);
+        expected.push(Expected { mean, sigma });
+        exacts.push(
+            kd / PI * irradiance(c)
+                + modified_lobe((DVec3::new(0.0, HEIGHT, 0.0) - point(c)).normalize(), wo)
+                    * irradiance(c),
+        );
+    }
+    check("DETP glossy, split radii", &got, &expected, &exacts);
 }

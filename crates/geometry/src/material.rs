@@ -114,6 +114,25 @@ impl MaterialModel {
         matches!(self, Self::Diffuse { .. })
     }
 
+    /// The Lambertian reflectance `ρ` of the model's diffuse part (García et al. section 2.4, equation 2.2 holds for it): `Diffuse` its reflectance, `Phong` and `Ward` their diffuse term, `Blend` the weighted sum of its sides; zero for models without one (rough conductor, mirror, dielectric) and for `Named` models, whose parameters are not interpreted here.
+    pub fn diffuse_reflectance(&self) -> Rgb {
+        match self {
+            Self::Diffuse { reflectance } => *reflectance,
+            Self::Phong { diffuse, .. } | Self::Ward { diffuse, .. } => *diffuse,
+            Self::Blend {
+                weight,
+                first,
+                second,
+            } => {
+                (1.0 - weight) * first.diffuse_reflectance() + weight * second.diffuse_reflectance()
+            }
+            Self::RoughConductor { .. }
+            | Self::Mirror { .. }
+            | Self::Dielectric { .. }
+            | Self::Named { .. } => Rgb::ZERO,
+        }
+    }
+
     /// A short name of the model, as used in messages and `lustre info`.
     pub fn name(&self) -> String {
         match self {

@@ -53,8 +53,9 @@ use lustre_photon::{
 use serde_json::json;
 
 use crate::render_density::{
-    DEFAULT_DETP_RADIUS, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K, DensitySettings, DetpAcceleration,
-    Estimator, GlossyEstimate, PreTestArg, vertex_lit_scene, vertex_radiance,
+    DEFAULT_DETP_RADIUS, DEFAULT_GLOSSY_RADIUS_FACTOR, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K,
+    DensitySettings, DetpAcceleration, Estimator, GlossyEstimate, PreTestArg, vertex_lit_scene,
+    vertex_radiance,
 };
 use crate::scene_arg;
 
@@ -228,11 +229,20 @@ pub struct RenderArgs {
     /// DETP disc radius in m (`--technique detp`).
     #[arg(long, default_value_t = DEFAULT_DETP_RADIUS)]
     pub radius: f32,
+    /// DETP disc radius in m for the non-diffuse part of glossy surfaces' view-dependent estimate (García et al. section 2.10; their diffuse part keeps `--radius`). Defaults to 3 × `--radius`, 0.15 m.
+    #[arg(long)]
+    pub glossy_radius: Option<f32>,
     /// Nearest impacts of Photon Maps (`--technique photonmap`); their power is divided by the part of their disc that lies on the vertex's surface (half on an edge against a wall, a quarter in a corner).
     #[arg(long, default_value_t = DEFAULT_PHOTONMAP_K)]
     pub k: usize,
-    /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh.
-    #[arg(long)]
+    /// DETP with artifact control (García et al. section 1.2.1): each disc's reachable area near walls and corners, and rays followed through concave parts of the vertex's own mesh. On by default; `--artifact-control false` gives the plain estimator of section 1.2.
+    #[arg(
+        long,
+        default_value_t = true,
+        num_args = 0..=1,
+        default_missing_value = "true",
+        action = clap::ArgAction::Set
+    )]
     pub artifact_control: bool,
     /// The per-vertex estimate on glossy surfaces (García et al. section 2.10): DETP's per-vertex ray lists in a list, QuadTree or summarised QuadTree (Impact Count and Photon Maps always keep plain impact lists), or `none` for only the diffuse part.
     #[arg(long, value_enum, default_value_t = GlossyEstimate::Quadtree)]
@@ -291,12 +301,19 @@ impl RenderArgs {
         }
     }
 
+    /// DETP's glossy disc radius: `--glossy-radius`, or [`DEFAULT_GLOSSY_RADIUS_FACTOR`] × `--radius`.
+    pub fn glossy_radius(&self) -> f32 {
+        self.glossy_radius
+            .unwrap_or(DEFAULT_GLOSSY_RADIUS_FACTOR * self.radius)
+    }
+
     /// The per-vertex techniques' settings from these options.
     pub fn density_settings(&self) -> DensitySettings {
         DensitySettings {
             photons: self.photons,
             seed: self.seed,
             artifact_control: self.artifact_control,
+            glossy_radius: self.glossy_radius(),
             glossy: self.glossy_estimate,
             acceleration: self.detp_acceleration,
             pretest: self.pretest,
@@ -382,6 +399,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         Some(Estimator::Detp { radius }) if !(radius > 0.0 && radius.is_finite()) => {
             bail!("--radius {radius}: the DETP disc radius must be positive")
+        }
+        Some(Estimator::Detp { .. })
+            if !(args.glossy_radius() > 0.0 && args.glossy_radius().is_finite()) =>
+        {
+            bail!(
+                "--glossy-radius {}: the DETP glossy disc radius must be positive",
+                args.glossy_radius()
+            )
         }
         _ => {}
     }
@@ -624,6 +649,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "estimator": density.map(|e| format!("{e:?}")),
         "mesh_edge": density.map(|_| args.mesh_edge),
         "artifact_control": density.map(|_| args.artifact_control),
+        "glossy_radius": matches!(density, Some(Estimator::Detp { .. })).then(|| args.glossy_radius()),
         "glossy_estimate": density.map(|_| format!("{:?}", args.glossy_estimate)),
         "detp_acceleration": density.map(|_| format!("{:?}", args.detp_acceleration)),
         "pretest": density.map(|_| format!("{:?}", args.pretest)),

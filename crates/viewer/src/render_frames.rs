@@ -215,6 +215,7 @@ pub fn run(
         "frames": frames,
         "mesh_edge": args.mesh_edge,
         "artifact_control": args.artifact_control,
+        "glossy_radius": matches!(estimator, Estimator::Detp { .. }).then(|| args.glossy_radius()),
         "glossy_estimate": format!("{:?}", args.glossy_estimate),
         "detp_acceleration": format!("{:?}", args.detp_acceleration),
         "pretest": format!("{:?}", args.pretest),

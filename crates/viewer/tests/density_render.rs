@@ -87,6 +87,17 @@ fn each_vertex_technique_renders_a_lit_cornell_with_its_sidecar() {
         };
         assert_eq!(sidecar["technique"], technique);
         assert_eq!(sidecar["photons"], 2000);
+        assert_eq!(
+            sidecar["artifact_control"], true,
+            "on by default: {sidecar}"
+        );
+        if technique == "detp" {
+            // Three times --radius unless given.
+            let g = sidecar["glossy_radius"].as_f64().unwrap();
+            assert!((g - 0.6).abs() < 1e-6, "{sidecar}");
+        } else {
+            assert!(sidecar["glossy_radius"].is_null(), "{sidecar}");
+        }
         assert!(sidecar["splats"].is_null(), "{sidecar}");
         assert!(sidecar["triangles"].as_u64().unwrap() > 36, "{sidecar}");
         for phase in ["ray_set", "estimate", "frame"] {
@@ -104,9 +115,28 @@ fn each_vertex_technique_renders_a_lit_cornell_with_its_sidecar() {
             "{technique}: {mean:?}"
         );
     }
+    // Plain DETP and an explicit glossy radius.
+    let out = dir.join("plain.exr");
+    let plain = [
+        "--photons",
+        "2000",
+        "--size",
+        "32x32",
+        "--mesh-edge",
+        "0.5",
+        "--artifact-control",
+        "false",
+        "--glossy-radius",
+        "0.25",
+    ];
+    if let Some(sidecar) = render("plain detp", "detp", &plain, &out) {
+        assert_eq!(sidecar["artifact_control"], false, "{sidecar}");
+        assert_eq!(sidecar["glossy_radius"].as_f64(), Some(0.25), "{sidecar}");
+    }
     // Bad estimator options are one clear line.
     for (technique, args, expected) in [
         ("detp", ["--radius", "0"], "radius"),
+        ("detp", ["--glossy-radius", "0"], "--glossy-radius"),
         ("photonmap", ["--k", "0"], "--k"),
         ("impact", ["--mesh-edge", "0"], "subdivide"),
     ] {

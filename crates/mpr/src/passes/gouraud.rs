@@ -217,21 +217,9 @@ impl GouraudPass {
     }
 }
 
-/// The Lambertian reflectance `ρ` of a material model's diffuse part (section 2.4, equation 2.2 holds for diffuse surfaces): `Diffuse` its reflectance, `Phong` and `Ward` their diffuse term, `Blend` the weighted sum of its sides; zero for models without one (rough conductor, mirror, dielectric) and for `Named` models, whose parameters are not interpreted here.
+/// The Lambertian reflectance `ρ` of a material model's diffuse part (section 2.4, equation 2.2 holds for diffuse surfaces): [`MaterialModel::diffuse_reflectance`].
 pub fn diffuse_part(model: &MaterialModel) -> Rgb {
-    match model {
-        MaterialModel::Diffuse { reflectance } => *reflectance,
-        MaterialModel::Phong { diffuse, .. } | MaterialModel::Ward { diffuse, .. } => *diffuse,
-        MaterialModel::Blend {
-            weight,
-            first,
-            second,
-        } => (1.0 - weight) * diffuse_part(first) + weight * diffuse_part(second),
-        MaterialModel::RoughConductor { .. }
-        | MaterialModel::Mirror { .. }
-        | MaterialModel::Dielectric { .. }
-        | MaterialModel::Named { .. } => Rgb::ZERO,
-    }
+    model.diffuse_reflectance()
 }
 
 /// Outgoing radiance per scene triangle corner, `L_r = ρ/π E` (section 2.4, equation 2.2) with `ρ` the [`diffuse_part`] of the mesh's material and `E` the irradiance at the corner's vertex; in scene-wide triangle-id order, three corners per triangle as [`SceneBuffers`] lays them out. Fails unless `irradiance` has one value per vertex of every mesh.
