@@ -515,9 +515,9 @@ fn splat_tables(s: &mut String, results: &[Measurement], setups: &[SplatSetup]) 
         let _ = writeln!(
             s,
             "\nNot measured: {}. On a software adapter the bench runs only the 250k \
-             configurations at C = 4 by default, to finish in about 10 minutes; \
-             `LUSTRE_BENCH_SPLAT_MAX=4000000 cargo xtask bench splat` measures all (the \
-             `-c16` frames take tens of seconds each on llvmpipe, so criterion's 10 samples take minutes per function).",
+             configurations by default, to finish in about 20 minutes; \
+             `LUSTRE_BENCH_SPLAT_MAX=1000000 cargo xtask bench splat` measures all. The `-c16` \
+             configurations measure only the surface-id frame.",
             missing.join(", ")
         );
     }
