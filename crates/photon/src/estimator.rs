@@ -290,10 +290,10 @@ impl SplatEstimator {
 
     /// The divisor of the estimate at the index-space point `q` of `surface`: the kernel's mass there with [`Edges::Normalised`] on a planar surface, else 1.
     fn mass_at(&self, surface: SurfaceId, q: Vec3) -> f32 {
-        match (&self.mass, self.params.get(surface)) {
-            (Some(mass), Some(SurfaceParam::Planar(_))) => mass.at(surface, q.truncate()),
-            _ => 1.0,
-        }
+        // Only planar surfaces have a grid; their index-space point is (u, v, 0).
+        self.mass
+            .as_ref()
+            .map_or(1.0, |mass| mass.at(surface, q.truncate()))
     }
 
     /// Number of photons splatted on a surface.

@@ -735,27 +735,22 @@ fn splat_setup(
             bail!("--technique {:?} does not splat", args.technique)
         }
     };
-    let estimator = SplatEstimator::build(
-        scene,
-        &map,
-        EstimatorOptions {
-            kernel,
-            support: args.support_rule(),
-            selection,
-            edges: args.edges.into(),
-        },
-    )
-    .context("cannot build the splats")?;
+    let estimator_options = EstimatorOptions {
+        kernel,
+        support: args.support_rule(),
+        selection,
+        edges: args.edges.into(),
+    };
+    let estimator =
+        SplatEstimator::build(scene, &map, estimator_options).context("cannot build the splats")?;
     let lambertian = match (args.support, args.diffuse) {
         (SupportArg::GlossySilverman, DiffuseArg::Texture) => Some(
             SplatEstimator::build(
                 scene,
                 &map,
                 EstimatorOptions {
-                    kernel,
                     support: Support::Scaled(args.kernel_c),
-                    selection,
-                    edges: args.edges.into(),
+                    ..estimator_options
                 },
             )
             .context("cannot build the splats of the Lambertian lobes")?,

@@ -112,6 +112,18 @@ impl GpuSplat {
 /// Marks a surface without a kernel-mass grid in [`GpuMassGrid::offset`]: its estimate is not divided (`M = 1`).
 pub const NO_MASS_GRID: u32 = u32::MAX;
 
+/// The record of a surface without a kernel-mass grid.
+const NO_GRID: GpuMassGrid = GpuMassGrid {
+    origin: [0.0; 3],
+    offset: NO_MASS_GRID,
+    u_axis: [0.0; 3],
+    columns: 0,
+    v_axis: [0.0; 3],
+    rows: 0,
+    min: [0.0; 2],
+    spacing: [0.0; 2],
+};
+
 /// One surface's grid of the kernel's mass on the surface (lustre-photon's [`KernelMass`], the paper's future work on polygon edges), as `splat.wgsl` reads it (`MassGrid`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
@@ -134,14 +146,15 @@ pub struct GpuMassGrid {
     pub spacing: [f32; 2],
 }
 
-/// The per-surface records and the concatenated values of `mass`'s grids (every surface [`NO_MASS_GRID`] without `mass`); never empty, for binding.
+/// The per-surface records and the concatenated values of `mass`'s grids (every surface [`NO_MASS_GRID`] without `mass`, a single such record without `params`); never empty, for binding.
 pub fn gpu_mass_grids(
-    params: &SurfaceParams,
+    params: Option<&SurfaceParams>,
     mass: Option<&KernelMass>,
 ) -> (Vec<GpuMassGrid>, Vec<f32>) {
+    let params = params.map_or(&[][..], SurfaceParams::all);
     let mut records = Vec::with_capacity(params.len().max(1));
     let mut values = Vec::new();
-    for (id, param) in params.all().iter().enumerate() {
+    for (id, param) in params.iter().enumerate() {
         let grid = mass.and_then(|m| m.grid(id as u32));
         let record = match (param, grid) {
             (SurfaceParam::Planar(frame), Some(g)) => {
@@ -158,18 +171,12 @@ pub fn gpu_mass_grids(
                     spacing: g.spacing.to_array(),
                 }
             }
-            _ => GpuMassGrid {
-                offset: NO_MASS_GRID,
-                ..GpuMassGrid::zeroed()
-            },
+            _ => NO_GRID,
         };
         records.push(record);
     }
     if records.is_empty() {
-        records.push(GpuMassGrid {
-            offset: NO_MASS_GRID,
-            ..GpuMassGrid::zeroed()
-        });
+        records.push(NO_GRID);
     }
     if values.is_empty() {
         values.push(1.0);
@@ -209,16 +216,15 @@ impl SplatBuffers {
         estimator: &SplatEstimator,
         glossy: GlossyModel,
     ) -> Result<Self> {
-        let splats = estimator.splats();
-        Self::from_splats(ctx, scene, &splats, glossy)?.with_kernel_mass(ctx, estimator)
-    }
-
-    /// Replaces the kernel-mass grids with those of `estimator` (none with truncated edges).
-    fn with_kernel_mass(mut self, ctx: &GpuContext, estimator: &SplatEstimator) -> Result<Self> {
-        let (records, values) = gpu_mass_grids(estimator.params(), estimator.kernel_mass());
-        self.mass_grids = storage_buffer(ctx, "splat-mass-grids", bytemuck::cast_slice(&records))?;
-        self.mass_values = storage_buffer(ctx, "splat-mass-values", bytemuck::cast_slice(&values))?;
-        Ok(self)
+        Self::upload(
+            ctx,
+            scene,
+            &estimator.splats(),
+            glossy,
+            1 << 27,
+            &[],
+            Some(estimator),
+        )
     }
 
     /// Uploads the splats of `estimator` for the surfaces whose Lambertian lobes another pass renders where `textured` (by `SurfaceId`) is true, such as the precomputed diffuse textures of section 2.2.1: a purely Lambertian such surface gets no splats, any other keeps its splats shaded without its Lambertian lobes ([`GpuMaterial::without_lambert`]). Surfaces beyond `textured` are splatted whole.
@@ -229,22 +235,16 @@ impl SplatBuffers {
         glossy: GlossyModel,
         textured: &[bool],
     ) -> Result<Self> {
-        let materials = scene_materials(scene, glossy)?;
-        let textured_and = |surface: SurfaceId, diffuse: bool| {
-            textured.get(surface as usize).copied().unwrap_or(false)
-                && scene
-                    .surfaces()
-                    .get(surface as usize)
-                    .and_then(|s| materials.get(s.material as usize))
-                    .is_some_and(|m| m.is_diffuse() == diffuse)
-        };
-        let mut splats = estimator.splats();
-        splats.retain(|s| !textured_and(s.surface, true));
-        let glossy_part: Vec<bool> = (0..scene.surfaces().len() as SurfaceId)
-            .map(|s| textured_and(s, false))
-            .collect();
-        Self::upload(ctx, scene, &splats, glossy, 1 << 27, &glossy_part)?
-            .with_kernel_mass(ctx, estimator)
+        let splats = estimator.splats();
+        Self::upload(
+            ctx,
+            scene,
+            &splats,
+            glossy,
+            1 << 27,
+            textured,
+            Some(estimator),
+        )
     }
 
     /// Uploads `splats` (any order; they are grouped by surface here) in buffers of at most 128 MiB, with truncated kernels at polygon edges (no kernel-mass grids).
@@ -265,18 +265,35 @@ impl SplatBuffers {
         glossy: GlossyModel,
         max_chunk_bytes: u64,
     ) -> Result<Self> {
-        Self::upload(ctx, scene, splats, glossy, max_chunk_bytes, &[])
+        Self::upload(ctx, scene, splats, glossy, max_chunk_bytes, &[], None)
     }
 
-    /// [`SplatBuffers::from_splats_chunked`], the surfaces where `without_lambert` is true shaded without their Lambertian lobes.
+    /// [`SplatBuffers::from_splats_chunked`] for the surfaces whose Lambertian lobes another pass renders where `textured` is true ([`SplatBuffers::new_excluding`]), with the kernel-mass grids of `estimator` (none without one).
     fn upload(
         ctx: &GpuContext,
         scene: &Scene,
         splats: &[Splat],
         glossy: GlossyModel,
         max_chunk_bytes: u64,
-        without_lambert: &[bool],
+        textured: &[bool],
+        estimator: Option<&SplatEstimator>,
     ) -> Result<Self> {
+        let mut materials = scene_materials(scene, glossy)?;
+        // A textured surface whose every lobe is Lambertian gets no splats; any other textured one is shaded without its Lambertian lobes.
+        let textured_as = |surface: SurfaceId, diffuse: bool| {
+            textured.get(surface as usize).copied().unwrap_or(false)
+                && scene
+                    .surfaces()
+                    .get(surface as usize)
+                    .and_then(|s| materials.get(s.material as usize))
+                    .is_some_and(|m| m.is_diffuse() == diffuse)
+        };
+        let without_lambert: Vec<bool> = (0..scene.surfaces().len() as SurfaceId)
+            .map(|s| textured_as(s, false))
+            .collect();
+        let excluded: Vec<bool> = (0..scene.surfaces().len() as SurfaceId)
+            .map(|s| textured_as(s, true))
+            .collect();
         let surfaces = scene.surfaces().len();
         let mut by_surface: Vec<Vec<GpuSplat>> = vec![Vec::new(); surfaces];
         for s in splats {
@@ -287,7 +304,7 @@ impl SplatBuffers {
                         what: "splats",
                         message: format!("surface {} is not in scene `{}`", s.surface, scene.name),
                     })?;
-            if s.h > 0.0 && s.power.is_finite() {
+            if s.h > 0.0 && s.power.is_finite() && !excluded[s.surface as usize] {
                 list.push(GpuSplat::new(s));
             }
         }
@@ -302,7 +319,6 @@ impl SplatBuffers {
         if instances.is_empty() {
             instances.push(GpuSplat::zeroed());
         }
-        let mut materials = scene_materials(scene, glossy)?;
         if materials.is_empty() {
             materials.push(GpuMaterial::zeroed());
         }
@@ -335,6 +351,10 @@ impl SplatBuffers {
                     })
             })
         };
+        let (mass_records, mass_values) = gpu_mass_grids(
+            estimator.map(SplatEstimator::params),
+            estimator.and_then(SplatEstimator::kernel_mass),
+        );
         let limit = ctx.device.limits().max_buffer_size.min(max_chunk_bytes);
         let per_chunk = (limit / size_of::<GpuSplat>() as u64).max(1) as usize;
         let mut chunks = Vec::with_capacity(instances.len().div_ceil(per_chunk));
@@ -361,32 +381,20 @@ impl SplatBuffers {
                 bytemuck::cast_slice(&surface_materials),
                 wgpu::BufferUsages::STORAGE,
             )?,
-            mass_grids: storage_buffer(
-                ctx,
+            mass_grids: buffer(
                 "splat-mass-grids",
-                bytemuck::bytes_of(&GpuMassGrid {
-                    offset: NO_MASS_GRID,
-                    ..GpuMassGrid::zeroed()
-                }),
+                bytemuck::cast_slice(&mass_records),
+                wgpu::BufferUsages::STORAGE,
             )?,
-            mass_values: storage_buffer(ctx, "splat-mass-values", bytemuck::bytes_of(&1.0f32))?,
+            mass_values: buffer(
+                "splat-mass-values",
+                bytemuck::cast_slice(&mass_values),
+                wgpu::BufferUsages::STORAGE,
+            )?,
             surface_ranges,
             count,
         })
     }
-}
-
-/// A read-only storage buffer initialised with `contents`.
-fn storage_buffer(ctx: &GpuContext, label: &str, contents: &[u8]) -> Result<wgpu::Buffer> {
-    use wgpu::util::DeviceExt;
-    ctx.checked("splat upload", || {
-        ctx.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-    })
 }
 
 /// The splat pass's uniform block (`SplatUniforms` in `splat.wgsl`).
