@@ -39,9 +39,11 @@ pub mod readback;
 pub mod scene_buffers;
 pub mod shaders;
 pub mod target;
+pub mod view;
 
 pub use device::{AdapterPreference, AdapterSummary, GpuContext};
 pub use error::{MprError, Result};
 pub use frame::{FrameGraph, FrameInputs};
 pub use scene_buffers::{GpuVertex, SceneBuffers};
 pub use target::{NO_SURFACE, RenderTargets};
+pub use view::{ClipMethod, View, ViewBuffer, ViewSlot};
