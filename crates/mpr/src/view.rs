@@ -76,11 +76,11 @@ impl View {
         // World points are drawn through `view * R`, so the image shows `R p`.
         // What the mirror reflects lies on the eye's side of it; anything on the
         // far side would land between the virtual eye and the face once mirrored.
-        let side = if plane.signed_distance(self.eye) >= 0.0 {
-            1.0
-        } else {
-            -1.0
-        };
+        let distance = plane.signed_distance(self.eye);
+        let side = if distance >= 0.0 { 1.0 } else { -1.0 };
+        // The face itself lies on the plane and would hide its own image: the
+        // kept half space starts a hair in front of it (1e-4 of the eye's distance).
+        let keep = plane.to_vec4() * side - Vec4::W * (1e-4 * distance.abs());
         Self {
             view: self.view * plane.reflection_matrix(),
             projection: self.projection,
@@ -89,7 +89,7 @@ impl View {
             stencil_reference: self.stencil_reference + 1,
             level: self.level + 1,
         }
-        .with_clip_plane(plane.to_vec4() * side, method)
+        .with_clip_plane(keep, method)
     }
 
     /// Clips away world points with `plane · (p, 1) < 0` by `method`.
