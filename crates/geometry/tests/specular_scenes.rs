@@ -10,7 +10,7 @@ use glam::Vec3;
 use lustre_geometry::builtin::{bathroom, mirrors};
 use lustre_geometry::light::Light;
 use lustre_geometry::mitsuba::{ExportOptions, export, read_ply};
-use lustre_geometry::{Bvh, Mesh, MaterialModel, Ray, Scene, SurfaceKind, builtin, triangle_area};
+use lustre_geometry::{Bvh, MaterialModel, Mesh, Ray, Scene, SurfaceKind, builtin, triangle_area};
 
 fn mesh<'a>(scene: &'a Scene, name: &str) -> (u32, &'a Mesh) {
     let m = scene
@@ -129,7 +129,7 @@ fn bathroom_has_the_papers_polygon_count_and_lights() {
     let triangles: usize = scene.meshes().iter().map(|m| m.indices.len()).sum();
     assert_eq!(scene.triangle_count(), triangles);
     assert!(
-        triangles >= 40_000 && triangles >= bathroom::PAPER_POLYGONS,
+        triangles >= bathroom::PAPER_POLYGONS,
         "{triangles}"
     );
     // One overhead and four vanity lights (figure 1), rectangles facing down.
@@ -145,7 +145,7 @@ fn bathroom_has_the_papers_polygon_count_and_lights() {
         })
         .collect();
     areas.sort_by(f32::total_cmp);
-    let expected = [0.12 * 0.08, 0.12 * 0.08, 0.12 * 0.08, 0.12 * 0.08, 0.36];
+    let expected = [0.02, 0.02, 0.02, 0.02, 0.36];
     assert_eq!(areas.len(), expected.len());
     for (a, e) in areas.iter().zip(expected) {
         assert!((a - e).abs() < 1e-5 * e.max(1.0), "{areas:?}");
@@ -162,7 +162,7 @@ fn bathroom_has_the_papers_polygon_count_and_lights() {
     // The total power is π L A summed over the five rectangles.
     let power = scene.total_power();
     let expected = std::f32::consts::PI
-        * (bathroom::OVERHEAD_RADIANCE * 0.36 + bathroom::VANITY_RADIANCE * 4.0 * 0.0096);
+        * (bathroom::OVERHEAD_RADIANCE * 0.36 + bathroom::VANITY_RADIANCE * 4.0 * 0.02);
     assert!(power.abs_diff_eq(expected, 1e-3 * expected.max_element()));
 }
 
@@ -170,10 +170,11 @@ fn bathroom_has_the_papers_polygon_count_and_lights() {
 fn bathroom_has_a_vanity_mirror_and_a_refractive_door() {
     let scene = builtin("bathroom").unwrap();
     let model = |name: &str| &scene.materials()[mesh(&scene, name).1.material as usize].model;
-    assert!(matches!(model("vanity-mirror"), MaterialModel::Mirror { .. }));
-    assert!(
-        matches!(model("shower-door"), MaterialModel::Dielectric { ior, .. } if *ior == 1.5)
-    );
+    assert!(matches!(
+        model("vanity-mirror"),
+        MaterialModel::Mirror { .. }
+    ));
+    assert!(matches!(model("shower-door"), MaterialModel::Dielectric { ior, .. } if *ior == 1.5));
     // Only the mirror and the door are specular.
     let specular: Vec<&str> = scene
         .meshes()
@@ -220,7 +221,9 @@ fn mirrors_are_exactly_parallel_and_facing() {
         let (m, quad) = mesh(&scene, name);
         assert_eq!(quad.indices.len(), 2, "a single quad");
         let material = &scene.materials()[quad.material as usize].model;
-        assert!(matches!(material, MaterialModel::Mirror { reflectance } if *reflectance == mirrors::MIRROR_REFLECTANCE));
+        assert!(
+            matches!(material, MaterialModel::Mirror { reflectance } if *reflectance == mirrors::MIRROR_REFLECTANCE)
+        );
         let surfaces: Vec<_> = scene.surfaces().iter().filter(|s| s.mesh == m).collect();
         assert_eq!(surfaces.len(), 1);
         let SurfaceKind::Planar(plane) = surfaces[0].kind else {
@@ -230,10 +233,16 @@ fn mirrors_are_exactly_parallel_and_facing() {
     }
     assert_eq!(planes[0].normal, Vec3::X);
     assert_eq!(planes[1].normal, -Vec3::X);
-    for p in scene.meshes()[mesh(&scene, "mirror-a").0 as usize].positions.iter() {
+    for p in scene.meshes()[mesh(&scene, "mirror-a").0 as usize]
+        .positions
+        .iter()
+    {
         assert_eq!(p.x, -mirrors::MIRROR_X);
     }
-    for p in scene.meshes()[mesh(&scene, "mirror-b").0 as usize].positions.iter() {
+    for p in scene.meshes()[mesh(&scene, "mirror-b").0 as usize]
+        .positions
+        .iter()
+    {
         assert_eq!(p.x, mirrors::MIRROR_X);
     }
     assert_eq!(scene.lights().len(), 1);
@@ -299,9 +308,18 @@ fn the_new_scenes_export_to_mitsuba() {
             xml.matches("<emitter type=\"area\">").count(),
             scene.lights().len()
         );
-        assert_eq!(xml.matches("<shape type=\"ply\"").count(), scene.meshes().len());
-        assert!(xml.contains("<bsdf type=\"conductor\""), "{name}: no mirror");
-        assert_eq!(xml.contains("<bsdf type=\"dielectric\""), name == "bathroom");
+        assert_eq!(
+            xml.matches("<shape type=\"ply\"").count(),
+            scene.meshes().len()
+        );
+        assert!(
+            xml.contains("<bsdf type=\"conductor\""),
+            "{name}: no mirror"
+        );
+        assert_eq!(
+            xml.contains("<bsdf type=\"dielectric\""),
+            name == "bathroom"
+        );
         if name == "bathroom" {
             assert!(xml.contains("<float name=\"int_ior\" value=\"1.5\"/>"));
         }

@@ -28,14 +28,15 @@
 //!   4 cm diffuse frame from the wall to z = -1.37.
 //! - Lights: `overhead-light`, a 0.6 × 0.6 rectangle centred at (0, 2.499, 0)
 //!   facing down, radiance [`OVERHEAD_RADIANCE`]; four `vanity-light-N`,
-//!   0.12 × 0.08 rectangles facing down at y = 1.899 under fixture boxes
-//!   above the mirror, centred at x = -1.225, -0.975, -0.725, -0.475, z = -1.35,
+//!   0.2 × 0.1 rectangles facing down at y = 1.899 under 0.22 m wide fixture
+//!   boxes above the mirror, centred at x = -1.225, -0.975, -0.725, -0.475,
+//!   z = -1.34,
 //!   radiance [`VANITY_RADIANCE`].
 //! - Tiles: 135 tiles of 0.15 × 0.15 × 0.006 with 5 mm joints above the tub
 //!   on the right and back walls (y ∈ [0.56, 1.955]).
 //! - Towel rail on the left wall: a bar of radius 1.2 cm from z = -0.1 to 0.6
 //!   at (x, y) = (-1.52, 1.15) on two posts, and a towel slab hanging in front.
-//! - Camera at (-0.55, 1.55, 1.3) looking at (0.2, 0.95, -1.0), 62° vertical
+//! - Camera at (-0.55, 1.55, 1.3) looking at (0.29, 0.95, -1.0), 70° vertical
 //!   field of view: the mirror on the left, the door and the tub behind it on
 //!   the right.
 //!
@@ -56,9 +57,9 @@ pub const DOOR_IOR: f32 = 1.5;
 /// Reflectance of the vanity mirror (Diefenbach & Badler 1997, section 3).
 pub const MIRROR_REFLECTANCE: Rgb = Rgb::new(0.9, 0.9, 0.9);
 /// Radiance of the overhead light, in W/(m² sr) (Diefenbach & Badler 1997, figure 1).
-pub const OVERHEAD_RADIANCE: Rgb = Rgb::new(16.0, 15.5, 14.5);
+pub const OVERHEAD_RADIANCE: Rgb = Rgb::new(10.5, 10.0, 9.5);
 /// Radiance of each vanity light, in W/(m² sr) (Diefenbach & Badler 1997, figure 1).
-pub const VANITY_RADIANCE: Rgb = Rgb::new(80.0, 72.0, 60.0);
+pub const VANITY_RADIANCE: Rgb = Rgb::new(25.0, 22.6, 18.8);
 /// x of the centres of the four vanity lights.
 pub const VANITY_LIGHT_X: [f32; 4] = [-1.225, -0.975, -0.725, -0.475];
 /// The polygon count of the paper's bathroom (Diefenbach & Badler 1997, section 8).
@@ -82,8 +83,22 @@ pub const CLOSED_MESHES: &[&str] = &[
 /// `bathroom`: the paper's bathroom class (Diefenbach & Badler 1997, figures 1 and 16).
 pub fn bathroom() -> Scene {
     let names = [
-        "wall", "floor", "ceiling", "tub", "glass", "bronze", "wood", "counter", "porcelain",
-        "chrome", "mirror", "frame", "tile", "towel", "overhead", "vanity",
+        "wall",
+        "floor",
+        "ceiling",
+        "tub",
+        "glass",
+        "bronze",
+        "wood",
+        "counter",
+        "porcelain",
+        "chrome",
+        "mirror",
+        "frame",
+        "tile",
+        "towel",
+        "overhead",
+        "vanity",
     ];
     let id = |name: &str| names.iter().position(|n| *n == name).unwrap_or(0) as u32;
     let materials = vec![
@@ -120,12 +135,48 @@ pub fn bathroom() -> Scene {
     let (hx, top, hz) = (1.6, 2.5, 1.4);
     let (v, v2) = (Vec3::new, Vec2::new);
     let mut meshes = vec![
-        quad("floor", v(-hx, 0.0, -hz), 2.0 * hz * z, 2.0 * hx * x, id("floor")),
-        quad("ceiling", v(-hx, top, -hz), 2.0 * hx * x, 2.0 * hz * z, id("ceiling")),
-        quad("wall-left", v(-hx, 0.0, -hz), top * y, 2.0 * hz * z, id("wall")),
-        quad("wall-right", v(hx, 0.0, -hz), 2.0 * hz * z, top * y, id("wall")),
-        quad("wall-back", v(-hx, 0.0, -hz), 2.0 * hx * x, top * y, id("wall")),
-        quad("wall-front", v(-hx, 0.0, hz), top * y, 2.0 * hx * x, id("wall")),
+        quad(
+            "floor",
+            v(-hx, 0.0, -hz),
+            2.0 * hz * z,
+            2.0 * hx * x,
+            id("floor"),
+        ),
+        quad(
+            "ceiling",
+            v(-hx, top, -hz),
+            2.0 * hx * x,
+            2.0 * hz * z,
+            id("ceiling"),
+        ),
+        quad(
+            "wall-left",
+            v(-hx, 0.0, -hz),
+            top * y,
+            2.0 * hz * z,
+            id("wall"),
+        ),
+        quad(
+            "wall-right",
+            v(hx, 0.0, -hz),
+            2.0 * hz * z,
+            top * y,
+            id("wall"),
+        ),
+        quad(
+            "wall-back",
+            v(-hx, 0.0, -hz),
+            2.0 * hx * x,
+            top * y,
+            id("wall"),
+        ),
+        quad(
+            "wall-front",
+            v(-hx, 0.0, hz),
+            top * y,
+            2.0 * hx * x,
+            id("wall"),
+        ),
         tub(id("tub")),
         cuboid(
             "shower-door",
@@ -172,7 +223,7 @@ pub fn bathroom() -> Scene {
         ),
         boxes(
             "vanity-fixtures",
-            &VANITY_LIGHT_X.map(|c| (v(c - 0.07, 1.9, -1.399), v(c + 0.07, 1.96, -1.3))),
+            &VANITY_LIGHT_X.map(|c| (v(c - 0.11, 1.9, -1.399), v(c + 0.11, 1.96, -1.28))),
             id("chrome"),
         ),
         tiles(id("tile")),
@@ -194,13 +245,13 @@ pub fn bathroom() -> Scene {
     for (i, c) in VANITY_LIGHT_X.iter().enumerate() {
         meshes.push(quad(
             &format!("vanity-light-{}", i + 1),
-            v(c - 0.06, 1.899, -1.39),
-            0.12 * x,
-            0.08 * z,
+            v(c - 0.1, 1.899, -1.39),
+            0.2 * x,
+            0.1 * z,
             id("vanity"),
         ));
     }
-    let camera = Camera::look_at(v(-0.55, 1.55, 1.3), v(0.2, 0.95, -1.0), Vec3::Y, 62.0);
+    let camera = Camera::look_at(v(-0.55, 1.55, 1.3), v(0.29, 0.95, -1.0), Vec3::Y, 70.0);
     Scene::new(
         "bathroom",
         meshes.clone(),
@@ -358,12 +409,28 @@ fn towel_rail(material: u32) -> Mesh {
     let mut mesh = empty("towel-rail", material);
     append(
         &mut mesh,
-        &cylinder("towel-rail", v(-1.52, 1.15, -0.1), v(-1.52, 1.15, 0.6), 0.012, 32, 24, material),
+        &cylinder(
+            "towel-rail",
+            v(-1.52, 1.15, -0.1),
+            v(-1.52, 1.15, 0.6),
+            0.012,
+            32,
+            24,
+            material,
+        ),
     );
     for zc in [-0.05, 0.55] {
         append(
             &mut mesh,
-            &cylinder("towel-rail", v(-1.599, 1.15, zc), v(-1.515, 1.15, zc), 0.01, 24, 4, material),
+            &cylinder(
+                "towel-rail",
+                v(-1.599, 1.15, zc),
+                v(-1.515, 1.15, zc),
+                0.01,
+                24,
+                4,
+                material,
+            ),
         );
     }
     mesh

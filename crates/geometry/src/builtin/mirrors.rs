@@ -86,12 +86,48 @@ pub fn mirrors() -> Scene {
     let (y0, y1) = MIRROR_Y;
     let w = MIRROR_HALF_WIDTH;
     let mut meshes = vec![
-        quad("floor", Vec3::new(-h, 0.0, -h), 2.0 * h * z, 2.0 * h * x, floor),
-        quad("ceiling", Vec3::new(-h, top, -h), 2.0 * h * x, 2.0 * h * z, ceiling),
-        quad("wall-left", Vec3::new(-h, 0.0, -h), top * y, 2.0 * h * z, wall),
-        quad("wall-right", Vec3::new(h, 0.0, -h), 2.0 * h * z, top * y, wall),
-        quad("wall-back", Vec3::new(-h, 0.0, -h), 2.0 * h * x, top * y, wall),
-        quad("wall-front", Vec3::new(-h, 0.0, h), top * y, 2.0 * h * x, wall),
+        quad(
+            "floor",
+            Vec3::new(-h, 0.0, -h),
+            2.0 * h * z,
+            2.0 * h * x,
+            floor,
+        ),
+        quad(
+            "ceiling",
+            Vec3::new(-h, top, -h),
+            2.0 * h * x,
+            2.0 * h * z,
+            ceiling,
+        ),
+        quad(
+            "wall-left",
+            Vec3::new(-h, 0.0, -h),
+            top * y,
+            2.0 * h * z,
+            wall,
+        ),
+        quad(
+            "wall-right",
+            Vec3::new(h, 0.0, -h),
+            2.0 * h * z,
+            top * y,
+            wall,
+        ),
+        quad(
+            "wall-back",
+            Vec3::new(-h, 0.0, -h),
+            2.0 * h * x,
+            top * y,
+            wall,
+        ),
+        quad(
+            "wall-front",
+            Vec3::new(-h, 0.0, h),
+            top * y,
+            2.0 * h * x,
+            wall,
+        ),
         quad(
             "mirror-a",
             Vec3::new(-MIRROR_X, y0, -w),

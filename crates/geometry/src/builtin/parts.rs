@@ -308,8 +308,7 @@ fn push_facing(mesh: &mut Mesh, corners: [Vec3; 4], outward: Vec3) {
     let base = mesh.positions.len() as u32;
     mesh.positions.extend(corners);
     mesh.normals.extend([normal; 4]);
-    mesh.uvs
-        .extend([Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
+    mesh.uvs.extend([Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
     mesh.indices.push([base, base + 1, base + 2]);
     mesh.indices.push([base + 2, base + 3, base]);
 }
@@ -334,14 +333,8 @@ pub(crate) fn frame_solid(
         p[v_axis] = uv.y;
         p
     };
-    let corners = |(min, max): (Vec2, Vec2)| {
-        [
-            min,
-            Vec2::new(max.x, min.y),
-            max,
-            Vec2::new(min.x, max.y),
-        ]
-    };
+    let corners =
+        |(min, max): (Vec2, Vec2)| [min, Vec2::new(max.x, min.y), max, Vec2::new(min.x, max.y)];
     let (o, i) = (corners(outer), corners(inner));
     let (oc, ic) = (0.5 * (outer.0 + outer.1), 0.5 * (inner.0 + inner.1));
     let axis_dir = Vec3::AXES[axis];
@@ -352,7 +345,12 @@ pub(crate) fn frame_solid(
         for (d, facing) in [(depth.1, axis_dir), (depth.0, -axis_dir)] {
             push_facing(
                 &mut mesh,
-                [point(o[k], d), point(o[l], d), point(i[l], d), point(i[k], d)],
+                [
+                    point(o[k], d),
+                    point(o[l], d),
+                    point(i[l], d),
+                    point(i[k], d),
+                ],
                 facing,
             );
         }
