@@ -38,6 +38,7 @@ mod plane;
 mod ray;
 pub mod sampling;
 mod scene;
+pub mod shadow_volume;
 
 pub use aabb::Aabb;
 pub use animation::{Keyframe, MobileObject, ObjectPath, PathEnd};
