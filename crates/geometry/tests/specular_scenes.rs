@@ -128,10 +128,7 @@ fn bathroom_has_the_papers_polygon_count_and_lights() {
     let scene = builtin("bathroom").unwrap();
     let triangles: usize = scene.meshes().iter().map(|m| m.indices.len()).sum();
     assert_eq!(scene.triangle_count(), triangles);
-    assert!(
-        triangles >= bathroom::PAPER_POLYGONS,
-        "{triangles}"
-    );
+    assert!(triangles >= bathroom::PAPER_POLYGONS, "{triangles}");
     // One overhead and four vanity lights (figure 1), rectangles facing down.
     let mut areas: Vec<f32> = scene
         .lights()
