@@ -174,11 +174,7 @@ impl Renderer {
         let depth = DepthPass::new(ctx).unwrap();
         let splat = SplatPass::new(ctx, targets.hdr_format(), Kernel::Silverman).unwrap();
         let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, &camera).unwrap();
-        splat.prepare(
-            &ctx.queue,
-            &lustre_mpr::View::from_camera(&camera),
-            KernelFiltering::PixelCentre,
-        );
+        splat.prepare(&ctx.queue, KernelFiltering::PixelCentre);
         let direct = (method == Method::Optimised).then(|| {
             let pass = DirectPass::new(ctx, targets.hdr_format()).unwrap();
             let lights = DirectLights::new(ctx, &pass, &scene, GlossyModel::Exact).unwrap();
@@ -241,6 +237,8 @@ impl Renderer {
                 splats,
                 targets,
                 restriction,
+                &self.views,
+                self.slot,
             )
             .unwrap();
         ctx.queue.submit([encoder.finish()]);
@@ -270,6 +268,8 @@ impl Renderer {
                 splats,
                 targets,
                 restriction,
+                &self.views,
+                self.slot,
             )
             .unwrap();
         ctx.queue.submit([encoder.finish()]);

@@ -38,6 +38,7 @@ pub trait LightPass {
     /// Records the pass for the view in `slot` (its stencil reference bound with it).
     fn encode_view(
         &self,
+        ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         views: &ViewBuffer,
@@ -45,9 +46,35 @@ pub trait LightPass {
     ) -> Result<()>;
 }
 
+impl LightPass for SplatPass {
+    fn encode_view(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        let Some(inputs) = frame.splats else {
+            return Ok(());
+        };
+        self.encode(
+            &ctx.device,
+            encoder,
+            frame.scene,
+            inputs.buffers,
+            frame.targets,
+            inputs.restriction,
+            views,
+            slot,
+        )
+    }
+}
+
 impl LightPass for EmissionPass {
     fn encode_view(
         &self,
+        _ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         views: &ViewBuffer,
@@ -61,6 +88,7 @@ impl LightPass for EmissionPass {
 impl LightPass for GouraudPass {
     fn encode_view(
         &self,
+        _ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         views: &ViewBuffer,
@@ -73,6 +101,7 @@ impl LightPass for GouraudPass {
 impl LightPass for DirectPass {
     fn encode_view(
         &self,
+        _ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         views: &ViewBuffer,
@@ -88,6 +117,7 @@ impl LightPass for DirectPass {
 impl LightPass for DiffuseTexturePass {
     fn encode_view(
         &self,
+        _ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         views: &ViewBuffer,
@@ -298,15 +328,16 @@ impl FrameGraph {
         let tree = self.view_tree(ctx, frame.camera)?;
         let slots = views.write(ctx, &tree.views)?;
         if let Some((inputs, pass)) = passes.splat {
-            pass.prepare(&ctx.queue, &tree.views[0], inputs.filtering);
+            pass.prepare(&ctx.queue, inputs.filtering);
         }
+        let light = self.light_passes(&passes);
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("frame"),
                 });
-            self.encode_light(ctx, &mut encoder, frame, &passes, &views, &tree, &slots)?;
+            self.encode_light(ctx, &mut encoder, frame, &light, &views, &tree, &slots)?;
             self.tonemap.encode(
                 &ctx.device,
                 &mut encoder,
@@ -370,6 +401,7 @@ impl FrameGraph {
             splat: if splat_once { None } else { passes.splat },
             ..passes
         };
+        let jittered_light = self.light_passes(&jittered_passes);
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
         for s in 0..samples {
             before_sample(s)?;
@@ -379,8 +411,8 @@ impl FrameGraph {
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
             let tree = self.view_tree(ctx, &camera)?;
             let slots = views.write(ctx, &tree.views)?;
-            if let Some((inputs, pass)) = jittered_passes.splat {
-                pass.prepare(&ctx.queue, &tree.views[0], inputs.filtering);
+            if let Some((inputs, pass)) = passes.splat {
+                pass.prepare(&ctx.queue, inputs.filtering);
             }
             ctx.checked_result("accumulated frame", || {
                 let mut encoder =
@@ -392,7 +424,7 @@ impl FrameGraph {
                     ctx,
                     &mut encoder,
                     frame,
-                    &jittered_passes,
+                    &jittered_light,
                     &views,
                     &tree,
                     &slots,
@@ -400,41 +432,39 @@ impl FrameGraph {
                 accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
                 if s + 1 == samples {
                     let accumulation = &frame.targets.accumulation.texture;
-                    encoder.copy_texture_to_texture(
-                        accumulation.as_image_copy(),
-                        frame.targets.hdr.texture.as_image_copy(),
-                        accumulation.size(),
-                    );
                     if splat_once {
-                        // Ordered after this submit's jittered views (write_buffer applies at submit).
+                        // The splats once through the pixel centres, at every
+                        // level of the specular recursion, into a cleared HDR
+                        // target that is then added to the average. Ordered
+                        // after this submit's jittered views (write_buffer
+                        // applies at submit).
                         ctx.queue.submit([encoder.finish()]);
                         encoder =
                             ctx.device
                                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                                     label: Some("splats-once"),
                                 });
-                        let centre = View::from_camera(frame.camera);
-                        let slots = views.write(ctx, &[centre])?;
-                        if let Some((inputs, pass)) = passes.splat {
-                            pass.prepare(&ctx.queue, &centre, inputs.filtering);
-                            self.depth.encode(
+                        let tree = self.view_tree(ctx, frame.camera)?;
+                        let slots = views.write(ctx, &tree.views)?;
+                        if let Some((_, pass)) = passes.splat {
+                            let splat_light: [&dyn LightPass; 1] = [pass];
+                            self.encode_light(
+                                ctx,
                                 &mut encoder,
-                                frame.scene,
-                                frame.targets,
+                                frame,
+                                &splat_light,
                                 &views,
-                                slots[0],
-                                true,
-                            );
-                            pass.encode(
-                                &ctx.device,
-                                &mut encoder,
-                                frame.scene,
-                                inputs.buffers,
-                                frame.targets,
-                                inputs.restriction,
+                                &tree,
+                                &slots,
                             )?;
                         }
+                        accumulate.encode(&ctx.device, &mut encoder, frame.targets, 1.0, false);
                     }
+                    encoder.copy_texture_to_texture(
+                        accumulation.as_image_copy(),
+                        frame.targets.hdr.texture.as_image_copy(),
+                        accumulation.size(),
+                    );
                     self.tonemap.encode(
                         &ctx.device,
                         &mut encoder,
@@ -509,36 +539,27 @@ impl FrameGraph {
         if let Some((_, pass)) = passes.diffuse {
             list.push(pass);
         }
+        if let Some((_, pass)) = passes.splat {
+            list.push(pass);
+        }
         list
     }
 
     /// Records the frame's light into the HDR target, cleared first (section
-    /// 7.2): `draw_window` of the camera's view, then the splats.
+    /// 7.2): `draw_window` of the camera's view with `light` at every level.
     #[allow(clippy::too_many_arguments)]
     fn encode_light(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
-        passes: &ResolvedPasses<'_>,
+        light: &[&dyn LightPass],
         views: &ViewBuffer,
         tree: &ViewTree,
         slots: &[ViewSlot],
     ) -> Result<()> {
         clear_hdr(encoder, frame.targets);
-        let light = self.light_passes(passes);
-        self.draw_window(encoder, frame, &light, views, tree, slots, 0)?;
-        if let Some((inputs, pass)) = passes.splat {
-            pass.encode(
-                &ctx.device,
-                encoder,
-                frame.scene,
-                inputs.buffers,
-                frame.targets,
-                inputs.restriction,
-            )?;
-        }
-        Ok(())
+        self.draw_window(ctx, encoder, frame, light, views, tree, slots, 0)
     }
 
     /// `draw_window` of section 7.1 for view `index` of `tree`: its depth
@@ -549,6 +570,7 @@ impl FrameGraph {
     #[allow(clippy::too_many_arguments)]
     fn draw_window(
         &self,
+        ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         light: &[&dyn LightPass],
@@ -563,7 +585,7 @@ impl FrameGraph {
         if let Some(specular) = &self.specular {
             for &(face, child) in &tree.children[index] {
                 specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
-                self.draw_window(encoder, frame, light, views, tree, slots, child)?;
+                self.draw_window(ctx, encoder, frame, light, views, tree, slots, child)?;
                 specular.encode_restore(encoder, frame.scene, frame.targets, views, slot, face);
             }
             specular.encode_limit(
@@ -576,7 +598,7 @@ impl FrameGraph {
             );
         }
         for pass in light {
-            pass.encode_view(encoder, frame, views, slot)?;
+            pass.encode_view(ctx, encoder, frame, views, slot)?;
         }
         Ok(())
     }

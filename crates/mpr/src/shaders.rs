@@ -93,7 +93,7 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ),
         (
             "passes/splat.wgsl",
-            with_materials(crate::passes::splat::SPLAT_WGSL),
+            with_materials(&with_view(crate::passes::splat::SPLAT_WGSL)),
         ),
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),

@@ -72,11 +72,7 @@ impl Renderer {
         let diffuse = DiffuseTexturePass::new(&ctx, targets.hdr_format()).unwrap();
         let splat = SplatPass::new(&ctx, targets.hdr_format(), Kernel::Silverman).unwrap();
         let (views, slot) = lustre_mpr::ViewBuffer::for_camera(&ctx, &camera).unwrap();
-        splat.prepare(
-            &ctx.queue,
-            &lustre_mpr::View::from_camera(&camera),
-            KernelFiltering::PixelCentre,
-        );
+        splat.prepare(&ctx.queue, KernelFiltering::PixelCentre);
         Self {
             ctx,
             targets,
@@ -123,6 +119,8 @@ impl Renderer {
                     splats,
                     &self.targets,
                     Restriction::SurfaceId,
+                    &self.views,
+                    self.slot,
                 )
                 .unwrap();
         }

@@ -67,11 +67,7 @@ fn render_with(
     let depth = DepthPass::new(ctx).unwrap();
     let pass = SplatPass::new(ctx, targets.hdr_format(), estimator.options().kernel).unwrap();
     let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, &camera).unwrap();
-    pass.prepare(
-        &ctx.queue,
-        &lustre_mpr::View::from_camera(&camera),
-        filtering,
-    );
+    pass.prepare(&ctx.queue, filtering);
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
@@ -84,6 +80,8 @@ fn render_with(
         splats,
         &targets,
         restriction,
+        &views,
+        slot,
     )
     .unwrap();
     ctx.queue.submit([encoder.finish()]);

@@ -16,6 +16,11 @@
 //!   point lights over each area light (Diefenbach & Badler 1997, section
 //!   4.4) and the photons from the area light itself.
 //!
+//! - `mpr` (Diefenbach & Badler 1997): `splat-direct`'s light with the
+//!   planar mirrors' specular images: each mirror face masked in the stencil
+//!   and the scene drawn again from its virtual camera, recursively to
+//!   `--spec-depth` (sections 3, 7.1, 7.3).
+//!
 //! Every technique's frame is antialiased by `--aa N` jittered accumulation
 //! (Diefenbach & Badler 1997, section 7).
 //!
@@ -41,6 +46,7 @@ use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
+use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::{
@@ -72,13 +78,21 @@ pub enum Technique {
     Impact,
     /// Per-vertex Photon Maps, Gouraud-shaded (García et al. 2003).
     Photonmap,
+    /// Multi-pass pipeline rendering (Diefenbach & Badler 1997): `splat-direct`'s
+    /// light with the mirror faces' stencilled specular images to `--spec-depth`.
+    Mpr,
 }
 
 impl Technique {
+    /// Whether the technique draws direct light from point lights (section 2.2.1) and splats only the indirect photons.
+    fn direct_light(self) -> bool {
+        matches!(self, Self::SplatDirect | Self::Mpr)
+    }
+
     /// The density estimator of a per-vertex technique, `None` for the splatting ones.
     fn estimator(self, radius: f32, k: usize) -> Option<Estimator> {
         match self {
-            Self::Splat | Self::SplatDirect => None,
+            Self::Splat | Self::SplatDirect | Self::Mpr => None,
             Self::Detp => Some(Estimator::Detp { radius }),
             Self::Impact => Some(Estimator::ImpactCount),
             Self::Photonmap => Some(Estimator::PhotonMaps { k }),
@@ -262,6 +276,11 @@ pub struct RenderArgs {
     /// 1 keeps the paper's single point light of equal power for both phases.
     #[arg(long, default_value_t = DEFAULT_LIGHT_SAMPLES)]
     pub light_samples: u32,
+    /// `--technique mpr`: depth of the recursive specular images (Diefenbach &
+    /// Badler 1997, sections 3 and 8.2); at the limit a mirror shows its
+    /// reflectance times the scene's mean radiance instead of a further image.
+    #[arg(long, default_value_t = DEFAULT_SPEC_DEPTH)]
+    pub spec_depth: u32,
     /// Antialiasing: frames rendered with sub-pixel jittered projections and
     /// averaged, a box filter over each pixel (Diefenbach & Badler 1997,
     /// section 7); 1 renders once through the pixel centres.
@@ -331,6 +350,8 @@ pub const DEFAULT_SUPPORT_C: f32 = 1.25;
 /// reference and time on lavapipe: on `cornell` at 256×256 FLIP 0.066 with 1,
 /// 0.061 with 4, 0.056 with 16 jittered point lights (BENCHMARKS.md).
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
+/// Default `--spec-depth`: two levels of specular images (the paper's figure 18(a)).
+pub const DEFAULT_SPEC_DEPTH: u32 = 2;
 
 /// The default `--aa`, chosen by error against the Mitsuba reference and
 /// time on lavapipe: with 16 light samples on `cornell` at 256×256 relMSE
@@ -420,7 +441,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Section 3: one point light of equal power for both phases; with more
     // light samples the photons leave the area light itself and only the
     // direct light uses its jittered point lights.
-    if args.technique == Technique::SplatDirect && args.light_samples == 1 {
+    if args.technique.direct_light() && args.light_samples == 1 {
         scene = with_point_lights(&scene)?;
     }
     if density.is_some() {
@@ -536,7 +557,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let direct = if args.technique == Technique::SplatDirect {
+    let direct = if args.technique.direct_light() {
         graph = graph.with_direct(&ctx, targets.hdr_format())?;
         let pass = graph.direct.as_ref().context("direct pass")?;
         let lights = DirectLights::jittered(&ctx, pass, &scene, glossy, args.light_samples)
@@ -546,6 +567,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     } else {
         None
     };
+    if args.technique == Technique::Mpr {
+        graph = graph.with_specular(
+            &ctx,
+            targets.hdr_format(),
+            &scene,
+            SpecularSettings {
+                max_depth: args.spec_depth,
+                limit_radiance: mean_radiance(&scene),
+                clip: None,
+            },
+        )?;
+    }
     if args.aa > 1 {
         graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
     }
@@ -632,6 +665,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     write_outputs(args, &image)?;
     timings.insert("write".into(), json!(ms(start)));
+    let scene_passes = graph.view_tree(&ctx, &camera)?.scene_passes();
     let total: f64 = timings.values().filter_map(serde_json::Value::as_f64).sum();
     timings.insert("total".into(), json!(total));
 
@@ -655,7 +689,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "pretest": density.map(|_| format!("{:?}", args.pretest)),
         "triangles": scene.triangle_count(),
         "ray_segments": vertex.as_ref().map(|v| v.segments),
-        "light_samples": (args.technique == Technique::SplatDirect).then_some(args.light_samples),
+        "light_samples": args.technique.direct_light().then_some(args.light_samples),
+        "spec_depth": (args.technique == Technique::Mpr).then_some(args.spec_depth),
+        "specular_faces": graph.specular.as_ref().map(|s| s.faces().len()),
+        "scene_passes": scene_passes,
+        "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
         "direct_lights": direct.as_ref().map(DirectLights::len),
         "aa": args.aa,
         "aa_splats": args.aa_splats,
@@ -730,7 +768,7 @@ fn splat_setup(
     let start = Instant::now();
     let selection = match args.technique {
         Technique::Splat => BounceSelection::All,
-        Technique::SplatDirect => BounceSelection::Indirect,
+        Technique::SplatDirect | Technique::Mpr => BounceSelection::Indirect,
         Technique::Detp | Technique::Impact | Technique::Photonmap => {
             bail!("--technique {:?} does not splat", args.technique)
         }

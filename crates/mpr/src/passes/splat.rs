@@ -19,7 +19,8 @@ use crate::material::{GlossyModel, GpuMaterial, scene_materials};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
 use crate::shaders::{DEPTH_WGSL, with_materials, with_view};
 use crate::target::RenderTargets;
-use crate::view::{View, ViewUniforms};
+use crate::passes::redraw::{scene_module, view_stencil};
+use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
 /// The splat WGSL (`src/passes/splat.wgsl`), without the material prefix.
@@ -402,10 +403,6 @@ impl SplatBuffers {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct SplatUniforms {
-    /// Column-major world-to-clip matrix.
-    pub view_projection: [[f32; 4]; 4],
-    /// Eye position (w unused).
-    pub eye: [f32; 4],
     /// `x`: 1 for [`KernelFiltering::MipMapped`], 0 for [`KernelFiltering::PixelCentre`]; `y`: 1 for [`Kernel::Gaussian`], 0 for Silverman's.
     pub options: [u32; 4],
 }
@@ -414,13 +411,10 @@ pub struct SplatUniforms {
 #[derive(Debug)]
 pub struct SplatPass {
     layout: wgpu::BindGroupLayout,
-    mask_layout: wgpu::BindGroupLayout,
     splat_id: wgpu::RenderPipeline,
     splat_stencil: Option<wgpu::RenderPipeline>,
     mask: Option<wgpu::RenderPipeline>,
     uniforms: wgpu::Buffer,
-    /// The view block of the stencil mask's depth redraw.
-    mask_view: wgpu::Buffer,
     kernel_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
     kernel: Kernel,
@@ -480,16 +474,10 @@ impl SplatPass {
         let has_stencil = ctx.has_stencil();
         ctx.checked("splat pass creation", || {
             let device = &ctx.device;
-            let source = with_materials(SPLAT_WGSL);
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("splat"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-            let depth_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("splat-mask-depth"),
-                // The depth pre-pass's shader over the splat pass's own view block, unclipped (level 0).
-                source: wgpu::ShaderSource::Wgsl(with_view(DEPTH_WGSL).into()),
-            });
+            let source = with_materials(&with_view(SPLAT_WGSL));
+            let module = scene_module(ctx, "splat", &source);
+            // The depth pre-pass's shader for the per-surface stencil masks, under the same view.
+            let depth_module = scene_module(ctx, "splat-mask-depth", &with_view(DEPTH_WGSL));
             let storage = |binding| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::VERTEX,
@@ -550,28 +538,15 @@ impl SplatPass {
                     fragment_storage(7),
                 ],
             });
-            let mask_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("splat-mask"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<ViewUniforms>() as u64),
-                    },
-                    count: None,
-                }],
-            });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("splat"),
-                bind_group_layouts: &[Some(&layout)],
+                bind_group_layouts: &[Some(ctx.view_layout()), Some(&layout)],
                 immediate_size: 0,
             });
             let mask_pipeline_layout =
                 device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                     label: Some("splat-mask"),
-                    bind_group_layouts: &[Some(&mask_layout)],
+                    bind_group_layouts: &[Some(ctx.view_layout())],
                     immediate_size: 0,
                 });
             let splat_pipeline = |entry: &str, depth_stencil: Option<wgpu::DepthStencilState>| {
@@ -605,7 +580,17 @@ impl SplatPass {
                     cache: None,
                 })
             };
-            let splat_id = splat_pipeline("fs_splat_id", None);
+            // Surface-id restriction under the view's stencil test (only the view's pixels).
+            let splat_id = splat_pipeline(
+                "fs_splat_id",
+                Some(wgpu::DepthStencilState {
+                    format: depth_format,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: view_stencil(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+            );
             let (splat_stencil, mask) = if has_stencil {
                 let splat_stencil = splat_pipeline(
                     "fs_splat_stencil",
@@ -656,12 +641,6 @@ impl SplatPass {
             } else {
                 (None, None)
             };
-            let mask_view = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("splat-mask-view"),
-                size: size_of::<ViewUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
             let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat-uniforms"),
                 size: size_of::<SplatUniforms>() as u64,
@@ -682,12 +661,10 @@ impl SplatPass {
             });
             Self {
                 layout,
-                mask_layout,
                 splat_id,
                 splat_stencil,
                 mask,
                 uniforms,
-                mask_view,
                 kernel_view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
                 sampler,
                 kernel,
@@ -700,14 +677,9 @@ impl SplatPass {
         self.mask.is_some()
     }
 
-    /// Writes the view's camera and the kernel filtering for the next
-    /// [`SplatPass::encode`]. Splats carry their own camera block and are drawn
-    /// in the camera's own view only (level 0): their stencil restriction
-    /// method uses the stencil the specular recursion needs.
-    pub fn prepare(&self, queue: &wgpu::Queue, view: &View, filtering: KernelFiltering) {
+    /// Writes the kernel filtering for the next [`SplatPass::encode`] (the camera comes from the view).
+    pub fn prepare(&self, queue: &wgpu::Queue, filtering: KernelFiltering) {
         let uniforms = SplatUniforms {
-            view_projection: view.view_projection().to_cols_array_2d(),
-            eye: view.eye.extend(1.0).to_array(),
             options: [
                 u32::from(filtering == KernelFiltering::MipMapped),
                 u32::from(self.kernel == Kernel::Gaussian),
@@ -716,10 +688,13 @@ impl SplatPass {
             ],
         };
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        queue.write_buffer(&self.mask_view, 0, bytemuck::bytes_of(&view.uniforms()));
     }
 
-    /// Records the pass after the depth pre-pass: adds every splat into `targets.hdr`, restricted by `restriction`.
+    /// Records the pass after the view's depth pass: adds every splat into
+    /// `targets.hdr` where the stencil holds the view's reference, restricted
+    /// by `restriction`. [`Restriction::Stencil`] writes the stencil itself,
+    /// so it is refused in a virtual view (stencil reference above 0).
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         device: &wgpu::Device,
@@ -728,6 +703,8 @@ impl SplatPass {
         splats: &SplatBuffers,
         targets: &RenderTargets,
         restriction: Restriction,
+        views: &ViewBuffer,
+        slot: ViewSlot,
     ) -> Result<()> {
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("splat"),
@@ -772,7 +749,8 @@ impl SplatPass {
                 let mut pass = begin(encoder, targets, None);
                 if splats.count > 0 {
                     pass.set_pipeline(&self.splat_id);
-                    pass.set_bind_group(0, &bind_group, &[]);
+                    views.bind(&mut pass, 0, slot);
+                    pass.set_bind_group(1, &bind_group, &[]);
                     draw_instances(&mut pass, splats, 0..splats.count);
                 }
             }
@@ -785,14 +763,14 @@ impl SplatPass {
                             .into(),
                     });
                 };
-                let mask_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("splat-mask"),
-                    layout: &self.mask_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: self.mask_view.as_entire_binding(),
-                    }],
-                });
+                if slot.stencil_reference != 0 {
+                    return Err(MprError::InvalidSetting {
+                        what: "splat restriction",
+                        message: "per-surface stencil masks need the stencil the specular \
+                                  images use; use the surface-id restriction with mirrors"
+                            .into(),
+                    });
+                }
                 // Stencil references 1..=255 name the surfaces of one render
                 // pass; a new pass clears the stencil before they repeat.
                 let surfaces: Vec<usize> = (0..splats.surface_ranges.len())
@@ -809,9 +787,9 @@ impl SplatPass {
                     };
                     let mut pass = begin(encoder, targets, Some(stencil_load));
                     for (i, &s) in chunk.iter().enumerate() {
-                        pass.set_stencil_reference(i as u32 + 1);
                         pass.set_pipeline(mask);
-                        pass.set_bind_group(0, &mask_group, &[]);
+                        views.bind(&mut pass, 0, slot);
+                        pass.set_stencil_reference(i as u32 + 1);
                         pass.set_vertex_buffer(0, scene.vertices.slice(..));
                         pass.set_index_buffer(
                             scene.surface_indices.slice(..),
@@ -819,7 +797,7 @@ impl SplatPass {
                         );
                         pass.draw_indexed(scene.surface_ranges[s].clone(), 0, 0..1);
                         pass.set_pipeline(splat_stencil);
-                        pass.set_bind_group(0, &bind_group, &[]);
+                        pass.set_bind_group(1, &bind_group, &[]);
                         draw_instances(&mut pass, splats, splats.surface_ranges[s].clone());
                     }
                 }
@@ -840,7 +818,7 @@ fn draw_instances(pass: &mut wgpu::RenderPass<'_>, splats: &SplatBuffers, range:
     }
 }
 
-/// A render pass adding into the HDR target; with `stencil`, also on the depth-stencil target (depth read only).
+/// A render pass adding into the HDR target over the depth-stencil target: read only, or with `stencil` its stencil loaded so and written.
 fn begin<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     targets: &RenderTargets,
@@ -857,16 +835,24 @@ fn begin<'e>(
                 store: wgpu::StoreOp::Store,
             },
         })],
-        depth_stencil_attachment: stencil.map(|load| wgpu::RenderPassDepthStencilAttachment {
-            view: &targets.depth.view,
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            }),
-            stencil_ops: Some(wgpu::Operations {
-                load,
-                store: wgpu::StoreOp::Store,
-            }),
+        depth_stencil_attachment: Some(match stencil {
+            Some(load) => wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth.view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: Some(wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                }),
+            },
+            // Read only: the view's stencil test, nothing written.
+            None => wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth.view,
+                depth_ops: None,
+                stencil_ops: None,
+            },
         }),
         timestamp_writes: None,
         occlusion_query_set: None,

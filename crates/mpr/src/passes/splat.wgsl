@@ -31,19 +31,17 @@
 // The texture covers k in [-1, 1]^2.
 
 struct SplatUniforms {
-    view_projection: mat4x4f,
-    eye: vec4f,
     // x: 1 to filter the kernel texture with mip-maps and anisotropy (section 3.2), 0 to evaluate K at the pixel centre.
     // y: the kernel at the pixel centre: 0 Silverman, 1 truncated Gaussian (lustre-photon's Kernel).
     options: vec4u,
 }
 
-@group(0) @binding(0) var<uniform> uniforms: SplatUniforms;
-@group(0) @binding(1) var<storage, read> materials: array<GpuMaterial>;
-@group(0) @binding(2) var<storage, read> surface_materials: array<u32>;
-@group(0) @binding(3) var kernel_texture: texture_2d<f32>;
-@group(0) @binding(4) var kernel_sampler: sampler;
-@group(0) @binding(5) var surface_ids: texture_2d<u32>;
+@group(1) @binding(0) var<uniform> uniforms: SplatUniforms;
+@group(1) @binding(1) var<storage, read> materials: array<GpuMaterial>;
+@group(1) @binding(2) var<storage, read> surface_materials: array<u32>;
+@group(1) @binding(3) var kernel_texture: texture_2d<f32>;
+@group(1) @binding(4) var kernel_sampler: sampler;
+@group(1) @binding(5) var surface_ids: texture_2d<u32>;
 
 // One surface's grid of M (GpuMassGrid in splat.rs): sample (i, j) at
 // min + (i, j) spacing in the surface's (u, v) frame, values[offset + j columns + i].
@@ -59,8 +57,8 @@ struct MassGrid {
     spacing: vec2f,
 }
 
-@group(0) @binding(6) var<storage, read> mass_grids: array<MassGrid>;
-@group(0) @binding(7) var<storage, read> mass_values: array<f32>;
+@group(1) @binding(6) var<storage, read> mass_grids: array<MassGrid>;
+@group(1) @binding(7) var<storage, read> mass_values: array<f32>;
 
 const NO_MASS_GRID: u32 = 0xffffffffu;
 // lustre-photon's MIN_MASS.
@@ -73,13 +71,14 @@ const SPLAT_CORNERS = array<vec2f, 3>(
     vec2f(-1.0, 2.41421356),
 );
 
-struct SplatOut {
+struct VertexOutput {
     @builtin(position) clip: vec4f,
     @location(0) kernel: vec2f,
     @location(1) @interpolate(flat) colour: vec3f,
     @location(2) @interpolate(flat) surface: u32,
     // World position of the fragment on the surface's plane.
     @location(3) world: vec3f,
+    //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
 }
 
 // material_brdf of materials[mi], reading one lobe at a time from storage
@@ -104,15 +103,16 @@ fn vs_splat(
     @location(3) h: f32,
     @location(4) power: vec3f,
     @location(5) normal: vec3f,
-) -> SplatOut {
-    var out: SplatOut;
-    let to_eye = uniforms.eye.xyz - position;
+) -> VertexOutput {
+    var out: VertexOutput;
+    let to_eye = view.eye.xyz - position;
     let wo = normalize(to_eye);
     let n = select(-normal, normal, dot(normal, to_eye) >= 0.0);
     let basis = material_basis(n);
     let k = SPLAT_CORNERS[corner];
     let world = position + h * (k.x * basis[0] + k.y * basis[1]);
-    out.clip = uniforms.view_projection * vec4f(world, 1.0);
+    out.clip = view.view_projection * vec4f(world, 1.0);
+    //clip_distances: out.clip_distances[0] = view_clip_distance(world);
     out.kernel = k;
     out.world = world;
     let f = splat_brdf(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
@@ -179,7 +179,7 @@ fn splat_mass(surface: u32, world: vec3f) -> f32 {
 // The filtering choice is uniform, so the mip-mapped branch may use derivatives;
 // the centre branch rejects other surfaces before it reads the texture.
 @fragment
-fn fs_splat_id(in: SplatOut) -> @location(0) vec4f {
+fn fs_splat_id(in: VertexOutput) -> @location(0) vec4f {
     let visible = textureLoad(surface_ids, vec2i(in.clip.xy), 0).r;
     if uniforms.options.x != 0u {
         let value = splat_kernel_filtered(in.kernel);
@@ -196,7 +196,7 @@ fn fs_splat_id(in: SplatOut) -> @location(0) vec4f {
 
 // Stencil restriction: the stencil test has already limited the splat to its surface's mask.
 @fragment
-fn fs_splat_stencil(in: SplatOut) -> @location(0) vec4f {
+fn fs_splat_stencil(in: VertexOutput) -> @location(0) vec4f {
     if uniforms.options.x != 0u {
         return vec4f(in.colour * splat_kernel_filtered(in.kernel) / splat_mass(in.surface, in.world), 0.0);
     }
