@@ -56,6 +56,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),
         (
+            "passes/shadow_volume.wgsl",
+            crate::passes::shadow_volume::SHADOW_VOLUME_WGSL.to_owned(),
+        ),
+        (
             "passes/emission.wgsl",
             crate::passes::emission::EMISSION_WGSL.to_owned(),
         ),

@@ -8,5 +8,6 @@ pub mod emission;
 pub mod gouraud;
 pub mod redraw;
 pub mod shadow;
+pub mod shadow_volume;
 pub mod splat;
 pub mod tonemap;
