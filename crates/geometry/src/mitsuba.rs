@@ -1056,6 +1056,37 @@ mod tests {
     }
 
     #[test]
+    fn mirrors_and_bathroom_xml_is_well_formed() {
+        for name in ["mirrors", "bathroom"] {
+            let scene = builtin(name).unwrap();
+            let mut warnings = Vec::new();
+            let xml = scene_xml(&scene, &ExportOptions::default(), &mut warnings).unwrap();
+            let tags = check_well_formed(&xml).unwrap_or_else(|e| panic!("{name}: {e}\n{xml}"));
+            assert!(warnings.is_empty(), "{name}: {warnings:?}");
+            let count = |tag: &str| tags.iter().filter(|t| *t == tag).count();
+            assert_eq!(count("shape"), scene.meshes().len(), "{name}");
+            assert_eq!(count("emitter"), scene.lights().len(), "{name}");
+            assert_eq!(count("bsdf"), scene.materials().len(), "{name}");
+            // The mirrors are F = 1 conductors scaled by their reflectance.
+            assert!(xml.contains("<bsdf type=\"conductor\""), "{name}");
+            assert!(xml.contains("<rgb name=\"specular_reflectance\" value=\"0.9, 0.9, 0.9\"/>"));
+        }
+        let xml = scene_xml(
+            &builtin("bathroom").unwrap(),
+            &ExportOptions::default(),
+            &mut Vec::new(),
+        )
+        .unwrap();
+        for needle in [
+            "<bsdf type=\"dielectric\"",
+            "<float name=\"int_ior\" value=\"1.5\"/>",
+            "<float name=\"ext_ior\" value=\"1\"/>",
+        ] {
+            assert!(xml.contains(needle), "bathroom XML lacks {needle}");
+        }
+    }
+
+    #[test]
     fn names_are_escaped() {
         assert_eq!(escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
         assert_eq!(sanitize("white wall/1"), "white_wall_1");

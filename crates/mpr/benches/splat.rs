@@ -163,6 +163,8 @@ struct Renderer {
     splat: SplatPass,
     /// Direct pass and its lights, with shadow cubes already drawn (optimised method only).
     direct: Option<(DirectPass, DirectLights)>,
+    views: lustre_mpr::ViewBuffer,
+    slot: lustre_mpr::ViewSlot,
 }
 
 impl Renderer {
@@ -171,12 +173,15 @@ impl Renderer {
         let buffers = SceneBuffers::upload(ctx, &scene).unwrap();
         let depth = DepthPass::new(ctx).unwrap();
         let splat = SplatPass::new(ctx, targets.hdr_format(), Kernel::Silverman).unwrap();
-        depth.prepare(&ctx.queue, &camera);
-        splat.prepare(&ctx.queue, &camera, KernelFiltering::PixelCentre);
+        let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, &camera).unwrap();
+        splat.prepare(
+            &ctx.queue,
+            &lustre_mpr::View::from_camera(&camera),
+            KernelFiltering::PixelCentre,
+        );
         let direct = (method == Method::Optimised).then(|| {
             let pass = DirectPass::new(ctx, targets.hdr_format()).unwrap();
             let lights = DirectLights::new(ctx, &pass, &scene, GlossyModel::Exact).unwrap();
-            pass.prepare(&ctx.queue, &camera);
             // Shadow maps are per light pose: drawn once, outside the timed frames.
             let mut encoder = ctx
                 .device
@@ -191,6 +196,8 @@ impl Renderer {
             depth,
             splat,
             direct,
+            views,
+            slot,
         }
     }
 
@@ -208,9 +215,23 @@ impl Renderer {
                 label: Some("frame"),
             });
         clear_hdr(&mut encoder, targets);
-        self.depth.encode(&mut encoder, &self.buffers, targets);
+        self.depth.encode(
+            &mut encoder,
+            &self.buffers,
+            targets,
+            &self.views,
+            self.slot,
+            true,
+        );
         if let Some((pass, lights)) = &self.direct {
-            pass.encode(&mut encoder, &self.buffers, targets, lights);
+            pass.encode(
+                &mut encoder,
+                &self.buffers,
+                targets,
+                lights,
+                &self.views,
+                self.slot,
+            );
         }
         self.splat
             .encode(

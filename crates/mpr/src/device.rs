@@ -2,7 +2,6 @@
 //! software one), the adapter's identity for every output, and whether float32
 //! targets can be blended (DESIGN.md "Data flow", step 3).
 
-use crate::target::DEPTH_FORMAT;
 use std::fmt;
 
 use crate::{MprError, Result};
@@ -63,6 +62,8 @@ pub struct GpuContext {
     summary: AdapterSummary,
     float32_blendable: bool,
     depth_stencil: bool,
+    clip_distances: bool,
+    view_layout: wgpu::BindGroupLayout,
 }
 
 /// Request options for the hardware-first attempt.
@@ -156,6 +157,11 @@ impl GpuContext {
         if depth_stencil {
             required_features |= wgpu::Features::DEPTH32FLOAT_STENCIL8;
         }
+        let clip_distances = adapter.features().contains(wgpu::Features::CLIP_DISTANCES)
+            && std::env::var_os("LUSTRE_NO_CLIP_DISTANCES").is_none();
+        if clip_distances {
+            required_features |= wgpu::Features::CLIP_DISTANCES;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lustre-mpr"),
             required_features,
@@ -166,6 +172,7 @@ impl GpuContext {
             adapter: summary.to_string(),
             source,
         })?;
+        let view_layout = crate::view::view_layout(&device);
         Ok(Self {
             device,
             queue,
@@ -173,6 +180,8 @@ impl GpuContext {
             summary,
             float32_blendable,
             depth_stencil,
+            clip_distances,
+            view_layout,
         })
     }
 
@@ -196,18 +205,47 @@ impl GpuContext {
         !self.float32_blendable
     }
 
-    /// Whether the depth target carries a stencil (`Depth32FloatStencil8`), which the stencilled passes need.
+    /// Whether the depth target carries a stencil; always true since the
+    /// specular recursion needs one ([`GpuContext::depth_format`]).
     pub fn has_stencil(&self) -> bool {
-        self.depth_stencil
+        self.depth_format().has_stencil_aspect()
     }
 
-    /// The depth format of every pass: `Depth32FloatStencil8` where the device has it, else `Depth32Float`.
+    /// The depth format of every pass: `Depth32FloatStencil8` where the
+    /// device has it, else `Depth24PlusStencil8` (every WebGPU device has it).
     pub fn depth_format(&self) -> wgpu::TextureFormat {
         if self.depth_stencil {
             wgpu::TextureFormat::Depth32FloatStencil8
         } else {
-            DEPTH_FORMAT
+            wgpu::TextureFormat::Depth24PlusStencil8
         }
+    }
+
+    /// Whether vertex stages write user clip distances (`CLIP_DISTANCES`;
+    /// `LUSTRE_NO_CLIP_DISTANCES` set in the environment turns it off, to test
+    /// the oblique near plane on such a device).
+    pub fn has_clip_distances(&self) -> bool {
+        self.clip_distances
+    }
+
+    /// How this device clips geometry in front of a specular face ([`crate::view::ClipMethod`]).
+    pub fn clip_method(&self) -> crate::view::ClipMethod {
+        if self.clip_distances {
+            crate::view::ClipMethod::Hardware
+        } else {
+            crate::view::ClipMethod::ObliqueNearPlane
+        }
+    }
+
+    /// The layout of group 0 of every scene pass: the view at a dynamic offset ([`crate::view`]).
+    pub fn view_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.view_layout
+    }
+
+    /// A scene pass's WGSL as compiled on this device: with user clip distances
+    /// enabled where the device has them ([`crate::shaders::specialise`]).
+    pub fn scene_wgsl(&self, source: &str) -> String {
+        crate::shaders::specialise(source, self.clip_distances)
     }
 
     /// The HDR accumulation format: `Rgba32Float` when blendable, `Rgba16Float` otherwise.

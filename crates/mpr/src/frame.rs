@@ -1,10 +1,17 @@
 //! The frame graph (DESIGN.md "Data flow", step 3; Diefenbach & Badler 1997,
 //! section 7): one command encoder per frame runs the passes in order (clear
-//! HDR, depth pre-pass, emitters, Gouraud vertex radiance, direct light,
-//! diffuse textures, photon splats, tone map) into
-//! any `TextureView`; [`FrameGraph::render_accumulated`] averages jittered
-//! frames for antialiasing (section 7). Shadow maps are rendered per light pose, not per frame
-//! ([`FrameGraph::update_shadows`]).
+//! HDR, depth pre-pass, specular images, emitters, Gouraud vertex radiance,
+//! direct light, diffuse textures, photon splats, tone map) into any
+//! `TextureView`. Every scene pass draws under a [`View`]; the views of a
+//! frame sit in one [`ViewBuffer`] at dynamic offsets, so the specular
+//! recursion of section 7.1 (`draw_window` → `draw_spec_objects` →
+//! `draw_window` from the virtual camera) is the same passes recorded again
+//! under a deeper view ([`crate::passes::specular`]).
+//! [`FrameGraph::render_accumulated`] averages jittered frames for
+//! antialiasing (section 7). Shadow maps are rendered per light pose, not per
+//! frame ([`FrameGraph::update_shadows`]).
+
+use std::sync::Mutex;
 
 use lustre_geometry::Camera;
 use lustre_geometry::light::hammersley_centred;
@@ -16,11 +23,82 @@ use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
 use crate::passes::direct::{DirectLights, DirectPass};
 use crate::passes::emission::EmissionPass;
 use crate::passes::gouraud::GouraudPass;
+use crate::passes::specular::{SpecularPass, SpecularSettings, ViewTree};
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
 use crate::passes::tonemap::{Tonemap, TonemapPass};
 use crate::scene_buffers::SceneBuffers;
 use crate::target::RenderTargets;
+use crate::view::{View, ViewBuffer, ViewSlot};
 use crate::{GpuContext, Result};
+
+/// One pass that adds light into the HDR target under a view (section 7.2):
+/// the interface the frame records every such pass through, at every level
+/// of the specular recursion.
+pub trait LightPass {
+    /// Records the pass for the view in `slot` (its stencil reference bound with it).
+    fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()>;
+}
+
+impl LightPass for EmissionPass {
+    fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        self.encode(encoder, frame.scene, frame.targets, views, slot);
+        Ok(())
+    }
+}
+
+impl LightPass for GouraudPass {
+    fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        self.encode(encoder, frame.scene, frame.targets, views, slot)
+    }
+}
+
+impl LightPass for DirectPass {
+    fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        if let Some(lights) = frame.direct {
+            self.encode(encoder, frame.scene, frame.targets, lights, views, slot);
+        }
+        Ok(())
+    }
+}
+
+impl LightPass for DiffuseTexturePass {
+    fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        if let Some(textures) = frame.diffuse {
+            self.encode(encoder, frame.scene, frame.targets, textures, views, slot);
+        }
+        Ok(())
+    }
+}
 
 /// What one frame reads and writes.
 #[derive(Debug, Clone, Copy)]
@@ -71,8 +149,12 @@ pub struct FrameGraph {
     pub splat: Option<SplatPass>,
     /// The accumulation of jittered frames ([`FrameGraph::with_accumulation`]).
     pub accumulate: Option<AccumulatePass>,
+    /// Stencilled specular images of mirror faces ([`FrameGraph::with_specular`]).
+    pub specular: Option<SpecularPass>,
     /// The final tone map.
     pub tonemap: TonemapPass,
+    /// The frame's views (camera, virtual cameras), rewritten every frame.
+    views: Mutex<ViewBuffer>,
 }
 
 impl FrameGraph {
@@ -86,8 +168,24 @@ impl FrameGraph {
             diffuse: None,
             splat: None,
             accumulate: None,
+            specular: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
+            views: Mutex::new(ViewBuffer::new(ctx, 8)),
         })
+    }
+
+    /// Adds specular images (section 3, 7.1): every planar mirror face of
+    /// `scene` masked in the stencil and the scene redrawn from its virtual
+    /// camera, recursively to `settings.max_depth`.
+    pub fn with_specular(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &lustre_geometry::Scene,
+        settings: SpecularSettings,
+    ) -> Result<Self> {
+        self.specular = Some(SpecularPass::new(ctx, hdr_format, scene, settings)?);
+        Ok(self)
     }
 
     /// Adds the emission pass for `scene`'s emitters and HDR targets of `hdr_format`.
@@ -189,19 +287,26 @@ impl FrameGraph {
     }
 
     /// Records and submits one frame in one command encoder: clear HDR to
-    /// black (passes add light into it), depth pre-pass, emitters, Gouraud
-    /// vertex radiance, direct light, splats, tone map to `output`.
-    pub fn render(&self, ctx: &GpuContext, frame: &FrameInputs<'_>) -> Result<()> {
+    /// black (passes add light into it), then `draw_window` of the camera's
+    /// view (depth pre-pass, specular images recursively, emitters, Gouraud
+    /// vertex radiance, direct light, diffuse textures), splats, tone map to
+    /// `output`. Returns the views drawn (scene passes, table 3).
+    pub fn render(&self, ctx: &GpuContext, frame: &FrameInputs<'_>) -> Result<usize> {
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
         let passes = self.resolve(frame)?;
-        self.prepare_camera(ctx, &passes, frame.camera);
+        let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
+        let tree = self.view_tree(ctx, frame.camera)?;
+        let slots = views.write(ctx, &tree.views)?;
+        if let Some((inputs, pass)) = passes.splat {
+            pass.prepare(&ctx.queue, &tree.views[0], inputs.filtering);
+        }
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("frame"),
                 });
-            self.encode_light(ctx, &mut encoder, frame, &passes)?;
+            self.encode_light(ctx, &mut encoder, frame, &passes, &views, &tree, &slots)?;
             self.tonemap.encode(
                 &ctx.device,
                 &mut encoder,
@@ -210,7 +315,18 @@ impl FrameGraph {
             );
             ctx.queue.submit([encoder.finish()]);
             Ok(())
-        })
+        })?;
+        Ok(tree.views.len())
+    }
+
+    /// The views of a frame through `camera`: the camera alone, or with the
+    /// virtual cameras of the specular recursion ([`crate::passes::specular::ViewTree`]).
+    pub fn view_tree(&self, ctx: &GpuContext, camera: &Camera) -> Result<ViewTree> {
+        let root = View::from_camera(camera);
+        match &self.specular {
+            Some(specular) => specular.view_tree(root, ctx.clip_method()),
+            None => Ok(ViewTree::single(root)),
+        }
     }
 
     /// Antialiasing by jittered accumulation (Diefenbach & Badler 1997,
@@ -235,7 +351,7 @@ impl FrameGraph {
     ) -> Result<()> {
         if samples <= 1 {
             before_sample(0)?;
-            return self.render(ctx, frame);
+            return self.render(ctx, frame).map(|_| ());
         }
         let Some(accumulate) = &self.accumulate else {
             return Err(crate::MprError::InvalidSetting {
@@ -254,20 +370,33 @@ impl FrameGraph {
             splat: if splat_once { None } else { passes.splat },
             ..passes
         };
+        let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
         for s in 0..samples {
             before_sample(s)?;
             let camera =
                 frame
                     .camera
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
-            self.prepare_camera(ctx, &jittered_passes, &camera);
+            let tree = self.view_tree(ctx, &camera)?;
+            let slots = views.write(ctx, &tree.views)?;
+            if let Some((inputs, pass)) = jittered_passes.splat {
+                pass.prepare(&ctx.queue, &tree.views[0], inputs.filtering);
+            }
             ctx.checked_result("accumulated frame", || {
                 let mut encoder =
                     ctx.device
                         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                             label: Some("accumulated-frame"),
                         });
-                self.encode_light(ctx, &mut encoder, frame, &jittered_passes)?;
+                self.encode_light(
+                    ctx,
+                    &mut encoder,
+                    frame,
+                    &jittered_passes,
+                    &views,
+                    &tree,
+                    &slots,
+                )?;
                 accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
                 if s + 1 == samples {
                     let accumulation = &frame.targets.accumulation.texture;
@@ -277,17 +406,25 @@ impl FrameGraph {
                         accumulation.size(),
                     );
                     if splat_once {
-                        // Ordered after this submit's jittered camera (write_buffer applies at submit).
+                        // Ordered after this submit's jittered views (write_buffer applies at submit).
                         ctx.queue.submit([encoder.finish()]);
                         encoder =
                             ctx.device
                                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                                     label: Some("splats-once"),
                                 });
-                        self.depth.prepare(&ctx.queue, frame.camera);
+                        let centre = View::from_camera(frame.camera);
+                        let slots = views.write(ctx, &[centre])?;
                         if let Some((inputs, pass)) = passes.splat {
-                            pass.prepare(&ctx.queue, frame.camera, inputs.filtering);
-                            self.depth.encode(&mut encoder, frame.scene, frame.targets);
+                            pass.prepare(&ctx.queue, &centre, inputs.filtering);
+                            self.depth.encode(
+                                &mut encoder,
+                                frame.scene,
+                                frame.targets,
+                                &views,
+                                slots[0],
+                                true,
+                            );
                             pass.encode(
                                 &ctx.device,
                                 &mut encoder,
@@ -357,48 +494,40 @@ impl FrameGraph {
         })
     }
 
-    /// Writes `camera` into every pass of the frame.
-    fn prepare_camera(&self, ctx: &GpuContext, passes: &ResolvedPasses<'_>, camera: &Camera) {
-        self.depth.prepare(&ctx.queue, camera);
-        if let Some((inputs, pass)) = passes.splat {
-            pass.prepare(&ctx.queue, camera, inputs.filtering);
-        }
-        if let Some((_, pass)) = passes.direct {
-            pass.prepare(&ctx.queue, camera);
-        }
-        if let Some((_, pass)) = passes.diffuse {
-            pass.prepare(&ctx.queue, camera);
-        }
+    /// The passes that add light under a view, in order (section 7.2).
+    fn light_passes<'a>(&'a self, passes: &ResolvedPasses<'a>) -> Vec<&'a dyn LightPass> {
+        let mut list: Vec<&dyn LightPass> = Vec::new();
         if let Some(emission) = &self.emission {
-            emission.prepare(&ctx.queue, camera);
+            list.push(emission);
         }
         if let Some(gouraud) = &self.gouraud {
-            gouraud.prepare(&ctx.queue, camera);
+            list.push(gouraud);
         }
+        if let Some((_, pass)) = passes.direct {
+            list.push(pass);
+        }
+        if let Some((_, pass)) = passes.diffuse {
+            list.push(pass);
+        }
+        list
     }
 
-    /// Records the passes that add light into the HDR target, cleared first (section 7.2).
+    /// Records the frame's light into the HDR target, cleared first (section
+    /// 7.2): `draw_window` of the camera's view, then the splats.
+    #[allow(clippy::too_many_arguments)]
     fn encode_light(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameInputs<'_>,
         passes: &ResolvedPasses<'_>,
+        views: &ViewBuffer,
+        tree: &ViewTree,
+        slots: &[ViewSlot],
     ) -> Result<()> {
         clear_hdr(encoder, frame.targets);
-        self.depth.encode(encoder, frame.scene, frame.targets);
-        if let Some(emission) = &self.emission {
-            emission.encode(encoder, frame.scene, frame.targets);
-        }
-        if let Some(gouraud) = &self.gouraud {
-            gouraud.encode(encoder, frame.scene, frame.targets)?;
-        }
-        if let Some((lights, pass)) = passes.direct {
-            pass.encode(encoder, frame.scene, frame.targets, lights);
-        }
-        if let Some((textures, pass)) = passes.diffuse {
-            pass.encode(encoder, frame.scene, frame.targets, textures);
-        }
+        let light = self.light_passes(passes);
+        self.draw_window(encoder, frame, &light, views, tree, slots, 0)?;
         if let Some((inputs, pass)) = passes.splat {
             pass.encode(
                 &ctx.device,
@@ -408,6 +537,46 @@ impl FrameGraph {
                 frame.targets,
                 inputs.restriction,
             )?;
+        }
+        Ok(())
+    }
+
+    /// `draw_window` of section 7.1 for view `index` of `tree`: its depth
+    /// pass (clearing for the camera, inside its mask for a virtual view),
+    /// each specular face masked, drawn from its virtual view and restored
+    /// (`draw_spec_objects`), the faces at the recursion limit, then the
+    /// light passes under the view.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_window(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        light: &[&dyn LightPass],
+        views: &ViewBuffer,
+        tree: &ViewTree,
+        slots: &[ViewSlot],
+        index: usize,
+    ) -> Result<()> {
+        let slot = slots[index];
+        self.depth
+            .encode(encoder, frame.scene, frame.targets, views, slot, index == 0);
+        if let Some(specular) = &self.specular {
+            for &(face, child) in &tree.children[index] {
+                specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
+                self.draw_window(encoder, frame, light, views, tree, slots, child)?;
+                specular.encode_restore(encoder, frame.scene, frame.targets, views, slot, face);
+            }
+            specular.encode_limit(
+                encoder,
+                frame.scene,
+                frame.targets,
+                views,
+                slot,
+                &tree.limit_faces[index],
+            );
+        }
+        for pass in light {
+            pass.encode_view(encoder, frame, views, slot)?;
         }
         Ok(())
     }

@@ -2,7 +2,7 @@
 //!
 //! Multi-pass pipeline rendering (Diefenbach & Badler 1997) on wgpu: a
 //! headless device ([`GpuContext`]), the frame's render targets
-//! ([`RenderTargets`]), one module per pass with its WGSL beside it
+//! ([`RenderTargets`]), the [`View`] every scene pass draws under, one module per pass with its WGSL beside it
 //! ([`passes`]), the frame graph that runs them in one command encoder into
 //! any `TextureView` ([`FrameGraph`]), and synchronous readback
 //! ([`readback`]). Every pass has a CPU counterpart computing the same
@@ -14,6 +14,7 @@
 //! | [`passes::emission`]: emitters' own radiance | (light sources seen directly) | ray cast + material `Le` |
 //! | [`passes::direct`], [`passes::shadow`]: point lights, cube shadow maps, per-pixel BRDF | Stürzlinger & Bastos 1997, 2.2.1 | ray cast + shadow ray |
 //! | [`passes::splat`]: photon splats, 64² kernel texture with mips, surface-id or stencil restriction | Stürzlinger & Bastos 1997, 2.2, 3.2, equation 2 | `SplatEstimator::radiance_splatted` |
+//! | [`passes::specular`]: mirror faces masked in the stencil, the scene redrawn from their virtual views, recursively | Diefenbach & Badler 1997, 3, 7.1, 7.3 | mirror ray tracer (`tests/specular.rs`) |
 //! | [`passes::tonemap`]: exposure, clamp or Reinhard, sRGB | — | per-pixel formula |
 //!
 //! Materials reach the GPU as weighted BRDF lobes ([`material`]) evaluated by
@@ -39,9 +40,11 @@ pub mod readback;
 pub mod scene_buffers;
 pub mod shaders;
 pub mod target;
+pub mod view;
 
 pub use device::{AdapterPreference, AdapterSummary, GpuContext};
 pub use error::{MprError, Result};
 pub use frame::{FrameGraph, FrameInputs};
 pub use scene_buffers::{GpuVertex, SceneBuffers};
 pub use target::{NO_SURFACE, RenderTargets};
+pub use view::{ClipMethod, View, ViewBuffer, ViewSlot};

@@ -4,8 +4,49 @@
 /// Colour encoding shared by passes: exposure, clamp and Reinhard operators, sRGB OETF (`src/shaders/common/color.wgsl`).
 pub const COLOR_WGSL: &str = include_str!("shaders/common/color.wgsl");
 
-/// The depth pre-pass shader (`src/passes/depth.wgsl`), self-contained.
+/// The view block of group 0 shared by every scene pass (`src/shaders/common/view.wgsl`, [`crate::view`]).
+pub const VIEW_WGSL: &str = include_str!("shaders/common/view.wgsl");
+
+/// The depth pre-pass's own WGSL (`src/passes/depth.wgsl`); compiled after [`VIEW_WGSL`].
 pub const DEPTH_WGSL: &str = include_str!("passes/depth.wgsl");
+
+/// A scene pass's own WGSL after the shared [`VIEW_WGSL`].
+pub fn with_view(pass: &str) -> String {
+    format!("{VIEW_WGSL}\n{pass}")
+}
+
+/// A complete scene-pass module specialised for a device: with `clip_distances`
+/// the `enable` directive is prepended and every line marked
+/// `//clip_distances: ` is uncommented (see `view.wgsl`); without, the module is
+/// unchanged and the projection clips instead ([`crate::view::ClipMethod`]).
+///
+/// The builtin is a vertex output only, so the fragment stages, which take
+/// `in: VertexOutput` by convention, are given `FragmentInput`: the same
+/// struct without it.
+pub fn specialise(module: &str, clip_distances: bool) -> String {
+    if !clip_distances || !module.contains(CLIP_MARKER) {
+        return module.to_owned();
+    }
+    let mut module = module.replace(CLIP_MARKER, "");
+    if let Some(start) = module.find("struct VertexOutput {") {
+        let end = module[start..]
+            .find("\n}\n")
+            .map_or(module.len(), |e| start + e + 3);
+        let fragment: Vec<&str> = module[start..end]
+            .lines()
+            .filter(|line| !line.contains("@builtin(clip_distances)"))
+            .collect();
+        let fragment = fragment
+            .join("\n")
+            .replace("struct VertexOutput {", "struct FragmentInput {");
+        module.insert_str(end, &format!("\n{fragment}\n"));
+        module = module.replace("(in: VertexOutput)", "(in: FragmentInput)");
+    }
+    format!("enable clip_distances;\n{module}")
+}
+
+/// The prefix of the lines [`specialise`] uncomments.
+const CLIP_MARKER: &str = "//clip_distances: ";
 
 /// The shadow cube-map shader (`src/passes/shadow.wgsl`), self-contained.
 pub const SHADOW_WGSL: &str = include_str!("passes/shadow.wgsl");
@@ -35,7 +76,7 @@ pub fn with_materials(pass: &str) -> String {
 
 /// The direct light pass as compiled: [`DIRECT_WGSL`] after [`material_module`].
 pub fn direct_wgsl() -> String {
-    with_materials(DIRECT_WGSL)
+    with_materials(&with_view(DIRECT_WGSL))
 }
 
 /// Each WGSL file under `src/` (path relative to `src/`) with the complete
@@ -44,7 +85,8 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
     vec![
         ("shaders/common/color.wgsl", COLOR_WGSL.to_owned()),
         ("shaders/common/material.wgsl", material_module()),
-        ("passes/depth.wgsl", DEPTH_WGSL.to_owned()),
+        ("shaders/common/view.wgsl", VIEW_WGSL.to_owned()),
+        ("passes/depth.wgsl", with_view(DEPTH_WGSL)),
         (
             "passes/accumulate.wgsl",
             crate::passes::accumulate::ACCUMULATE_WGSL.to_owned(),
@@ -61,16 +103,20 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ),
         (
             "passes/emission.wgsl",
-            crate::passes::emission::EMISSION_WGSL.to_owned(),
+            with_view(crate::passes::emission::EMISSION_WGSL),
         ),
         ("passes/direct.wgsl", direct_wgsl()),
         (
+            "passes/specular.wgsl",
+            with_view(crate::passes::specular::SPECULAR_WGSL),
+        ),
+        (
             "passes/diffuse_texture.wgsl",
-            crate::passes::diffuse_texture::DIFFUSE_TEXTURE_WGSL.to_owned(),
+            with_view(crate::passes::diffuse_texture::DIFFUSE_TEXTURE_WGSL),
         ),
         (
             "passes/gouraud.wgsl",
-            crate::passes::gouraud::GOURAUD_WGSL.to_owned(),
+            with_view(crate::passes::gouraud::GOURAUD_WGSL),
         ),
     ]
 }
@@ -87,7 +133,7 @@ mod tests {
             .unwrap_or_else(|e| panic!("{path}: WGSL parse error:\n{}", e.emit_to_string(src)));
         naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::empty(),
+            naga::valid::Capabilities::CLIP_DISTANCES,
         )
         .validate(&module)
         .unwrap_or_else(|e| panic!("{path}: WGSL validation error:\n{}", e.emit_to_string(src)));
@@ -110,6 +156,25 @@ mod tests {
     fn every_wgsl_module_parses_and_validates_with_naga() {
         for (path, src) in all_wgsl() {
             validate(path, &src);
+            // The variant with user clip distances, where the device has them.
+            validate(path, &super::specialise(&src, true));
+        }
+    }
+
+    #[test]
+    fn scene_passes_write_clip_distances_only_when_specialised() {
+        for (path, src) in all_wgsl() {
+            let active = |module: &str, what: &str| {
+                module
+                    .lines()
+                    .any(|l| l.contains(what) && !l.trim_start().starts_with("//"))
+            };
+            if src.contains(super::CLIP_MARKER) {
+                assert!(!active(&src, "@builtin(clip_distances)"), "{path}");
+                let clip = super::specialise(&src, true);
+                assert!(active(&clip, "@builtin(clip_distances)"), "{path}");
+                assert!(active(&clip, "= view_clip_distance("), "{path}");
+            }
         }
     }
 

@@ -105,11 +105,11 @@ fn gpu_depth(
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let pass = DepthPass::new(ctx).unwrap();
-    pass.prepare(&ctx.queue, camera);
+    let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, camera).unwrap();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    pass.encode(&mut encoder, &buffers, &targets);
+    pass.encode(&mut encoder, &buffers, &targets, &views, slot, true);
     ctx.queue.submit([encoder.finish()]);
     (
         read_depth(ctx, &targets.depth.texture).unwrap(),

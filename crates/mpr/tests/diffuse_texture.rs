@@ -59,6 +59,8 @@ struct Renderer {
     depth: DepthPass,
     diffuse: DiffuseTexturePass,
     splat: SplatPass,
+    views: lustre_mpr::ViewBuffer,
+    slot: lustre_mpr::ViewSlot,
 }
 
 impl Renderer {
@@ -69,9 +71,12 @@ impl Renderer {
         let depth = DepthPass::new(&ctx).unwrap();
         let diffuse = DiffuseTexturePass::new(&ctx, targets.hdr_format()).unwrap();
         let splat = SplatPass::new(&ctx, targets.hdr_format(), Kernel::Silverman).unwrap();
-        depth.prepare(&ctx.queue, &camera);
-        diffuse.prepare(&ctx.queue, &camera);
-        splat.prepare(&ctx.queue, &camera, KernelFiltering::PixelCentre);
+        let (views, slot) = lustre_mpr::ViewBuffer::for_camera(&ctx, &camera).unwrap();
+        splat.prepare(
+            &ctx.queue,
+            &lustre_mpr::View::from_camera(&camera),
+            KernelFiltering::PixelCentre,
+        );
         Self {
             ctx,
             targets,
@@ -79,6 +84,8 @@ impl Renderer {
             depth,
             diffuse,
             splat,
+            views,
+            slot,
         }
     }
 
@@ -89,10 +96,23 @@ impl Renderer {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         lustre_mpr::frame::clear_hdr(&mut encoder, &self.targets);
-        self.depth.encode(&mut encoder, &self.scene, &self.targets);
+        self.depth.encode(
+            &mut encoder,
+            &self.scene,
+            &self.targets,
+            &self.views,
+            self.slot,
+            true,
+        );
         if let Some(textures) = passes.diffuse {
-            self.diffuse
-                .encode(&mut encoder, &self.scene, &self.targets, textures);
+            self.diffuse.encode(
+                &mut encoder,
+                &self.scene,
+                &self.targets,
+                textures,
+                &self.views,
+                self.slot,
+            );
         }
         if let Some(splats) = passes.splats {
             self.splat

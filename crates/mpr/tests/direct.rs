@@ -116,8 +116,7 @@ fn render_direct(
     let targets = RenderTargets::new(ctx, size, size).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let depth = DepthPass::new(ctx).unwrap();
-    depth.prepare(&ctx.queue, camera);
-    direct.prepare(&ctx.queue, camera);
+    let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, camera).unwrap();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
@@ -137,9 +136,9 @@ fn render_direct(
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    depth.encode(&mut encoder, &buffers, &targets);
+    depth.encode(&mut encoder, &buffers, &targets, &views, slot, true);
     direct.encode_shadows(&mut encoder, &buffers, lights);
-    direct.encode(&mut encoder, &buffers, &targets, lights);
+    direct.encode(&mut encoder, &buffers, &targets, lights, &views, slot);
     ctx.queue.submit([encoder.finish()]);
     (
         read_rgba_f32(ctx, &targets.hdr.texture).unwrap(),

@@ -44,14 +44,13 @@ fn gpu_emission_matches_cpu_on_cornell_with_the_light_facing_and_turned_away() {
         let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
         let depth = DepthPass::new(&ctx).unwrap();
         let pass = EmissionPass::new(&ctx, targets.hdr_format(), &scene).unwrap();
-        depth.prepare(&ctx.queue, &camera);
-        pass.prepare(&ctx.queue, &camera);
+        let (views, slot) = lustre_mpr::ViewBuffer::for_camera(&ctx, &camera).unwrap();
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         lustre_mpr::frame::clear_hdr(&mut encoder, &targets);
-        depth.encode(&mut encoder, &buffers, &targets);
-        pass.encode(&mut encoder, &buffers, &targets);
+        depth.encode(&mut encoder, &buffers, &targets, &views, slot, true);
+        pass.encode(&mut encoder, &buffers, &targets, &views, slot);
         ctx.queue.submit([encoder.finish()]);
         let gpu = read_rgba_f32(&ctx, &targets.hdr.texture).unwrap();
         let ids = read_u32(&ctx, &targets.surface_id.texture).unwrap();

@@ -52,14 +52,14 @@ fn render(
     let pass = GouraudPass::new(ctx, targets.hdr_format(), &buffers).unwrap();
     assert_eq!(pass.corners() as usize, corners.len());
     pass.set_radiance(&ctx.queue, corners).unwrap();
-    depth.prepare(&ctx.queue, camera);
-    pass.prepare(&ctx.queue, camera);
+    let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, camera).unwrap();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
     lustre_mpr::frame::clear_hdr(&mut encoder, &targets);
-    depth.encode(&mut encoder, &buffers, &targets);
-    pass.encode(&mut encoder, &buffers, &targets).unwrap();
+    depth.encode(&mut encoder, &buffers, &targets, &views, slot, true);
+    pass.encode(&mut encoder, &buffers, &targets, &views, slot)
+        .unwrap();
     ctx.queue.submit([encoder.finish()]);
     (
         read_rgba_f32(ctx, &targets.hdr.texture).unwrap(),
@@ -302,5 +302,10 @@ fn an_empty_radiance_is_refused_and_a_mismatched_scene_is_not_drawn() {
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    assert!(pass.encode(&mut encoder, &fine_buffers, &targets).is_err());
+    let (views, slot) =
+        lustre_mpr::ViewBuffer::for_camera(&ctx, &coarse.camera().with_aspect(1.0)).unwrap();
+    assert!(
+        pass.encode(&mut encoder, &fine_buffers, &targets, &views, slot)
+            .is_err()
+    );
 }

@@ -66,13 +66,17 @@ fn render_with(
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let depth = DepthPass::new(ctx).unwrap();
     let pass = SplatPass::new(ctx, targets.hdr_format(), estimator.options().kernel).unwrap();
-    depth.prepare(&ctx.queue, &camera);
-    pass.prepare(&ctx.queue, &camera, filtering);
+    let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, &camera).unwrap();
+    pass.prepare(
+        &ctx.queue,
+        &lustre_mpr::View::from_camera(&camera),
+        filtering,
+    );
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
     lustre_mpr::frame::clear_hdr(&mut encoder, &targets);
-    depth.encode(&mut encoder, &buffers, &targets);
+    depth.encode(&mut encoder, &buffers, &targets, &views, slot, true);
     pass.encode(
         &ctx.device,
         &mut encoder,

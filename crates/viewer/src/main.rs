@@ -27,12 +27,12 @@ struct Cli {
 enum Command {
     /// Print a scene's triangles, surfaces, materials, lights and bounds.
     Info {
-        /// A built-in scene (cornell, glosbox, tree) or an OBJ file.
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom) or an OBJ file.
         scene: String,
     },
     /// Write a scene as Mitsuba 3 XML, with its meshes as PLY files beside it.
     ExportMitsuba {
-        /// A built-in scene (cornell, glosbox, tree) or an OBJ file.
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom) or an OBJ file.
         scene: String,
         /// The XML file to write.
         out: PathBuf,

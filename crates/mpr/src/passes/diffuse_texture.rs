@@ -80,8 +80,11 @@ use lustre_photon::{PlanarFrame, SplatEstimator, SurfaceParam};
 use rayon::prelude::*;
 
 use crate::material::{GlossyModel, GpuMaterial};
-use crate::scene_buffers::{GpuVertex, SceneBuffers};
+use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
+use crate::scene_buffers::SceneBuffers;
+use crate::shaders::with_view;
 use crate::target::{RenderTargets, check_size};
+use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
 /// The diffuse texture WGSL (`src/passes/diffuse_texture.wgsl`), self-contained.
@@ -540,16 +543,6 @@ impl GpuDiffuseSurface {
     }
 }
 
-/// The pass's camera block (`DiffuseCamera` in `diffuse_texture.wgsl`).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct DiffuseCamera {
-    /// Column-major world-to-clip matrix, the same as the depth pre-pass's.
-    pub view_projection: [[f32; 4]; 4],
-    /// Camera position (xyz), w unused.
-    pub eye: [f32; 4],
-}
-
 /// The diffuse textures on the GPU: the atlas, the per-surface records and their bind group.
 #[derive(Debug)]
 pub struct DiffuseTextures {
@@ -645,8 +638,6 @@ impl DiffuseTextures {
 #[derive(Debug)]
 pub struct DiffuseTexturePass {
     pipeline: wgpu::RenderPipeline,
-    camera: wgpu::Buffer,
-    camera_bind_group: wgpu::BindGroup,
     textures_layout: wgpu::BindGroupLayout,
 }
 
@@ -661,23 +652,7 @@ impl DiffuseTexturePass {
         }
         ctx.checked("diffuse texture pass creation", || {
             let device = &ctx.device;
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("diffuse-texture"),
-                source: wgpu::ShaderSource::Wgsl(DIFFUSE_TEXTURE_WGSL.into()),
-            });
-            let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("diffuse-camera"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<DiffuseCamera>() as u64),
-                    },
-                    count: None,
-                }],
-            });
+            let module = scene_module(ctx, "diffuse-texture", &with_view(DIFFUSE_TEXTURE_WGSL));
             let textures_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("diffuse-textures"),
@@ -706,84 +681,23 @@ impl DiffuseTexturePass {
                         },
                     ],
                 });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("diffuse-texture"),
-                bind_group_layouts: &[Some(&camera_layout), Some(&textures_layout)],
-                immediate_size: 0,
-            });
-            let additive = wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            };
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("diffuse-texture"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
+            let pipeline = scene_pipeline(
+                ctx,
+                &ScenePipeline {
+                    label: "diffuse-texture",
                     module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(GpuVertex::LAYOUT)],
+                    layouts: &[&textures_layout],
+                    extra_vertex_buffers: &[],
+                    target: additive_target(hdr_format),
+                    depth_compare: wgpu::CompareFunction::Equal,
+                    depth_write: false,
                 },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: ctx.depth_format(),
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Equal),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: hdr_format,
-                        blend: Some(wgpu::BlendState {
-                            color: additive,
-                            alpha: additive,
-                        }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            let camera = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("diffuse-camera"),
-                size: size_of::<DiffuseCamera>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("diffuse-camera"),
-                layout: &camera_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: camera.as_entire_binding(),
-                }],
-            });
+            );
             Self {
                 pipeline,
-                camera,
-                camera_bind_group,
                 textures_layout,
             }
         })
-    }
-
-    /// Writes the camera for the next [`DiffuseTexturePass::encode`] (the same camera as the depth pre-pass).
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera) {
-        let uniforms = DiffuseCamera {
-            view_projection: camera.view_projection().to_cols_array_2d(),
-            eye: camera.position.extend(1.0).to_array(),
-        };
-        queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&uniforms));
     }
 
     /// Records the pass after the depth pre-pass: one render pass that loads
@@ -795,6 +709,8 @@ impl DiffuseTexturePass {
         scene: &SceneBuffers,
         targets: &RenderTargets,
         textures: &DiffuseTextures,
+        views: &ViewBuffer,
+        slot: ViewSlot,
     ) {
         let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "diffuse-texture");
         let runs = textured_runs(&scene.surface_ranges, &textures.textured);
@@ -802,7 +718,7 @@ impl DiffuseTexturePass {
             return;
         }
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.camera_bind_group, &[]);
+        views.bind(&mut pass, 0, slot);
         pass.set_bind_group(1, &textures.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);

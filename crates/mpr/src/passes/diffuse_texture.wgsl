@@ -22,12 +22,6 @@
 // No layer on this side: no photon arrived there, the radiance is zero.
 const NO_LAYER: u32 = 0xffffffffu;
 
-struct DiffuseCamera {
-    view_projection: mat4x4f,
-    // xyz: E.
-    eye: vec4f,
-}
-
 // One surface's texture record (GpuDiffuseSurface in diffuse_texture.rs).
 struct DiffuseSurface {
     origin: vec3f,
@@ -47,13 +41,13 @@ struct DiffuseSurface {
     layers: vec4u,
 }
 
-@group(0) @binding(0) var<uniform> camera: DiffuseCamera;
 @group(1) @binding(0) var<storage, read> surfaces: array<DiffuseSurface>;
 @group(1) @binding(1) var atlas: texture_2d<f32>;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
     @builtin(position) @invariant clip: vec4f,
+    //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
     @location(0) world: vec3f,
     @location(1) @interpolate(flat) surface: u32,
 }
@@ -61,7 +55,8 @@ struct VertexOutput {
 @vertex
 fn vs_main(@location(0) position: vec3f, @location(1) surface: u32) -> VertexOutput {
     var out: VertexOutput;
-    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.clip = view.view_projection * vec4f(position, 1.0);
+    //clip_distances: out.clip_distances[0] = view_clip_distance(position);
     out.world = position;
     out.surface = surface;
     return out;
@@ -73,7 +68,7 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     if rec.textured == 0u {
         discard;
     }
-    let front = dot(camera.eye.xyz - in.world, rec.normal) >= 0.0;
+    let front = dot(view.eye.xyz - in.world, rec.normal) >= 0.0;
     let base = select(rec.layers.zw, rec.layers.xy, front);
     if base.x == NO_LAYER {
         discard;

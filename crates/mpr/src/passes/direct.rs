@@ -40,10 +40,12 @@ use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
 
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
+use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::passes::shadow::{ShadowCube, ShadowPass, ShadowSettings};
-use crate::scene_buffers::{GpuVertex, SceneBuffers};
+use crate::scene_buffers::SceneBuffers;
 use crate::shaders::direct_wgsl;
 use crate::target::{NO_SURFACE, RenderTargets};
+use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
 /// `GpuLight::kind` of an isotropic point light.
@@ -52,16 +54,6 @@ pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_ORIENTED_POINT: u32 = 1;
 /// `GpuLight::kind` of a spot light.
 pub const LIGHT_SPOT: u32 = 2;
-
-/// The direct pass's camera block (`DirectCamera` in `direct.wgsl`).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct DirectCamera {
-    /// Column-major world-to-clip matrix, the same as the depth pre-pass's.
-    pub view_projection: [[f32; 4]; 4],
-    /// Camera position (xyz), w unused.
-    pub position: [f32; 4],
-}
 
 /// One point light and its shadow lookup (`DirectLight` in `direct.wgsl`).
 #[repr(C)]
@@ -360,8 +352,6 @@ impl DirectLights {
 #[derive(Debug)]
 pub struct DirectPass {
     pipeline: wgpu::RenderPipeline,
-    camera: wgpu::Buffer,
-    camera_bind_group: wgpu::BindGroup,
     light_layout: wgpu::BindGroupLayout,
     shadow_sampler: wgpu::Sampler,
     shadow: ShadowPass,
@@ -380,23 +370,7 @@ impl DirectPass {
         let shadow = ShadowPass::new(ctx)?;
         ctx.checked("direct pass creation", || {
             let device = &ctx.device;
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("direct"),
-                source: wgpu::ShaderSource::Wgsl(direct_wgsl().into()),
-            });
-            let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("direct-camera"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<DirectCamera>() as u64),
-                    },
-                    count: None,
-                }],
-            });
+            let module = scene_module(ctx, "direct", &direct_wgsl());
             let light_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("direct-light"),
@@ -443,76 +417,24 @@ impl DirectPass {
                         },
                     ],
                 });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("direct"),
-                bind_group_layouts: &[Some(&camera_layout), Some(&light_layout)],
-                immediate_size: 0,
-            });
-            let additive = wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            };
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("direct"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
+            let pipeline = scene_pipeline(
+                ctx,
+                &ScenePipeline {
+                    label: "direct",
                     module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(GpuVertex::LAYOUT)],
+                    layouts: &[&light_layout],
+                    extra_vertex_buffers: &[],
+                    target: additive_target(hdr_format),
+                    depth_compare: wgpu::CompareFunction::Equal,
+                    depth_write: false,
                 },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: ctx.depth_format(),
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Equal),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: hdr_format,
-                        blend: Some(wgpu::BlendState {
-                            color: additive,
-                            alpha: additive,
-                        }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            let camera = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("direct-camera"),
-                size: size_of::<DirectCamera>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("direct-camera"),
-                layout: &camera_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: camera.as_entire_binding(),
-                }],
-            });
+            );
             let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("shadow-nearest"),
                 ..Default::default()
             });
             Self {
                 pipeline,
-                camera,
-                camera_bind_group,
                 light_layout,
                 shadow_sampler,
                 shadow,
@@ -523,15 +445,6 @@ impl DirectPass {
     /// The shadow pass that draws the lights' cubes.
     pub fn shadow_pass(&self) -> &ShadowPass {
         &self.shadow
-    }
-
-    /// Writes the camera for the next [`DirectPass::encode`] (the same camera as the depth pre-pass).
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera) {
-        let uniforms = DirectCamera {
-            view_projection: camera.view_projection().to_cols_array_2d(),
-            position: camera.position.extend(1.0).to_array(),
-        };
-        queue.write_buffer(&self.camera, 0, bytemuck::bytes_of(&uniforms));
     }
 
     /// Records the shadow cube of every light (section 2.2.1, "construct a
@@ -557,13 +470,15 @@ impl DirectPass {
         scene: &SceneBuffers,
         targets: &RenderTargets,
         lights: &DirectLights,
+        views: &ViewBuffer,
+        slot: ViewSlot,
     ) {
         let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "direct");
         if scene.vertex_count == 0 || lights.is_empty() {
             return;
         }
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.camera_bind_group, &[]);
+        views.bind(&mut pass, 0, slot);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         for slot in &lights.slots {
             pass.set_bind_group(1, &slot.bind_group, &[]);

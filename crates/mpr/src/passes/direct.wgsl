@@ -25,12 +25,6 @@ const LIGHT_POINT: u32 = 0u;
 const LIGHT_ORIENTED_POINT: u32 = 1u;
 const LIGHT_SPOT: u32 = 2u;
 
-struct DirectCamera {
-    view_projection: mat4x4f,
-    // xyz: E.
-    position: vec4f,
-}
-
 // One point light and its shadow-map lookup parameters (GpuLight in direct.rs).
 struct DirectLight {
     position: vec3f,
@@ -48,7 +42,6 @@ struct DirectLight {
     pad: f32,
 }
 
-@group(0) @binding(0) var<uniform> camera: DirectCamera;
 @group(1) @binding(0) var<storage, read> materials: array<GpuMaterial>;
 @group(1) @binding(1) var<uniform> light: DirectLight;
 @group(1) @binding(2) var shadow_cube: texture_cube<f32>;
@@ -57,6 +50,7 @@ struct DirectLight {
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
     @builtin(position) @invariant clip: vec4f,
+    //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
     @location(0) world: vec3f,
     @location(1) normal: vec3f,
     @location(2) @interpolate(flat) material: u32,
@@ -69,7 +63,8 @@ fn vs_main(
     @location(3) material: u32,
 ) -> VertexOutput {
     var out: VertexOutput;
-    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.clip = view.view_projection * vec4f(position, 1.0);
+    //clip_distances: out.clip_distances[0] = view_clip_distance(position);
     out.world = position;
     out.normal = normal;
     out.material = material;
@@ -128,7 +123,7 @@ fn direct_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
 
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
-    let wo_world = normalize(camera.position.xyz - in.world);
+    let wo_world = normalize(view.eye.xyz - in.world);
     var n = normalize(in.normal);
     if dot(n, wo_world) < 0.0 {
         n = -n;

@@ -7,18 +7,12 @@
 // | symbol | meaning                                                    | unit       |
 // |--------|------------------------------------------------------------|------------|
 // | P      | world position of the shaded point                         | m          |
-// | E      | camera position                                            | m          |
+// | E      | the view's eye                                             | m          |
 // | n      | interpolated vertex normal: the emitting side              | -          |
 // | Le     | emitted radiance of the triangle's material (zero if none) | W/(m^2 sr) |
 // One-sided like Mitsuba's area emitter: Le is seen only where (E - P) . n > 0.
 
-struct EmissionCamera {
-    view_projection: mat4x4f,
-    position: vec4f,
-}
-
-@group(0) @binding(0) var<uniform> camera: EmissionCamera;
-@group(0) @binding(1) var<storage, read> emission: array<vec4f>;
+@group(1) @binding(0) var<storage, read> emission: array<vec4f>;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -26,6 +20,7 @@ struct VertexOutput {
     @location(0) world: vec3f,
     @location(1) normal: vec3f,
     @location(2) @interpolate(flat) material: u32,
+    //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
 }
 
 @vertex
@@ -35,7 +30,8 @@ fn vs_main(
     @location(3) material: u32,
 ) -> VertexOutput {
     var out: VertexOutput;
-    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.clip = view.view_projection * vec4f(position, 1.0);
+    //clip_distances: out.clip_distances[0] = view_clip_distance(position);
     out.world = position;
     out.normal = normal;
     out.material = material;
@@ -45,7 +41,7 @@ fn vs_main(
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     let le = emission[in.material].xyz;
-    if all(le == vec3f(0.0)) || dot(camera.position.xyz - in.world, in.normal) <= 0.0 {
+    if all(le == vec3f(0.0)) || dot(view.eye.xyz - in.world, in.normal) <= 0.0 {
         discard;
     }
     return vec4f(le, 0.0);

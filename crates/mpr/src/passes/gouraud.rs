@@ -8,17 +8,19 @@
 //! [`gouraud_pass_cpu`]; conversion from per-vertex irradiance:
 //! [`corner_radiance`].
 
-use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use lustre_density::{VertexIrradiance, diffuse_radiance};
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Bvh, Camera, Rgb, Scene};
 
-use crate::scene_buffers::{GpuVertex, SceneBuffers};
+use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
+use crate::scene_buffers::SceneBuffers;
+use crate::shaders::with_view;
 use crate::target::RenderTargets;
+use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
-/// The Gouraud WGSL (`src/passes/gouraud.wgsl`), self-contained.
+/// The Gouraud pass's own WGSL (`src/passes/gouraud.wgsl`); compiled after the view block.
 pub const GOURAUD_WGSL: &str = include_str!("gouraud.wgsl");
 
 /// Layout of the per-corner radiance buffer: `@location(4) vec3f`, one per [`GpuVertex`] (section 2.4, one value per vertex).
@@ -28,22 +30,10 @@ pub const RADIANCE_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBuffe
     attributes: &wgpu::vertex_attr_array![4 => Float32x3],
 };
 
-/// The pass's uniform block (`GouraudCamera` in `gouraud.wgsl`).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct GouraudCamera {
-    /// Column-major world-to-clip matrix.
-    pub view_projection: [[f32; 4]; 4],
-    /// Camera position (w unused).
-    pub position: [f32; 4],
-}
-
 /// The GPU Gouraud pass (section 2.4) for one scene's triangle corners.
 #[derive(Debug)]
 pub struct GouraudPass {
     pipeline: wgpu::RenderPipeline,
-    uniforms: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
     /// Outgoing radiance per triangle corner (`[f32; 3]`), parallel to [`SceneBuffers::vertices`].
     radiance: wgpu::Buffer,
     /// Corners the radiance buffer holds: the scene's `vertex_count`.
@@ -57,80 +47,22 @@ impl GouraudPass {
         hdr_format: wgpu::TextureFormat,
         scene: &SceneBuffers,
     ) -> Result<Self> {
-        let depth_format = ctx.depth_format();
         let corners = scene.vertex_count;
         ctx.checked("gouraud pass creation", || {
             let device = &ctx.device;
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("gouraud"),
-                source: wgpu::ShaderSource::Wgsl(GOURAUD_WGSL.into()),
-            });
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("gouraud"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<GouraudCamera>() as u64),
-                    },
-                    count: None,
-                }],
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("gouraud"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("gouraud"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
+            let module = scene_module(ctx, "gouraud", &with_view(GOURAUD_WGSL));
+            let pipeline = scene_pipeline(
+                ctx,
+                &ScenePipeline {
+                    label: "gouraud",
                     module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(GpuVertex::LAYOUT), Some(RADIANCE_LAYOUT)],
+                    layouts: &[],
+                    extra_vertex_buffers: &[RADIANCE_LAYOUT],
+                    target: additive_target(hdr_format),
+                    depth_compare: wgpu::CompareFunction::Equal,
+                    depth_write: false,
                 },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: depth_format,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Equal),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: hdr_format,
-                        blend: Some(wgpu::BlendState {
-                            color: wgpu::BlendComponent {
-                                src_factor: wgpu::BlendFactor::One,
-                                dst_factor: wgpu::BlendFactor::One,
-                                operation: wgpu::BlendOperation::Add,
-                            },
-                            alpha: wgpu::BlendComponent::OVER,
-                        }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("gouraud-camera"),
-                size: size_of::<GouraudCamera>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            );
             // A zero-sized vertex buffer cannot be bound; an empty scene keeps one unused corner.
             let radiance = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("gouraud-radiance"),
@@ -138,18 +70,8 @@ impl GouraudPass {
                 usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("gouraud"),
-                layout: &layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniforms.as_entire_binding(),
-                }],
-            });
             Self {
                 pipeline,
-                uniforms,
-                bind_group,
                 radiance,
                 corners,
             }
@@ -179,21 +101,14 @@ impl GouraudPass {
         Ok(())
     }
 
-    /// Writes the camera for the next [`GouraudPass::encode`].
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera) {
-        let uniforms = GouraudCamera {
-            view_projection: camera.view_projection().to_cols_array_2d(),
-            position: camera.position.extend(1.0).to_array(),
-        };
-        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-    }
-
     /// Records the pass after the depth pre-pass: adds the interpolated vertex radiance on the front side of every visible triangle. Fails when `scene` has another corner count than the pass was built for.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &SceneBuffers,
         targets: &RenderTargets,
+        views: &ViewBuffer,
+        slot: ViewSlot,
     ) -> Result<()> {
         if scene.vertex_count != self.corners {
             return Err(MprError::InvalidSetting {
@@ -209,7 +124,7 @@ impl GouraudPass {
         }
         let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "gouraud");
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
+        views.bind(&mut pass, 0, slot);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_vertex_buffer(1, self.radiance.slice(..));
         pass.draw(0..scene.vertex_count, 0..1);

@@ -7,18 +7,11 @@
 // | symbol | meaning                                                       | unit       |
 // |--------|---------------------------------------------------------------|------------|
 // | P      | world position of the shaded point                            | m          |
-// | E      | camera position                                               | m          |
+// | E      | the view's eye                                                | m          |
 // | n      | interpolated vertex normal: the side the estimate belongs to  | -          |
 // | Lv     | outgoing radiance at a triangle corner (per-vertex, eq. 2.2)  | W/(m^2 sr) |
 // | L      | Lv interpolated perspective-correctly at the pixel centre     | W/(m^2 sr) |
 // One-sided like the estimators' tangent-plane side: L is seen only where (E - P) . n > 0.
-
-struct GouraudCamera {
-    view_projection: mat4x4f,
-    position: vec4f,
-}
-
-@group(0) @binding(0) var<uniform> camera: GouraudCamera;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -27,6 +20,7 @@ struct VertexOutput {
     @location(1) normal: vec3f,
     // Perspective-correct (the WGSL default), so L is linear in world space across the triangle.
     @location(2) @interpolate(perspective, center) radiance: vec3f,
+    //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
 }
 
 @vertex
@@ -36,7 +30,8 @@ fn vs_main(
     @location(4) radiance: vec3f,
 ) -> VertexOutput {
     var out: VertexOutput;
-    out.clip = camera.view_projection * vec4f(position, 1.0);
+    out.clip = view.view_projection * vec4f(position, 1.0);
+    //clip_distances: out.clip_distances[0] = view_clip_distance(position);
     out.world = position;
     out.normal = normal;
     out.radiance = radiance;
@@ -45,7 +40,7 @@ fn vs_main(
 
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
-    if dot(camera.position.xyz - in.world, in.normal) <= 0.0 {
+    if dot(view.eye.xyz - in.world, in.normal) <= 0.0 {
         discard;
     }
     return vec4f(in.radiance, 0.0);

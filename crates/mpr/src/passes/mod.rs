@@ -9,5 +9,6 @@ pub mod gouraud;
 pub mod redraw;
 pub mod shadow;
 pub mod shadow_volume;
+pub mod specular;
 pub mod splat;
 pub mod tonemap;

@@ -1,10 +1,126 @@
-//! The render pass shared by the passes that redraw the scene over the depth
-//! pre-pass (Diefenbach & Badler 1997, section 7.2): load and add into the
-//! HDR target, test against the pre-pass's depth without writing it.
+//! What every scene pass shares (Diefenbach & Badler 1997, sections 7.1 and
+//! 7.2): the render pass that adds into the HDR target over the depth
+//! pre-pass, additive blending, the stencil test against the view's
+//! reference, the shader module specialised for the device's clipping, and
+//! the pipeline whose group 0 is the view ([`crate::view`]).
 
+use crate::GpuContext;
+use crate::scene_buffers::GpuVertex;
 use crate::target::RenderTargets;
 
-/// Begins a pass that adds into `targets.hdr` with `targets.depth` attached read-only.
+/// Additive blending `dst + src` on colour (light accumulation, section 7.2); alpha keeps `OVER`.
+pub const ADDITIVE: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent::OVER,
+};
+
+/// The stencil test of a pass drawn under a view: pass where the stencil equals
+/// the view's reference (its recursion level, section 7.3), never write it.
+pub fn view_stencil() -> wgpu::StencilState {
+    let face = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Equal,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: wgpu::StencilOperation::Keep,
+    };
+    wgpu::StencilState {
+        front: face,
+        back: face,
+        read_mask: 0xff,
+        write_mask: 0,
+    }
+}
+
+/// A scene pass's shader module: `source` (its complete WGSL, view block
+/// included) specialised for the device's user clip distances.
+pub fn scene_module(ctx: &GpuContext, label: &str, source: &str) -> wgpu::ShaderModule {
+    ctx.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(ctx.scene_wgsl(source).into()),
+        })
+}
+
+/// What differs between the pipelines that draw the scene under a view.
+#[derive(Debug)]
+pub struct ScenePipeline<'a> {
+    /// Debug label.
+    pub label: &'a str,
+    /// The module ([`scene_module`]) with `vs_main` and `fs_main`.
+    pub module: &'a wgpu::ShaderModule,
+    /// The pass's own bind group layouts, groups 1 and up (group 0 is the view).
+    pub layouts: &'a [&'a wgpu::BindGroupLayout],
+    /// Vertex buffers after the scene's [`GpuVertex::LAYOUT`] at slot 0.
+    pub extra_vertex_buffers: &'a [wgpu::VertexBufferLayout<'a>],
+    /// The one colour target.
+    pub target: wgpu::ColorTargetState,
+    /// Depth test (`Equal` for redraws over the pre-pass).
+    pub depth_compare: wgpu::CompareFunction,
+    /// Whether the pass writes depth.
+    pub depth_write: bool,
+}
+
+/// A triangle-list pipeline over the scene's vertices, cull none, under the
+/// view's stencil test ([`view_stencil`]), group 0 the view.
+pub fn scene_pipeline(ctx: &GpuContext, desc: &ScenePipeline<'_>) -> wgpu::RenderPipeline {
+    let device = &ctx.device;
+    let mut layouts = vec![Some(ctx.view_layout())];
+    layouts.extend(desc.layouts.iter().map(|l| Some(*l)));
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(desc.label),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    let mut buffers = vec![Some(GpuVertex::LAYOUT)];
+    buffers.extend(desc.extra_vertex_buffers.iter().cloned().map(Some));
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(desc.label),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: desc.module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: ctx.depth_format(),
+            depth_write_enabled: Some(desc.depth_write),
+            depth_compare: Some(desc.depth_compare),
+            stencil: view_stencil(),
+            bias: wgpu::DepthBiasState::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: desc.module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(desc.target.clone())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// An additive colour target of `format` (section 7.2).
+pub fn additive_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
+    wgpu::ColorTargetState {
+        format,
+        blend: Some(ADDITIVE),
+        write_mask: wgpu::ColorWrites::ALL,
+    }
+}
+
+/// Begins a pass that adds into `targets.hdr` with `targets.depth` attached
+/// read-only (depth and stencil loaded, neither written).
 pub fn begin_over_depth<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     targets: &RenderTargets,

@@ -17,8 +17,9 @@ use lustre_photon::{Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, Sur
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
-use crate::shaders::{DEPTH_WGSL, with_materials};
+use crate::shaders::{DEPTH_WGSL, with_materials, with_view};
 use crate::target::RenderTargets;
+use crate::view::{View, ViewUniforms};
 use crate::{GpuContext, MprError, Result};
 
 /// The splat WGSL (`src/passes/splat.wgsl`), without the material prefix.
@@ -418,6 +419,8 @@ pub struct SplatPass {
     splat_stencil: Option<wgpu::RenderPipeline>,
     mask: Option<wgpu::RenderPipeline>,
     uniforms: wgpu::Buffer,
+    /// The view block of the stencil mask's depth redraw.
+    mask_view: wgpu::Buffer,
     kernel_view: wgpu::TextureView,
     sampler: wgpu::Sampler,
     kernel: Kernel,
@@ -484,7 +487,8 @@ impl SplatPass {
             });
             let depth_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("splat-mask-depth"),
-                source: wgpu::ShaderSource::Wgsl(DEPTH_WGSL.into()),
+                // The depth pre-pass's shader over the splat pass's own view block, unclipped (level 0).
+                source: wgpu::ShaderSource::Wgsl(with_view(DEPTH_WGSL).into()),
             });
             let storage = |binding| wgpu::BindGroupLayoutEntry {
                 binding,
@@ -548,7 +552,16 @@ impl SplatPass {
             });
             let mask_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("splat-mask"),
-                entries: &[uniform_entry],
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<ViewUniforms>() as u64),
+                    },
+                    count: None,
+                }],
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("splat"),
@@ -643,6 +656,12 @@ impl SplatPass {
             } else {
                 (None, None)
             };
+            let mask_view = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat-mask-view"),
+                size: size_of::<ViewUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat-uniforms"),
                 size: size_of::<SplatUniforms>() as u64,
@@ -668,6 +687,7 @@ impl SplatPass {
                 splat_stencil,
                 mask,
                 uniforms,
+                mask_view,
                 kernel_view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
                 sampler,
                 kernel,
@@ -680,11 +700,14 @@ impl SplatPass {
         self.mask.is_some()
     }
 
-    /// Writes the camera and the kernel filtering for the next [`SplatPass::encode`].
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera, filtering: KernelFiltering) {
+    /// Writes the view's camera and the kernel filtering for the next
+    /// [`SplatPass::encode`]. Splats carry their own camera block and are drawn
+    /// in the camera's own view only (level 0): their stencil restriction
+    /// method uses the stencil the specular recursion needs.
+    pub fn prepare(&self, queue: &wgpu::Queue, view: &View, filtering: KernelFiltering) {
         let uniforms = SplatUniforms {
-            view_projection: camera.view_projection().to_cols_array_2d(),
-            eye: camera.position.extend(1.0).to_array(),
+            view_projection: view.view_projection().to_cols_array_2d(),
+            eye: view.eye.extend(1.0).to_array(),
             options: [
                 u32::from(filtering == KernelFiltering::MipMapped),
                 u32::from(self.kernel == Kernel::Gaussian),
@@ -693,6 +716,7 @@ impl SplatPass {
             ],
         };
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+        queue.write_buffer(&self.mask_view, 0, bytemuck::bytes_of(&view.uniforms()));
     }
 
     /// Records the pass after the depth pre-pass: adds every splat into `targets.hdr`, restricted by `restriction`.
@@ -766,7 +790,7 @@ impl SplatPass {
                     layout: &self.mask_layout,
                     entries: &[wgpu::BindGroupEntry {
                         binding: 0,
-                        resource: self.uniforms.as_entire_binding(),
+                        resource: self.mask_view.as_entire_binding(),
                     }],
                 });
                 // Stencil references 1..=255 name the surfaces of one render

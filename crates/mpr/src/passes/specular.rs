@@ -1,0 +1,588 @@
+//! Specular images of planar mirror faces (Diefenbach & Badler 1997,
+//! sections 3 and 7.1, 7.3): `mask_face` draws a face with the depth test
+//! into the stencil (level `k` → `k + 1`), the depth inside the mask is
+//! reset to far, the whole scene is drawn again from the virtual camera of
+//! the mirror transform only where the stencil holds `k + 1` (recursively,
+//! depth first, the recursion depth kept in the stencil values), and the
+//! face is restored: its depth and surface id written back, the stencil
+//! popped to `k`, the image inside multiplied by the mirror's reflectance.
+//! Geometry on the far side of the face is clipped ([`crate::view`]).
+//!
+//! At the recursion limit a face shows `R · L_lim` rather than black:
+//! [`SpecularSettings::limit_radiance`], by default the radiance of a white
+//! Lambertian surface under the scene's mean first-bounce irradiance
+//! ([`mean_radiance`]) — the paper's constant ambient term (section 7.4)
+//! standing in for the images not drawn.
+//!
+//! CPU twin: the views of [`ViewTree`] are checked against ray casts through
+//! the mirrors (`tests/specular.rs`).
+
+use std::ops::Range;
+
+use glam::Vec3;
+use lustre_geometry::SurfaceKind;
+use lustre_geometry::material::MaterialModel;
+use lustre_geometry::{Plane, Scene};
+use wgpu::util::DeviceExt;
+
+use crate::passes::redraw::{additive_target, scene_module, view_stencil};
+use crate::scene_buffers::{GpuVertex, SceneBuffers};
+use crate::shaders::with_view;
+use crate::target::{RenderTargets, SURFACE_ID_FORMAT};
+use crate::view::{ClipMethod, View, ViewBuffer, ViewSlot};
+use crate::{GpuContext, MprError, Result};
+
+/// The specular pass's own WGSL (`src/passes/specular.wgsl`); compiled after the view block.
+pub const SPECULAR_WGSL: &str = include_str!("specular.wgsl");
+
+/// The most views one frame may hold (`n^d` grows fast, equation 8).
+pub const MAX_VIEWS: usize = 4096;
+
+/// How deep specular images recurse and what a face shows at the limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpecularSettings {
+    /// Recursion depth `d` (section 8.2): 0 draws no specular image.
+    pub max_depth: u32,
+    /// `L_lim`, the radiance a face reflects at the limit (W/(m² sr), RGB).
+    pub limit_radiance: Vec3,
+    /// The clip method; `None` takes the device's ([`GpuContext::clip_method`]).
+    pub clip: Option<ClipMethod>,
+}
+
+impl Default for SpecularSettings {
+    fn default() -> Self {
+        Self {
+            max_depth: 2,
+            limit_radiance: Vec3::ZERO,
+            clip: None,
+        }
+    }
+}
+
+/// The radiance `Φ / (π A)` of a white Lambertian surface receiving the
+/// scene's emitted power `Φ` spread over its total surface area `A`: the
+/// default [`SpecularSettings::limit_radiance`].
+pub fn mean_radiance(scene: &Scene) -> Vec3 {
+    let area: f32 = scene.surfaces().iter().map(|s| s.area).sum();
+    if area <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let power = scene.total_power();
+    Vec3::new(power.x, power.y, power.z) / (std::f32::consts::PI * area)
+}
+
+/// One planar mirror face: a scene surface with a [`MaterialModel::Mirror`] material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpecularFace {
+    /// Its `SurfaceId`.
+    pub surface: u32,
+    /// Its plane; the mirror reflects on the side its normal points to.
+    pub plane: Plane,
+}
+
+/// The mirror faces of `scene`: planar surfaces whose material is a mirror.
+pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
+    scene
+        .surfaces()
+        .iter()
+        .enumerate()
+        .filter_map(|(id, surface)| {
+            let SurfaceKind::Planar(plane) = surface.kind else {
+                return None;
+            };
+            let material = &scene.materials()[surface.material as usize];
+            matches!(material.model, MaterialModel::Mirror { .. }).then(|| SpecularFace {
+                surface: id as u32,
+                plane,
+            })
+        })
+        .collect()
+}
+
+/// The views of one frame in depth-first order and, per view, the faces
+/// recursed into with the index of the child view (section 7.1,
+/// `draw_spec_objects`), or the faces at the recursion limit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewTree {
+    /// Every view; index 0 is the camera.
+    pub views: Vec<View>,
+    /// Per view: `(face index, child view index)` for each face it recurses into.
+    pub children: Vec<Vec<(usize, usize)>>,
+    /// Per view: faces it sees at the recursion limit.
+    pub limit_faces: Vec<Vec<usize>>,
+}
+
+impl ViewTree {
+    /// The tree of a frame without specular faces: the camera alone.
+    pub fn single(root: View) -> Self {
+        Self {
+            views: vec![root],
+            children: vec![Vec::new()],
+            limit_faces: vec![Vec::new()],
+        }
+    }
+
+    /// The tree of `faces` seen from `root` to depth `max_depth`: a face
+    /// recurses where its mirror side faces the view's eye (the eye of a
+    /// virtual view lies behind its own face, so no face recurses into itself).
+    pub fn build(
+        root: View,
+        faces: &[SpecularFace],
+        max_depth: u32,
+        clip: ClipMethod,
+    ) -> Result<Self> {
+        let mut tree = Self::single(root);
+        tree.grow(0, faces, max_depth, clip)?;
+        Ok(tree)
+    }
+
+    fn grow(
+        &mut self,
+        index: usize,
+        faces: &[SpecularFace],
+        max_depth: u32,
+        clip: ClipMethod,
+    ) -> Result<()> {
+        let view = self.views[index];
+        for (f, face) in faces.iter().enumerate() {
+            if face.plane.signed_distance(view.eye) <= 0.0 {
+                continue;
+            }
+            if view.level >= max_depth {
+                self.limit_faces[index].push(f);
+                continue;
+            }
+            if self.views.len() >= MAX_VIEWS {
+                return Err(MprError::InvalidSetting {
+                    what: "specular recursion",
+                    message: format!(
+                        "more than {MAX_VIEWS} views: lower the recursion depth (now {max_depth})"
+                    ),
+                });
+            }
+            let child = self.views.len();
+            self.views.push(view.reflected(&face.plane, clip));
+            self.children.push(Vec::new());
+            self.limit_faces.push(Vec::new());
+            self.children[index].push((f, child));
+            self.grow(child, faces, max_depth, clip)?;
+        }
+        Ok(())
+    }
+
+    /// Scene renderings per frame: one per view (the paper's "scene iterations" of table 3).
+    pub fn scene_passes(&self) -> usize {
+        self.views.len()
+    }
+}
+
+/// The range of `face`'s triangles in [`SceneBuffers::surface_indices`].
+fn face_indices(scene: &SceneBuffers, face: &SpecularFace) -> Range<u32> {
+    scene
+        .surface_ranges
+        .get(face.surface as usize)
+        .cloned()
+        .unwrap_or(0..0)
+}
+
+/// The per-surface record of `specular.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuFace {
+    reflectance: [f32; 4],
+}
+
+/// The GPU specular pass for one scene's mirror faces.
+#[derive(Debug)]
+pub struct SpecularPass {
+    faces: Vec<SpecularFace>,
+    settings: SpecularSettings,
+    mask: wgpu::RenderPipeline,
+    reset: wgpu::RenderPipeline,
+    restore: wgpu::RenderPipeline,
+    limit: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+}
+
+/// A stencil state comparing `Equal` and applying `pass_op` where both tests pass.
+fn stencil_equal(pass_op: wgpu::StencilOperation) -> wgpu::StencilState {
+    let face = wgpu::StencilFaceState {
+        compare: wgpu::CompareFunction::Equal,
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op,
+    };
+    wgpu::StencilState {
+        front: face,
+        back: face,
+        read_mask: 0xff,
+        write_mask: 0xff,
+    }
+}
+
+impl SpecularPass {
+    /// Builds the pipelines for `scene`'s mirror faces and HDR targets of `hdr_format`.
+    pub fn new(
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &Scene,
+        settings: SpecularSettings,
+    ) -> Result<Self> {
+        if settings.max_depth > 120 {
+            return Err(MprError::InvalidSetting {
+                what: "specular recursion depth",
+                message: format!(
+                    "{} exceeds the 120 levels the lower half of the stencil holds (section 7.3)",
+                    settings.max_depth
+                ),
+            });
+        }
+        if !settings.limit_radiance.is_finite() || settings.limit_radiance.min_element() < 0.0 {
+            return Err(MprError::InvalidSetting {
+                what: "specular limit radiance",
+                message: format!("{} is not a finite radiance", settings.limit_radiance),
+            });
+        }
+        let faces = specular_faces(scene);
+        let mut records: Vec<GpuFace> = scene
+            .surfaces()
+            .iter()
+            .map(|s| {
+                let material = &scene.materials()[s.material as usize];
+                match material.model {
+                    MaterialModel::Mirror { reflectance } => GpuFace {
+                        reflectance: [reflectance.x, reflectance.y, reflectance.z, 1.0],
+                    },
+                    _ => GpuFace {
+                        reflectance: [0.0; 4],
+                    },
+                }
+            })
+            .collect();
+        if records.is_empty() {
+            records.push(GpuFace {
+                reflectance: [0.0; 4],
+            });
+        }
+        let depth_format = ctx.depth_format();
+        ctx.checked("specular pass creation", || {
+            let device = &ctx.device;
+            let module = scene_module(ctx, "specular", &with_view(SPECULAR_WGSL));
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("specular"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Storage { read_only: true },
+                            has_dynamic_offset: false,
+                            min_binding_size: None,
+                        },
+                        count: None,
+                    },
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 1,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: None,
+                        },
+                        count: None,
+                    },
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("specular"),
+                bind_group_layouts: &[Some(ctx.view_layout()), Some(&layout)],
+                immediate_size: 0,
+            });
+            let primitive = wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                cull_mode: None,
+                ..Default::default()
+            };
+            let vertex = |entry: &'static str, buffers: bool| wgpu::VertexState {
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                buffers: if buffers {
+                    &[Some(GpuVertex::LAYOUT)]
+                } else {
+                    &[]
+                },
+            };
+            let depth = |compare, write, stencil| {
+                Some(wgpu::DepthStencilState {
+                    format: depth_format,
+                    depth_write_enabled: Some(write),
+                    depth_compare: Some(compare),
+                    stencil,
+                    bias: wgpu::DepthBiasState::default(),
+                })
+            };
+            // mask_face: where the face is the visible surface of level k, k -> k + 1.
+            let mask = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("specular-mask"),
+                layout: Some(&pipeline_layout),
+                vertex: vertex("vs_main", true),
+                primitive,
+                depth_stencil: depth(
+                    wgpu::CompareFunction::Equal,
+                    false,
+                    stencil_equal(wgpu::StencilOperation::IncrementClamp),
+                ),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            });
+            // Depth inside the mask back to far, so the virtual view's depth pass starts clean.
+            let reset = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("specular-reset"),
+                layout: Some(&pipeline_layout),
+                vertex: vertex("vs_far", false),
+                primitive,
+                depth_stencil: depth(
+                    wgpu::CompareFunction::Always,
+                    true,
+                    stencil_equal(wgpu::StencilOperation::Keep),
+                ),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            });
+            // The face restored at level k: depth and id written back, k + 1 -> k,
+            // the image drawn inside scaled by R (blend: dst * src).
+            let restore = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("specular-restore"),
+                layout: Some(&pipeline_layout),
+                vertex: vertex("vs_main", true),
+                primitive,
+                depth_stencil: depth(
+                    wgpu::CompareFunction::Always,
+                    true,
+                    stencil_equal(wgpu::StencilOperation::DecrementClamp),
+                ),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_restore"),
+                    compilation_options: Default::default(),
+                    targets: &[
+                        Some(wgpu::ColorTargetState {
+                            format: hdr_format,
+                            blend: Some(wgpu::BlendState {
+                                color: wgpu::BlendComponent {
+                                    src_factor: wgpu::BlendFactor::Zero,
+                                    dst_factor: wgpu::BlendFactor::Src,
+                                    operation: wgpu::BlendOperation::Add,
+                                },
+                                alpha: wgpu::BlendComponent {
+                                    src_factor: wgpu::BlendFactor::Zero,
+                                    dst_factor: wgpu::BlendFactor::One,
+                                    operation: wgpu::BlendOperation::Add,
+                                },
+                            }),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                        Some(wgpu::ColorTargetState {
+                            format: SURFACE_ID_FORMAT,
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        }),
+                    ],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            let limit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("specular-limit"),
+                layout: Some(&pipeline_layout),
+                vertex: vertex("vs_main", true),
+                primitive,
+                depth_stencil: depth(wgpu::CompareFunction::Equal, false, view_stencil()),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_limit"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(additive_target(hdr_format))],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            let faces_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("specular-faces"),
+                contents: bytemuck::cast_slice(&records),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("specular-uniforms"),
+                contents: bytemuck::cast_slice(&settings.limit_radiance.extend(0.0).to_array()),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("specular"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: faces_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: uniforms.as_entire_binding(),
+                    },
+                ],
+            });
+            Self {
+                faces,
+                settings,
+                mask,
+                reset,
+                restore,
+                limit,
+                bind_group,
+            }
+        })
+    }
+
+    /// The mirror faces.
+    pub fn faces(&self) -> &[SpecularFace] {
+        &self.faces
+    }
+
+    /// The settings the pass was built with.
+    pub fn settings(&self) -> &SpecularSettings {
+        &self.settings
+    }
+
+    /// The views of a frame seen from `root` ([`ViewTree::build`]) with `clip` the device's method unless the settings name one.
+    pub fn view_tree(&self, root: View, device_clip: ClipMethod) -> Result<ViewTree> {
+        ViewTree::build(
+            root,
+            &self.faces,
+            self.settings.max_depth,
+            self.settings.clip.unwrap_or(device_clip),
+        )
+    }
+
+    fn depth_stencil_pass<'e>(
+        encoder: &'e mut wgpu::CommandEncoder,
+        targets: &RenderTargets,
+        colour: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+        label: &str,
+    ) -> wgpu::RenderPass<'e> {
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: colour,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth.view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
+
+    /// `mask_face` of `face` in the view `outer` (stencil `k` → `k + 1` where
+    /// the face is visible), then the depth inside the new mask reset to far.
+    pub fn encode_mask(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        outer: ViewSlot,
+        face: usize,
+    ) {
+        let face = &self.faces[face];
+        let mut pass = Self::depth_stencil_pass(encoder, targets, &[], "specular-mask");
+        pass.set_pipeline(&self.mask);
+        views.bind(&mut pass, 0, outer);
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(face_indices(scene, face), 0, 0..1);
+        pass.set_pipeline(&self.reset);
+        pass.set_stencil_reference(outer.stencil_reference + 1);
+        pass.draw(0..3, 0..1);
+    }
+
+    /// Restores `face` in the view `outer` after its image was drawn: depth
+    /// and surface id written back, stencil `k + 1` → `k`, the image scaled by R.
+    pub fn encode_restore(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        outer: ViewSlot,
+        face: usize,
+    ) {
+        let face = &self.faces[face];
+        let colour = [
+            Some(wgpu::RenderPassColorAttachment {
+                view: &targets.hdr.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            }),
+            Some(wgpu::RenderPassColorAttachment {
+                view: &targets.surface_id.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            }),
+        ];
+        let mut pass = Self::depth_stencil_pass(encoder, targets, &colour, "specular-restore");
+        pass.set_pipeline(&self.restore);
+        views.bind(&mut pass, 0, outer);
+        pass.set_stencil_reference(outer.stencil_reference + 1);
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(face_indices(scene, face), 0, 0..1);
+    }
+
+    /// Adds `R · L_lim` on the faces a view at the recursion limit sees.
+    pub fn encode_limit(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+        faces: &[usize],
+    ) {
+        if faces.is_empty() || self.settings.limit_radiance == Vec3::ZERO {
+            return;
+        }
+        let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "specular-limit");
+        pass.set_pipeline(&self.limit);
+        views.bind(&mut pass, 0, slot);
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);
+        for &f in faces {
+            pass.draw_indexed(face_indices(scene, &self.faces[f]), 0, 0..1);
+        }
+    }
+}

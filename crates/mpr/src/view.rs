@@ -1,0 +1,292 @@
+//! The view every pass draws under (Diefenbach & Badler 1997, sections 3 and
+//! 7.1): a camera (view and projection, eye), the stencil reference that
+//! masks where the view may draw, an optional clip plane that removes the
+//! geometry in front of a specular face, and the recursion level. The views
+//! of one frame live in one uniform buffer read at dynamic offsets
+//! ([`ViewBuffer`]), so a single submission can hold the primary camera and
+//! every virtual camera of the specular recursion.
+
+use glam::{Mat4, Vec3, Vec4};
+use lustre_geometry::Camera;
+use lustre_geometry::Plane;
+
+use crate::{GpuContext, MprError, Result};
+
+/// How geometry on the far side of a clip plane is removed (section 3: "clip away geometry").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ClipMethod {
+    /// User clip distances in the vertex stage (`CLIP_DISTANCES`), where the adapter has them.
+    #[default]
+    Hardware,
+    /// The projection's near plane replaced by the clip plane (Lengyel's oblique
+    /// frustum, derived for reverse Z with an infinite far plane in
+    /// [`oblique_near_plane`]); works on every adapter.
+    ObliqueNearPlane,
+}
+
+/// One camera of a frame and how its passes are masked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    /// World to view (may be a mirror transform, determinant -1).
+    pub view: Mat4,
+    /// View to clip, reverse Z ([`Camera::projection_matrix`]), possibly oblique.
+    pub projection: Mat4,
+    /// The eye the passes shade for (the virtual eye of a specular image).
+    pub eye: Vec3,
+    /// World-space plane `(n, w)`: a point `p` is kept where `n·p + w >= 0`.
+    /// Evaluated by the vertex stage when the clip method is
+    /// [`ClipMethod::Hardware`]; already folded into `projection` otherwise.
+    pub clip_plane: Option<Vec4>,
+    /// Stencil value of the pixels this view may draw (its recursion level,
+    /// or `SHAD_ZERO` while lights are added under shadow volumes).
+    pub stencil_reference: u32,
+    /// Depth of specular recursion: 0 for the camera itself (section 7.1).
+    pub level: u32,
+}
+
+impl View {
+    /// The view of a real camera: level 0, stencil 0, no clip plane.
+    pub fn from_camera(camera: &Camera) -> Self {
+        Self {
+            view: camera.view_matrix(),
+            projection: camera.projection_matrix(),
+            eye: camera.position,
+            clip_plane: None,
+            stencil_reference: 0,
+            level: 0,
+        }
+    }
+
+    /// World to clip.
+    pub fn view_projection(&self) -> Mat4 {
+        self.projection * self.view
+    }
+
+    /// Whether the view matrix mirrors (determinant < 0): triangles wind the other way.
+    pub fn is_mirrored(&self) -> bool {
+        self.view.determinant() < 0.0
+    }
+
+    /// The virtual view behind the planar mirror `plane` (section 3, the
+    /// beam-tracing reflection of Heckbert & Hanrahan): the view matrix
+    /// composed with the mirror transform, the eye reflected, one level
+    /// deeper with stencil reference `level + 1`, and everything on the eye's
+    /// side of the mirror clipped away by `method`.
+    pub fn reflected(&self, plane: &Plane, method: ClipMethod) -> Self {
+        // World points are drawn through `view * R`, so the image shows `R p`.
+        // What the mirror reflects lies on the eye's side of it; anything on the
+        // far side would land between the virtual eye and the face once mirrored.
+        let distance = plane.signed_distance(self.eye);
+        let side = if distance >= 0.0 { 1.0 } else { -1.0 };
+        // The face itself lies on the plane and would hide its own image: the
+        // kept half space starts a hair in front of it (1e-4 of the eye's distance).
+        let keep = plane.to_vec4() * side - Vec4::W * (1e-4 * distance.abs());
+        Self {
+            view: self.view * plane.reflection_matrix(),
+            projection: self.projection,
+            eye: plane.reflect_point(self.eye),
+            clip_plane: None,
+            stencil_reference: self.stencil_reference + 1,
+            level: self.level + 1,
+        }
+        .with_clip_plane(keep, method)
+    }
+
+    /// Clips away world points with `plane · (p, 1) < 0` by `method`.
+    pub fn with_clip_plane(mut self, plane: Vec4, method: ClipMethod) -> Self {
+        match method {
+            ClipMethod::Hardware => self.clip_plane = Some(plane),
+            ClipMethod::ObliqueNearPlane => {
+                // The plane in view space: p_world = view⁻¹ p_view.
+                let view_plane = self.view.inverse().transpose() * plane;
+                self.projection = oblique_near_plane(self.projection, view_plane);
+                self.clip_plane = None;
+            }
+        }
+        self
+    }
+
+    /// The GPU block of this view ([`ViewUniforms`]).
+    pub fn uniforms(&self) -> ViewUniforms {
+        ViewUniforms {
+            view_projection: self.view_projection().to_cols_array_2d(),
+            eye: self.eye.extend(1.0).to_array(),
+            // (0, 0, 0, 1) keeps every point.
+            clip_plane: self.clip_plane.unwrap_or(Vec4::W).to_array(),
+            level: [self.level, self.stencil_reference, 0, 0],
+        }
+    }
+
+    /// Whether world point `p` survives this view's clipping (hardware plane and projection).
+    pub fn keeps(&self, p: Vec3) -> bool {
+        let clip = self.view_projection() * p.extend(1.0);
+        let plane_ok = self.clip_plane.is_none_or(|c| c.dot(p.extend(1.0)) >= 0.0);
+        plane_ok && clip.w > 0.0 && clip.z <= clip.w && clip.z >= 0.0
+    }
+}
+
+/// Lengyel's oblique near plane for a reverse-Z projection with an infinite
+/// far plane: the projection's depth row is replaced so that depth reaches 1
+/// (the near plane) exactly on `view_plane` (view space, `(n, w)`, kept side
+/// `n·v + w >= 0`), and depth stays in [0, 1] for every kept point in front
+/// of the eye. With `w_clip = -z_v`, the new depth row is `w_row - a·plane`:
+/// depth `1 - a (n·v + w) / (-z_v)`. Along a view ray `v = t d` this is
+/// `1 - a (n·d)/(-d_z) - a w / (t (-d_z))`, so it decreases with `t` when
+/// `w < 0` (the eye on the clipped side, as a virtual eye behind its face
+/// always is), and stays `>= 0` at infinity when `a (n·d) <= -d_z` for every
+/// direction of the frustum; `a` is the largest scale meeting that at the
+/// frustum's four corner directions (the bound is linear in `d`, so the corners
+/// suffice), times 0.999.
+pub fn oblique_near_plane(projection: Mat4, view_plane: Vec4) -> Mat4 {
+    let rows = projection.transpose();
+    let w_row = rows.w_axis;
+    // Frustum corner directions in view space from the inverse projection.
+    let inverse = projection.inverse();
+    let mut scale = f32::INFINITY;
+    for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+        // A point at depth 0.5 on the corner ray gives its direction.
+        let p = inverse * Vec4::new(x, y, 0.5, 1.0);
+        let d = (p.truncate() / p.w).normalize();
+        let along = view_plane.truncate().dot(d);
+        if along > 0.0 {
+            scale = scale.min(-d.z / along);
+        }
+    }
+    if !scale.is_finite() {
+        // The plane's normal faces away from every frustum direction: any
+        // positive scale keeps depth in range; pick one of the plane's size.
+        scale = 1.0 / view_plane.truncate().length().max(f32::MIN_POSITIVE);
+    }
+    let new_z = w_row - 0.999 * scale * view_plane;
+    Mat4::from_cols(rows.x_axis, rows.y_axis, new_z, w_row).transpose()
+}
+
+/// The GPU block of one view (`View` in `shaders/common/view.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ViewUniforms {
+    /// Column-major world-to-clip matrix.
+    pub view_projection: [[f32; 4]; 4],
+    /// Eye position, w = 1.
+    pub eye: [f32; 4],
+    /// World clip plane; (0, 0, 0, 1) when none.
+    pub clip_plane: [f32; 4],
+    /// `x` recursion level, `y` stencil reference, `zw` zero.
+    pub level: [u32; 4],
+}
+
+/// The bind group layout of group 0 of every scene pass: one [`ViewUniforms`] at a dynamic offset.
+pub fn view_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("view"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(size_of::<ViewUniforms>() as u64),
+            },
+            count: None,
+        }],
+    })
+}
+
+/// Where one view's block lies in a [`ViewBuffer`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ViewSlot {
+    /// Byte offset of the block (a multiple of the device's uniform offset alignment).
+    pub offset: u32,
+    /// Its stencil reference.
+    pub stencil_reference: u32,
+}
+
+/// The views of a frame in one uniform buffer with one bind group read at dynamic offsets.
+#[derive(Debug)]
+pub struct ViewBuffer {
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    stride: u64,
+    capacity: usize,
+}
+
+impl ViewBuffer {
+    /// A buffer with room for `capacity` views (grown by [`ViewBuffer::write`] when needed).
+    pub fn new(ctx: &GpuContext, capacity: usize) -> Self {
+        let alignment = u64::from(ctx.device.limits().min_uniform_buffer_offset_alignment);
+        let stride = (size_of::<ViewUniforms>() as u64).div_ceil(alignment) * alignment;
+        let capacity = capacity.max(1);
+        let (buffer, bind_group) = Self::allocate(ctx, stride, capacity);
+        Self {
+            buffer,
+            bind_group,
+            stride,
+            capacity,
+        }
+    }
+
+    fn allocate(ctx: &GpuContext, stride: u64, capacity: usize) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("views"),
+            size: stride * capacity as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("views"),
+            layout: ctx.view_layout(),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<ViewUniforms>() as u64),
+                }),
+            }],
+        });
+        (buffer, bind_group)
+    }
+
+    /// A buffer holding the one view of `camera`, and its slot (for passes drawn outside a [`crate::FrameGraph`]).
+    pub fn for_camera(ctx: &GpuContext, camera: &Camera) -> Result<(Self, ViewSlot)> {
+        let mut views = Self::new(ctx, 1);
+        let slots = views.write(ctx, &[View::from_camera(camera)])?;
+        Ok((views, slots[0]))
+    }
+
+    /// Writes `views` (applied at the next submit) and returns their slots, in order.
+    pub fn write(&mut self, ctx: &GpuContext, views: &[View]) -> Result<Vec<ViewSlot>> {
+        if views.len() > self.capacity {
+            let capacity = views.len().next_power_of_two();
+            let (buffer, bind_group) = Self::allocate(ctx, self.stride, capacity);
+            self.buffer = buffer;
+            self.bind_group = bind_group;
+            self.capacity = capacity;
+        }
+        let mut bytes = vec![0u8; (self.stride as usize) * views.len()];
+        let mut slots = Vec::with_capacity(views.len());
+        for (i, view) in views.iter().enumerate() {
+            let offset = i * self.stride as usize;
+            let block = view.uniforms();
+            bytes[offset..offset + size_of::<ViewUniforms>()]
+                .copy_from_slice(bytemuck::bytes_of(&block));
+            slots.push(ViewSlot {
+                offset: u32::try_from(offset).map_err(|_| MprError::InvalidSetting {
+                    what: "views",
+                    message: format!("{} views exceed a 4 GiB uniform buffer", views.len()),
+                })?,
+                stencil_reference: view.stencil_reference,
+            });
+        }
+        if !bytes.is_empty() {
+            ctx.queue.write_buffer(&self.buffer, 0, &bytes);
+        }
+        Ok(slots)
+    }
+
+    /// Binds the view of `slot` at `group` and sets its stencil reference.
+    pub fn bind(&self, pass: &mut wgpu::RenderPass<'_>, group: u32, slot: ViewSlot) {
+        pass.set_bind_group(group, &self.bind_group, &[slot.offset]);
+        pass.set_stencil_reference(slot.stencil_reference);
+    }
+}
