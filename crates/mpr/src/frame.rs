@@ -23,6 +23,7 @@ use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
 use crate::passes::direct::{DirectLights, DirectPass};
 use crate::passes::emission::EmissionPass;
 use crate::passes::gouraud::GouraudPass;
+use crate::passes::shadowed_direct::{ShadowVolumes, ShadowedDirect};
 use crate::passes::specular::{SpecularPass, SpecularSettings, ViewTree};
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
 use crate::passes::tonemap::{Tonemap, TonemapPass};
@@ -151,6 +152,8 @@ pub struct FrameGraph {
     pub accumulate: Option<AccumulatePass>,
     /// Stencilled specular images of mirror faces ([`FrameGraph::with_specular`]).
     pub specular: Option<SpecularPass>,
+    /// Shadow volumes replacing the direct pass's shadow maps ([`FrameGraph::with_shadow_volumes`]).
+    pub shadow_volumes: Option<ShadowVolumes>,
     /// The final tone map.
     pub tonemap: TonemapPass,
     /// The frame's views (camera, virtual cameras), rewritten every frame.
@@ -169,6 +172,7 @@ impl FrameGraph {
             splat: None,
             accumulate: None,
             specular: None,
+            shadow_volumes: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
         })
@@ -229,6 +233,47 @@ impl FrameGraph {
     ) -> Result<Self> {
         self.direct = Some(DirectPass::new(ctx, hdr_format)?);
         Ok(self)
+    }
+
+    /// Shadows the direct light with shadow volumes instead of shadow maps
+    /// (Diefenbach & Badler 1997, sections 4.1 and 7.2): the volumes of every
+    /// object of `scene` for each of `lights` (the point lights the frame's
+    /// [`DirectLights`] hold, in order), for HDR targets of `hdr_format`. Each
+    /// view's direct light is then, per light, the volume count in the
+    /// stencil and the light added where it is zero ([`ShadowedDirect`]).
+    /// Needs [`FrameGraph::with_direct`] for the frame's direct light.
+    pub fn with_shadow_volumes(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &lustre_geometry::Scene,
+        lights: &[lustre_geometry::Light],
+    ) -> Result<Self> {
+        self.shadow_volumes = Some(ShadowVolumes::new(ctx, hdr_format, scene, lights)?);
+        Ok(self)
+    }
+
+    /// Rebuilds and re-uploads the shadow volumes of the objects and lights
+    /// that moved (section 4.3; [`ShadowVolumes::refresh`]); returns the
+    /// number of volumes rebuilt, 0 without shadow volumes.
+    pub fn update_shadow_volumes(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &lustre_geometry::Scene,
+        lights: &[lustre_geometry::Light],
+    ) -> Result<usize> {
+        match &mut self.shadow_volumes {
+            Some(volumes) => volumes.refresh(ctx, scene, lights),
+            None => Ok(0),
+        }
+    }
+
+    /// Writes the direct lights' positions for the shadow volumes, before a submission.
+    fn prepare_shadow_volumes(&self, ctx: &GpuContext, passes: &ResolvedPasses<'_>) -> Result<()> {
+        match (&self.shadow_volumes, passes.direct) {
+            (Some(volumes), Some((lights, _))) => volumes.prepare(ctx, lights),
+            _ => Ok(()),
+        }
     }
 
     /// Adds the pass drawing precomputed diffuse textures into HDR targets of `hdr_format`.
@@ -300,6 +345,7 @@ impl FrameGraph {
         if let Some((inputs, pass)) = passes.splat {
             pass.prepare(&ctx.queue, &tree.views[0], inputs.filtering);
         }
+        self.prepare_shadow_volumes(ctx, &passes)?;
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
@@ -382,6 +428,7 @@ impl FrameGraph {
             if let Some((inputs, pass)) = jittered_passes.splat {
                 pass.prepare(&ctx.queue, &tree.views[0], inputs.filtering);
             }
+            self.prepare_shadow_volumes(ctx, &jittered_passes)?;
             ctx.checked_result("accumulated frame", || {
                 let mut encoder =
                     ctx.device
@@ -495,7 +542,11 @@ impl FrameGraph {
     }
 
     /// The passes that add light under a view, in order (section 7.2).
-    fn light_passes<'a>(&'a self, passes: &ResolvedPasses<'a>) -> Vec<&'a dyn LightPass> {
+    fn light_passes<'a>(
+        &'a self,
+        passes: &ResolvedPasses<'a>,
+        shadowed: Option<&'a ShadowedDirect<'a>>,
+    ) -> Vec<&'a dyn LightPass> {
         let mut list: Vec<&dyn LightPass> = Vec::new();
         if let Some(emission) = &self.emission {
             list.push(emission);
@@ -504,7 +555,10 @@ impl FrameGraph {
             list.push(gouraud);
         }
         if let Some((_, pass)) = passes.direct {
-            list.push(pass);
+            match shadowed {
+                Some(shadowed) => list.push(shadowed),
+                None => list.push(pass),
+            }
         }
         if let Some((_, pass)) = passes.diffuse {
             list.push(pass);
@@ -526,7 +580,11 @@ impl FrameGraph {
         slots: &[ViewSlot],
     ) -> Result<()> {
         clear_hdr(encoder, frame.targets);
-        let light = self.light_passes(passes);
+        let shadowed = match (&self.shadow_volumes, passes.direct) {
+            (Some(volumes), Some((_, direct))) => Some(ShadowedDirect { direct, volumes }),
+            _ => None,
+        };
+        let light = self.light_passes(passes, shadowed.as_ref());
         self.draw_window(encoder, frame, &light, views, tree, slots, 0)?;
         if let Some((inputs, pass)) = passes.splat {
             pass.encode(

@@ -99,7 +99,7 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),
         (
             "passes/shadow_volume.wgsl",
-            crate::passes::shadow_volume::SHADOW_VOLUME_WGSL.to_owned(),
+            with_view(crate::passes::shadow_volume::SHADOW_VOLUME_WGSL),
         ),
         (
             "passes/emission.wgsl",

@@ -13,9 +13,9 @@ use glam::{Vec2, Vec3};
 use lustre_geometry::shadow_volume::{ShadowVolumeSet, light_position, shadow_count};
 use lustre_geometry::{Bvh, Camera, Light, Ray, Scene, builtin};
 use lustre_mpr::passes::depth::DepthPass;
-use lustre_mpr::passes::shadow_volume::{ShadowVolumeBuffers, ShadowVolumePass};
+use lustre_mpr::passes::shadow_volume::{ShadowVolumeBuffers, ShadowVolumePass, VolumeLights};
 use lustre_mpr::readback::read_rgba8;
-use lustre_mpr::{GpuContext, RenderTargets, SceneBuffers};
+use lustre_mpr::{GpuContext, RenderTargets, SceneBuffers, ViewBuffer};
 use support::gpu_or_skip;
 
 const SIZE: u32 = 96;
@@ -30,9 +30,13 @@ fn gpu_mask(
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let depth = DepthPass::new(ctx).unwrap();
-    depth.prepare(&ctx.queue, camera);
+    let (views, slot) = ViewBuffer::for_camera(ctx, camera).unwrap();
     let pass = ShadowVolumePass::new(ctx, wgpu::TextureFormat::Rgba8Unorm).unwrap();
-    pass.prepare(&ctx.queue, camera, light);
+    // Light 1 is the one tested; light 0 (elsewhere) checks the dynamic offset.
+    let mut lights = VolumeLights::new(ctx, &pass, 1);
+    lights
+        .write(ctx, &pass, &[Vec3::new(9.0, 9.0, 9.0), light])
+        .unwrap();
     let volumes = ShadowVolumeBuffers::upload(ctx, set.volumes_for_light(0)).unwrap();
     let mask = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("mask"),
@@ -52,11 +56,34 @@ fn gpu_mask(
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    depth.encode(&mut encoder, &buffers, &targets);
-    pass.encode_begin(&mut encoder, &targets, 0).unwrap();
-    pass.encode_volumes(&mut encoder, &targets, &volumes, false);
-    pass.encode_lit_mask(&mut encoder, &targets, &view);
-    pass.encode_end(&mut encoder, &targets, 0).unwrap();
+    // Clears the mask.
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("clear-mask"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    depth.encode(&mut encoder, &buffers, &targets, &views, slot, true);
+    {
+        let mut render = ShadowVolumePass::begin_pass(&mut encoder, &targets, &view, "mask");
+        pass.record_begin(&mut render, slot.stencil_reference)
+            .unwrap();
+        pass.record_volumes(&mut render, &views, slot, &lights, 1, &volumes)
+            .unwrap();
+        pass.record_lit_mask(&mut render);
+        pass.record_end(&mut render, slot.stencil_reference)
+            .unwrap();
+    }
     ctx.queue.submit([encoder.finish()]);
     read_rgba8(ctx, &mask)
         .unwrap()

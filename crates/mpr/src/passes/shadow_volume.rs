@@ -5,23 +5,31 @@
 //! its count there, and the lit area is then `stencil == SHAD_ZERO`; the
 //! area is given back to the view's reference after the light's passes.
 //!
-//! Order per light: [`ShadowVolumePass::prepare`] (camera, light position,
-//! jittered for the pivot approximation of section 4.4), then
-//! [`ShadowVolumePass::encode_begin`], [`ShadowVolumePass::encode_volumes`],
-//! the lit redraw with stencil reference [`SHAD_ZERO`] (compare `Equal`),
-//! and [`ShadowVolumePass::encode_end`]. The uniform block is written by
-//! `prepare` with `queue.write_buffer`, so one light per submission.
+//! The volumes are drawn under a [`crate::View`] (group 0, clipped like every
+//! scene pass in a virtual view); the light positions they are extruded from
+//! (possibly jittered, the pivot approximation of section 4.4) sit in one
+//! [`VolumeLights`] buffer at dynamic offsets (group 1), so all the lights
+//! of a frame fit one submission. Order per view and light, inside one
+//! render pass ([`ShadowVolumePass::begin_pass`]):
+//! [`ShadowVolumePass::record_begin`], [`ShadowVolumePass::record_volumes`],
+//! the lit redraw with stencil reference [`SHAD_ZERO`] (compare `Equal`,
+//! e.g. `DirectPass::record_light_under_stencil`), and
+//! [`ShadowVolumePass::record_end`]. [`crate::passes::shadowed_direct`]
+//! runs this per light in a frame.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use lustre_geometry::Camera;
 use lustre_geometry::shadow_volume::{ShadowVolume, VolumeVertex};
 use wgpu::util::DeviceExt;
 
+use crate::passes::redraw::scene_module;
+use crate::shaders::with_view;
 use crate::target::RenderTargets;
+use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
-/// The shadow-volume WGSL (`src/passes/shadow_volume.wgsl`), self-contained.
+/// The shadow-volume pass's own WGSL (`src/passes/shadow_volume.wgsl`),
+/// compiled after the view block ([`with_view`]).
 pub const SHADOW_VOLUME_WGSL: &str = include_str!("shadow_volume.wgsl");
 
 /// The stencil "zero" of the plus-minus count: three quarters of the 8-bit
@@ -32,14 +40,122 @@ pub const SHAD_ZERO: u32 = 192;
 /// recursion levels) live below it.
 pub const SHAD_MIN: u32 = 128;
 
-/// The uniform block (`VolumeUniforms` in `shadow_volume.wgsl`).
+/// One light's block of group 1 (`VolumeLight` in `shadow_volume.wgsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct VolumeUniforms {
-    /// Column-major world-to-clip matrix (reverse Z, infinite far plane).
-    pub view_projection: [[f32; 4]; 4],
-    /// The light position of the pass (xyz; w unused), jittered for section 4.4.
-    pub light: [f32; 4],
+pub struct VolumeLight {
+    /// The light position the far vertices are extruded from (xyz; w unused):
+    /// the light the volumes were built for, or a jittered one (the pivot
+    /// approximation of section 4.4).
+    pub position: [f32; 4],
+}
+
+/// The light positions of the shadow-volume passes (section 4.4), one
+/// [`VolumeLight`] block per light in one uniform buffer read at dynamic
+/// offsets (group 1), so every light of a frame fits one submission.
+#[derive(Debug)]
+pub struct VolumeLights {
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    stride: u64,
+    capacity: usize,
+    offsets: Vec<u32>,
+}
+
+impl VolumeLights {
+    /// Room for `capacity` lights (grown by [`VolumeLights::write`]).
+    pub fn new(ctx: &GpuContext, pass: &ShadowVolumePass, capacity: usize) -> Self {
+        let alignment = u64::from(ctx.device.limits().min_uniform_buffer_offset_alignment);
+        let stride = (size_of::<VolumeLight>() as u64).div_ceil(alignment) * alignment;
+        let capacity = capacity.max(1);
+        let (buffer, bind_group) = Self::allocate(ctx, pass, stride, capacity);
+        Self {
+            buffer,
+            bind_group,
+            stride,
+            capacity,
+            offsets: Vec::new(),
+        }
+    }
+
+    fn allocate(
+        ctx: &GpuContext,
+        pass: &ShadowVolumePass,
+        stride: u64,
+        capacity: usize,
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("shadow-volume-lights"),
+            size: stride * capacity as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow-volume-lights"),
+            layout: &pass.light_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<VolumeLight>() as u64),
+                }),
+            }],
+        });
+        (buffer, bind_group)
+    }
+
+    /// Writes the light positions (applied at the next submit), light `i` at
+    /// block `i`. Fails on a position that is not finite.
+    pub fn write(
+        &mut self,
+        ctx: &GpuContext,
+        pass: &ShadowVolumePass,
+        lights: &[Vec3],
+    ) -> Result<()> {
+        if let Some(i) = lights.iter().position(|l| !l.is_finite()) {
+            return Err(MprError::InvalidSetting {
+                what: "shadow volumes",
+                message: format!("light #{i} position is not finite"),
+            });
+        }
+        if lights.len() > self.capacity {
+            let capacity = lights.len().next_power_of_two();
+            let (buffer, bind_group) = Self::allocate(ctx, pass, self.stride, capacity);
+            self.buffer = buffer;
+            self.bind_group = bind_group;
+            self.capacity = capacity;
+        }
+        let mut bytes = vec![0u8; self.stride as usize * lights.len()];
+        self.offsets.clear();
+        for (i, l) in lights.iter().enumerate() {
+            let offset = i * self.stride as usize;
+            let block = VolumeLight {
+                position: l.extend(1.0).to_array(),
+            };
+            bytes[offset..offset + size_of::<VolumeLight>()]
+                .copy_from_slice(bytemuck::bytes_of(&block));
+            self.offsets
+                .push(u32::try_from(offset).map_err(|_| MprError::InvalidSetting {
+                    what: "shadow volumes",
+                    message: format!("{} lights exceed a 4 GiB uniform buffer", lights.len()),
+                })?);
+        }
+        if !bytes.is_empty() {
+            ctx.queue.write_buffer(&self.buffer, 0, &bytes);
+        }
+        Ok(())
+    }
+
+    /// Number of lights written.
+    pub fn len(&self) -> usize {
+        self.offsets.len()
+    }
+
+    /// Whether no light was written.
+    pub fn is_empty(&self) -> bool {
+        self.offsets.is_empty()
+    }
 }
 
 /// The volumes of one light uploaded as one non-indexed triangle list of
@@ -89,6 +205,11 @@ impl ShadowVolumeBuffers {
 }
 
 /// The pipelines of the shadow-volume passes (sections 4.1 and 7.3).
+///
+/// Every pipeline has one colour target of the format given to
+/// [`ShadowVolumePass::new`] (the HDR target in a frame, so the stencil
+/// passes, the lit redraw and the restore share one render pass;
+/// [`ShadowVolumePass::begin_pass`]); only the lit-mask pipeline writes colour.
 #[derive(Debug)]
 pub struct ShadowVolumePass {
     /// Inverts the view's area (stencil == r < 128 becomes 255 − r ≥ 128).
@@ -101,9 +222,8 @@ pub struct ShadowVolumePass {
     volumes_cw: wgpu::RenderPipeline,
     /// Writes 1 where stencil == SHAD_ZERO (tests and debugging).
     mask: wgpu::RenderPipeline,
-    mask_format: wgpu::TextureFormat,
-    uniforms: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    color_format: wgpu::TextureFormat,
+    light_layout: wgpu::BindGroupLayout,
 }
 
 fn face(
@@ -129,10 +249,11 @@ fn stencil(front: wgpu::StencilFaceState, back: wgpu::StencilFaceState) -> wgpu:
 }
 
 impl ShadowVolumePass {
-    /// Builds the pipelines; `mask_format` is the colour format of
-    /// [`ShadowVolumePass::encode_lit_mask`]. Fails when the depth target has
+    /// Builds the pipelines for render passes whose one colour attachment has
+    /// `color_format` (the HDR format in a frame; the mask's format for
+    /// [`ShadowVolumePass::record_lit_mask`]). Fails when the depth target has
     /// no stencil ([`GpuContext::has_stencil`]).
-    pub fn new(ctx: &GpuContext, mask_format: wgpu::TextureFormat) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, color_format: wgpu::TextureFormat) -> Result<Self> {
         if !ctx.has_stencil() {
             return Err(MprError::InvalidSetting {
                 what: "shadow volumes",
@@ -141,26 +262,23 @@ impl ShadowVolumePass {
         }
         ctx.checked("shadow volume pass creation", || {
             let device = &ctx.device;
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("shadow-volume"),
-                source: wgpu::ShaderSource::Wgsl(SHADOW_VOLUME_WGSL.into()),
-            });
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("shadow-volume"),
+            let module = scene_module(ctx, "shadow-volume", &with_view(SHADOW_VOLUME_WGSL));
+            let light_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shadow-volume-light"),
                 entries: &[wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: wgpu::ShaderStages::VERTEX,
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<VolumeUniforms>() as u64),
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<VolumeLight>() as u64),
                     },
                     count: None,
                 }],
             });
             let volume_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("shadow-volume"),
-                bind_group_layouts: &[Some(&layout)],
+                bind_group_layouts: &[Some(ctx.view_layout()), Some(&light_layout)],
                 immediate_size: 0,
             });
             let empty_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -181,9 +299,13 @@ impl ShadowVolumePass {
                             mask: bool| {
                 let buffers = [Some(vertex_layout.clone())];
                 let targets = [Some(wgpu::ColorTargetState {
-                    format: mask_format,
+                    format: color_format,
                     blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
+                    write_mask: if mask {
+                        wgpu::ColorWrites::ALL
+                    } else {
+                        wgpu::ColorWrites::empty()
+                    },
                 })];
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(label),
@@ -212,7 +334,7 @@ impl ShadowVolumePass {
                         bias: wgpu::DepthBiasState::default(),
                     }),
                     multisample: wgpu::MultisampleState::default(),
-                    fragment: mask.then(|| wgpu::FragmentState {
+                    fragment: Some(wgpu::FragmentState {
                         module: &module,
                         entry_point: Some("fs_mask"),
                         compilation_options: Default::default(),
@@ -273,52 +395,38 @@ impl ShadowVolumePass {
                 both(face(C::Equal, S::Keep, S::Keep)),
                 true,
             );
-            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("shadow-volume-uniforms"),
-                size: size_of::<VolumeUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("shadow-volume"),
-                layout: &layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniforms.as_entire_binding(),
-                }],
-            });
             Self {
                 mark,
                 replace_high,
                 volumes_ccw,
                 volumes_cw,
                 mask,
-                mask_format,
-                uniforms,
-                bind_group,
+                color_format,
+                light_layout,
             }
         })
     }
 
-    /// Writes the camera's view-projection and the light position the far
-    /// vertices are extruded from (the central light, or a jittered one: the
-    /// pivot approximation of section 4.4).
-    pub fn prepare(&self, queue: &wgpu::Queue, camera: &Camera, light: Vec3) {
-        let uniforms = VolumeUniforms {
-            view_projection: camera.view_projection().to_cols_array_2d(),
-            light: light.extend(1.0).to_array(),
-        };
-        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-    }
-
-    fn stencil_pass<'e>(
+    /// Begins the render pass the shadow-volume passes of a light are
+    /// recorded into (section 7.3): `color` loaded and stored (the HDR target
+    /// in a frame), depth and stencil of `targets` loaded and stored.
+    pub fn begin_pass<'e>(
         encoder: &'e mut wgpu::CommandEncoder,
         targets: &RenderTargets,
+        color: &wgpu::TextureView,
         label: &str,
     ) -> wgpu::RenderPass<'e> {
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
-            color_attachments: &[],
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &targets.depth.view,
                 depth_ops: Some(wgpu::Operations {
@@ -352,15 +460,10 @@ impl ShadowVolumePass {
     /// [`SHAD_MIN`]) to [`SHAD_ZERO`] (section 7.3): the area is inverted to
     /// `255 − r ≥ 128`, then every stencil `>= SHAD_MIN` is replaced; this
     /// assumes nothing outside the area is at or above [`SHAD_MIN`], which
-    /// [`ShadowVolumePass::encode_end`] restores.
-    pub fn encode_begin(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &RenderTargets,
-        view_reference: u32,
-    ) -> Result<()> {
+    /// [`ShadowVolumePass::record_end`] restores. Leaves the stencil reference
+    /// at [`SHAD_ZERO`].
+    pub fn record_begin(&self, pass: &mut wgpu::RenderPass<'_>, view_reference: u32) -> Result<()> {
         Self::check_reference(view_reference)?;
-        let mut pass = Self::stencil_pass(encoder, targets, "shadow-volume-begin");
         pass.set_pipeline(&self.mark);
         pass.set_stencil_reference(view_reference);
         pass.draw(0..3, 0..1);
@@ -370,92 +473,70 @@ impl ShadowVolumePass {
         Ok(())
     }
 
-    /// Counts the volumes into the stencil with the depth-fail rule (section
-    /// 4.1): depth test `Greater` (reverse Z) without writes, back faces
-    /// increment and front faces decrement (wrapping) where the depth test
-    /// fails, only where stencil `>= SHAD_MIN`. `mirrored` swaps which
-    /// winding is front (a view with a negative-determinant view matrix).
-    pub fn encode_volumes(
+    /// Counts the volumes of light `light` (its block in `lights`) into the
+    /// stencil with the depth-fail rule (section 4.1), drawn through the view
+    /// of `slot` (clipped by its clip plane): depth test `Greater` (reverse
+    /// Z) without writes, back faces increment and front faces decrement
+    /// (wrapping) where the depth test fails, only where stencil `>= SHAD_MIN`.
+    /// The slot's `mirrored` ([`crate::View::is_mirrored`]) swaps which
+    /// winding is front. Fails when `light` has no block in `lights`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_volumes(
         &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &RenderTargets,
+        pass: &mut wgpu::RenderPass<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+        lights: &VolumeLights,
+        light: usize,
         volumes: &ShadowVolumeBuffers,
-        mirrored: bool,
-    ) {
+    ) -> Result<()> {
+        let Some(&offset) = lights.offsets.get(light) else {
+            return Err(MprError::InvalidSetting {
+                what: "shadow volumes",
+                message: format!(
+                    "light #{light} has no position ({} written)",
+                    lights.offsets.len()
+                ),
+            });
+        };
         if volumes.vertex_count == 0 {
-            return;
+            return Ok(());
         }
-        let mut pass = Self::stencil_pass(encoder, targets, "shadow-volume-count");
-        pass.set_pipeline(if mirrored {
+        pass.set_pipeline(if slot.mirrored {
             &self.volumes_cw
         } else {
             &self.volumes_ccw
         });
+        views.bind(pass, 0, slot);
         pass.set_stencil_reference(SHAD_MIN);
-        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_bind_group(1, &lights.bind_group, &[offset]);
         pass.set_vertex_buffer(0, volumes.vertices.slice(..));
         pass.draw(0..volumes.vertex_count, 0..1);
+        Ok(())
     }
 
     /// Gives the shadow half back to the view: every stencil `>= SHAD_MIN`
     /// becomes `view_reference` again (section 7.3).
-    pub fn encode_end(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &RenderTargets,
-        view_reference: u32,
-    ) -> Result<()> {
+    pub fn record_end(&self, pass: &mut wgpu::RenderPass<'_>, view_reference: u32) -> Result<()> {
         Self::check_reference(view_reference)?;
-        let mut pass = Self::stencil_pass(encoder, targets, "shadow-volume-end");
         pass.set_pipeline(&self.replace_high);
         pass.set_stencil_reference(view_reference);
         pass.draw(0..3, 0..1);
         Ok(())
     }
 
-    /// Writes 1 into `mask` (of the format given to [`ShadowVolumePass::new`],
-    /// cleared to 0 first) where the stencil equals [`SHAD_ZERO`]: the lit
-    /// area between [`ShadowVolumePass::encode_volumes`] and
-    /// [`ShadowVolumePass::encode_end`] (section 4.1).
-    pub fn encode_lit_mask(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &RenderTargets,
-        mask: &wgpu::TextureView,
-    ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow-volume-mask"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: mask,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &targets.depth.view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+    /// Writes 1 into the pass's colour attachment (of the format given to
+    /// [`ShadowVolumePass::new`]) where the stencil equals [`SHAD_ZERO`]: the
+    /// lit area between [`ShadowVolumePass::record_volumes`] and
+    /// [`ShadowVolumePass::record_end`] (section 4.1).
+    pub fn record_lit_mask(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_pipeline(&self.mask);
         pass.set_stencil_reference(SHAD_ZERO);
         pass.draw(0..3, 0..1);
     }
 
-    /// The colour format of [`ShadowVolumePass::encode_lit_mask`].
-    pub fn mask_format(&self) -> wgpu::TextureFormat {
-        self.mask_format
+    /// The colour format of the passes the pipelines are recorded into.
+    pub fn color_format(&self) -> wgpu::TextureFormat {
+        self.color_format
     }
 }

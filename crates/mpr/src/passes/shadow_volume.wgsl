@@ -1,6 +1,8 @@
 // Shadow volumes (Diefenbach & Badler 1997, section 4.1; z-fail counting,
 // far vertices at infinity so the pivot jitter of section 4.4 is exact) and
-// the stencil bookkeeping of section 7.3 (full-screen triangles).
+// the stencil bookkeeping of section 7.3 (full-screen triangles). Compiled
+// after the view block (shaders::with_view): the volumes are drawn through
+// the view of group 0 and clipped by its clip plane like every scene pass.
 //
 // Notation
 // | symbol | meaning                                                       | unit |
@@ -8,24 +10,35 @@
 // | P      | world position of a volume vertex                             | m    |
 // | w      | 1 for a finite vertex, 0 for one extruded to infinity         | -    |
 // | L      | light position of this pass (jittered for soft shadows, 4.4)  | m    |
-// | VP     | camera view-projection, reverse Z, infinite far plane         | -    |
+// | VP     | the view's view-projection, reverse Z, infinite far plane     | -    |
 // | (P-L,0)| the point at infinity in direction P - L: depth 0            | -    |
 
-struct VolumeUniforms {
-    view_projection: mat4x4f,
+// One light of the pass, one block per light at a dynamic offset.
+struct VolumeLight {
     // xyz: L; w unused.
-    light: vec4f,
+    position: vec4f,
 }
 
-@group(0) @binding(0) var<uniform> u: VolumeUniforms;
+@group(1) @binding(0) var<uniform> volume_light: VolumeLight;
 
-// A finite vertex at (P, 1); an extruded one at (P - L, 0) (section 4.4).
+struct VertexOutput {
+    @builtin(position) clip: vec4f,
+    //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
+}
+
+// A finite vertex at (P, 1); an extruded one at (P - L, 0) (section 4.4). The
+// clip distance is the plane's value at the homogeneous point, which clipping
+// interpolates linearly like the position.
 @vertex
-fn vs_volume(@location(0) v: vec4f) -> @builtin(position) vec4f {
+fn vs_volume(@location(0) v: vec4f) -> VertexOutput {
+    var world = vec4f(v.xyz, 1.0);
     if v.w == 0.0 {
-        return u.view_projection * vec4f(v.xyz - u.light.xyz, 0.0);
+        world = vec4f(v.xyz - volume_light.position.xyz, 0.0);
     }
-    return u.view_projection * vec4f(v.xyz, 1.0);
+    var out: VertexOutput;
+    out.clip = view.view_projection * world;
+    //clip_distances: out.clip_distances[0] = dot(view.clip_plane, world);
+    return out;
 }
 
 // One triangle covering the viewport, at depth 0 (the stencil passes test
@@ -37,7 +50,8 @@ fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4f {
     return vec4f(2.0 * x - 1.0, 2.0 * y - 1.0, 0.0, 1.0);
 }
 
-// The lit mask of the tests: 1 where the stencil test (== SHAD_ZERO) passes.
+// The lit mask of the tests: 1 where the stencil test (== SHAD_ZERO) passes;
+// the stencil passes use it with colour writes off.
 @fragment
 fn fs_mask() -> @location(0) vec4f {
     return vec4f(1.0);
