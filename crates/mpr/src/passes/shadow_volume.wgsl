@@ -27,8 +27,9 @@ struct VertexOutput {
 }
 
 // A finite vertex at (P, 1); an extruded one at (P - L, 0) (section 4.4). The
-// clip distance is the plane's value at the homogeneous point, which clipping
-// interpolates linearly like the position.
+// clip distance is the plane's value at the homogeneous point, (n, w)·(x, w'),
+// which clipping interpolates linearly like the position: view_clip_distance
+// of the xyz part, less the plane's w where w' = 0.
 @vertex
 fn vs_volume(@location(0) v: vec4f) -> VertexOutput {
     var world = vec4f(v.xyz, 1.0);
@@ -37,7 +38,7 @@ fn vs_volume(@location(0) v: vec4f) -> VertexOutput {
     }
     var out: VertexOutput;
     out.clip = view.view_projection * world;
-    //clip_distances: out.clip_distances[0] = dot(view.clip_plane, world);
+    //clip_distances: out.clip_distances[0] = view_clip_distance(world.xyz) - (1.0 - world.w) * view.clip_plane.w;
     return out;
 }
 
