@@ -9,7 +9,9 @@
 //! under a deeper view ([`crate::passes::specular`]).
 //! [`FrameGraph::render_accumulated`] averages jittered frames for
 //! antialiasing (section 7). Shadow maps are rendered per light pose, not per
-//! frame ([`FrameGraph::update_shadows`]).
+//! frame ([`FrameGraph::update_shadows`]); shadow volumes, which replace them
+//! when the graph has [`FrameGraph::with_shadow_volumes`] (section 4.1), are
+//! rebuilt only for moved objects or lights ([`FrameGraph::update_shadow_volumes`]).
 
 use std::sync::Mutex;
 
