@@ -9,7 +9,9 @@
 //! under a deeper view ([`crate::passes::specular`]).
 //! [`FrameGraph::render_accumulated`] averages jittered frames for
 //! antialiasing (section 7). Shadow maps are rendered per light pose, not per
-//! frame ([`FrameGraph::update_shadows`]).
+//! frame ([`FrameGraph::update_shadows`]); shadow volumes, which replace them
+//! when the graph has [`FrameGraph::with_shadow_volumes`] (section 4.1), are
+//! rebuilt only for moved objects or lights ([`FrameGraph::update_shadow_volumes`]).
 
 use std::sync::Mutex;
 
@@ -23,6 +25,7 @@ use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
 use crate::passes::direct::{DirectLights, DirectPass};
 use crate::passes::emission::EmissionPass;
 use crate::passes::gouraud::GouraudPass;
+use crate::passes::shadowed_direct::{ShadowVolumes, ShadowedDirect};
 use crate::passes::specular::{SpecularPass, SpecularSettings, ViewTree};
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
 use crate::passes::tonemap::{Tonemap, TonemapPass};
@@ -181,6 +184,8 @@ pub struct FrameGraph {
     pub accumulate: Option<AccumulatePass>,
     /// Stencilled specular images of mirror faces ([`FrameGraph::with_specular`]).
     pub specular: Option<SpecularPass>,
+    /// Shadow volumes replacing the direct pass's shadow maps ([`FrameGraph::with_shadow_volumes`]).
+    pub shadow_volumes: Option<ShadowVolumes>,
     /// The final tone map.
     pub tonemap: TonemapPass,
     /// The frame's views (camera, virtual cameras), rewritten every frame.
@@ -199,6 +204,7 @@ impl FrameGraph {
             splat: None,
             accumulate: None,
             specular: None,
+            shadow_volumes: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
         })
@@ -259,6 +265,47 @@ impl FrameGraph {
     ) -> Result<Self> {
         self.direct = Some(DirectPass::new(ctx, hdr_format)?);
         Ok(self)
+    }
+
+    /// Shadows the direct light with shadow volumes instead of shadow maps
+    /// (Diefenbach & Badler 1997, sections 4.1 and 7.2): the volumes of every
+    /// object of `scene` for each of `lights` (the point lights the frame's
+    /// [`DirectLights`] hold, in order), for HDR targets of `hdr_format`. Each
+    /// view's direct light is then, per light, the volume count in the
+    /// stencil and the light added where it is zero ([`ShadowedDirect`]).
+    /// Needs [`FrameGraph::with_direct`] for the frame's direct light.
+    pub fn with_shadow_volumes(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &lustre_geometry::Scene,
+        lights: &[lustre_geometry::Light],
+    ) -> Result<Self> {
+        self.shadow_volumes = Some(ShadowVolumes::new(ctx, hdr_format, scene, lights)?);
+        Ok(self)
+    }
+
+    /// Rebuilds and re-uploads the shadow volumes of the objects and lights
+    /// that moved (section 4.3; [`ShadowVolumes::refresh`]); returns the
+    /// number of volumes rebuilt, 0 without shadow volumes.
+    pub fn update_shadow_volumes(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &lustre_geometry::Scene,
+        lights: &[lustre_geometry::Light],
+    ) -> Result<usize> {
+        match &mut self.shadow_volumes {
+            Some(volumes) => volumes.refresh(ctx, scene, lights),
+            None => Ok(0),
+        }
+    }
+
+    /// Writes the direct lights' positions for the shadow volumes, before a submission.
+    fn prepare_shadow_volumes(&self, ctx: &GpuContext, passes: &ResolvedPasses<'_>) -> Result<()> {
+        match (&self.shadow_volumes, passes.direct) {
+            (Some(volumes), Some((lights, _))) => volumes.prepare(ctx, lights),
+            _ => Ok(()),
+        }
     }
 
     /// Adds the pass drawing precomputed diffuse textures into HDR targets of `hdr_format`.
@@ -330,7 +377,9 @@ impl FrameGraph {
         if let Some((inputs, pass)) = passes.splat {
             pass.prepare(&ctx.queue, inputs.filtering);
         }
-        let light = self.light_passes(&passes);
+        self.prepare_shadow_volumes(ctx, &passes)?;
+        let shadowed = self.shadowed(&passes);
+        let light = self.light_passes(&passes, shadowed.as_ref());
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
@@ -401,7 +450,8 @@ impl FrameGraph {
             splat: if splat_once { None } else { passes.splat },
             ..passes
         };
-        let jittered_light = self.light_passes(&jittered_passes);
+        let shadowed = self.shadowed(&jittered_passes);
+        let jittered_light = self.light_passes(&jittered_passes, shadowed.as_ref());
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
         for s in 0..samples {
             before_sample(s)?;
@@ -414,6 +464,7 @@ impl FrameGraph {
             if let Some((inputs, pass)) = passes.splat {
                 pass.prepare(&ctx.queue, inputs.filtering);
             }
+            self.prepare_shadow_volumes(ctx, &jittered_passes)?;
             ctx.checked_result("accumulated frame", || {
                 let mut encoder =
                     ctx.device
@@ -524,8 +575,20 @@ impl FrameGraph {
         })
     }
 
+    /// The direct pass lit under shadow volumes, where the graph has them (section 4.1).
+    fn shadowed<'a>(&'a self, passes: &ResolvedPasses<'a>) -> Option<ShadowedDirect<'a>> {
+        match (&self.shadow_volumes, passes.direct) {
+            (Some(volumes), Some((_, direct))) => Some(ShadowedDirect { direct, volumes }),
+            _ => None,
+        }
+    }
+
     /// The passes that add light under a view, in order (section 7.2).
-    fn light_passes<'a>(&'a self, passes: &ResolvedPasses<'a>) -> Vec<&'a dyn LightPass> {
+    fn light_passes<'a>(
+        &'a self,
+        passes: &ResolvedPasses<'a>,
+        shadowed: Option<&'a ShadowedDirect<'a>>,
+    ) -> Vec<&'a dyn LightPass> {
         let mut list: Vec<&dyn LightPass> = Vec::new();
         if let Some(emission) = &self.emission {
             list.push(emission);
@@ -534,7 +597,10 @@ impl FrameGraph {
             list.push(gouraud);
         }
         if let Some((_, pass)) = passes.direct {
-            list.push(pass);
+            match shadowed {
+                Some(shadowed) => list.push(shadowed),
+                None => list.push(pass),
+            }
         }
         if let Some((_, pass)) = passes.diffuse {
             list.push(pass);

@@ -13,6 +13,7 @@
 //! | [`passes::depth`]: reverse-Z depth and surface ids | Diefenbach & Badler 1997, 7.2 | BVH ray casts |
 //! | [`passes::emission`]: emitters' own radiance | (light sources seen directly) | ray cast + material `Le` |
 //! | [`passes::direct`], [`passes::shadow`]: point lights, cube shadow maps, per-pixel BRDF | Stürzlinger & Bastos 1997, 2.2.1 | ray cast + shadow ray |
+//! | [`passes::shadow_volume`], [`passes::shadowed_direct`]: shadow volumes counted z-fail in the stencil's upper half, each point light added without its shadow map where the count is zero, under every view | Diefenbach & Badler 1997, 4.1, 4.4, 7.2, 7.3 | BVH shadow rays; `lustre_geometry::shadow_volume::shadow_count` |
 //! | [`passes::splat`]: photon splats, 64² kernel texture with mips, surface-id or stencil restriction | Stürzlinger & Bastos 1997, 2.2, 3.2, equation 2 | `SplatEstimator::radiance_splatted` |
 //! | [`passes::specular`]: mirror faces masked in the stencil, the scene redrawn from their virtual views, recursively | Diefenbach & Badler 1997, 3, 7.1, 7.3 | mirror ray tracer (`tests/specular.rs`) |
 //! | [`passes::tonemap`]: exposure, clamp or Reinhard, sRGB | — | per-pixel formula |

@@ -98,6 +98,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),
         (
+            "passes/shadow_volume.wgsl",
+            with_view(crate::passes::shadow_volume::SHADOW_VOLUME_WGSL),
+        ),
+        (
             "passes/emission.wgsl",
             with_view(crate::passes::emission::EMISSION_WGSL),
         ),

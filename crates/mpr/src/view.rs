@@ -199,6 +199,9 @@ pub struct ViewSlot {
     pub offset: u32,
     /// Its stencil reference.
     pub stencil_reference: u32,
+    /// [`View::is_mirrored`]: front faces wind clockwise in this view (the
+    /// shadow-volume count of Diefenbach & Badler 1997, section 4.1, needs it).
+    pub mirrored: bool,
 }
 
 /// The views of a frame in one uniform buffer with one bind group read at dynamic offsets.
@@ -276,6 +279,7 @@ impl ViewBuffer {
                     message: format!("{} views exceed a 4 GiB uniform buffer", views.len()),
                 })?,
                 stencil_reference: view.stencil_reference,
+                mirrored: view.is_mirrored(),
             });
         }
         if !bytes.is_empty() {

@@ -42,6 +42,7 @@ use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
 use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::passes::shadow::{ShadowCube, ShadowPass, ShadowSettings};
+use crate::passes::shadow_volume::SHAD_ZERO;
 use crate::scene_buffers::SceneBuffers;
 use crate::shaders::direct_wgsl;
 use crate::target::{NO_SURFACE, RenderTargets};
@@ -348,10 +349,29 @@ impl DirectLights {
     }
 }
 
-/// The GPU direct light pass: its pipeline, camera block and shadow pass.
+/// The line of `direct.wgsl` that switches the shadow-map lookup on.
+const SHADOW_MAPS_ON: &str = "const SHADOW_MAPS: bool = true;";
+
+/// `direct.wgsl` without the shadow-map lookup (`V = 1`), for lights drawn
+/// under the stencil of shadow volumes (Diefenbach & Badler 1997, section 4.1).
+pub fn direct_unshadowed_wgsl() -> Result<String> {
+    let source = direct_wgsl();
+    if !source.contains(SHADOW_MAPS_ON) {
+        return Err(MprError::InvalidSetting {
+            what: "direct pass",
+            message: format!("direct.wgsl lacks the line `{SHADOW_MAPS_ON}`"),
+        });
+    }
+    Ok(source.replace(SHADOW_MAPS_ON, "const SHADOW_MAPS: bool = false;"))
+}
+
+/// The GPU direct light pass: its pipelines, light layout and shadow pass.
 #[derive(Debug)]
 pub struct DirectPass {
     pipeline: wgpu::RenderPipeline,
+    /// The same redraw without the shadow-map lookup, drawn where the stencil
+    /// equals `SHAD_ZERO` (Diefenbach & Badler 1997, sections 4.1 and 7.2).
+    lit_under_stencil: wgpu::RenderPipeline,
     light_layout: wgpu::BindGroupLayout,
     shadow_sampler: wgpu::Sampler,
     shadow: ShadowPass,
@@ -368,9 +388,11 @@ impl DirectPass {
             });
         }
         let shadow = ShadowPass::new(ctx)?;
+        let unshadowed = direct_unshadowed_wgsl()?;
         ctx.checked("direct pass creation", || {
             let device = &ctx.device;
             let module = scene_module(ctx, "direct", &direct_wgsl());
+            let unshadowed_module = scene_module(ctx, "direct-under-stencil", &unshadowed);
             let light_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("direct-light"),
@@ -429,12 +451,27 @@ impl DirectPass {
                     depth_write: false,
                 },
             );
+            // The same stencil state (Equal, no writes); its reference is
+            // SHAD_ZERO instead of the view's, set after the view is bound.
+            let lit_under_stencil = scene_pipeline(
+                ctx,
+                &ScenePipeline {
+                    label: "direct-under-stencil",
+                    module: &unshadowed_module,
+                    layouts: &[&light_layout],
+                    extra_vertex_buffers: &[],
+                    target: additive_target(hdr_format),
+                    depth_compare: wgpu::CompareFunction::Equal,
+                    depth_write: false,
+                },
+            );
             let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("shadow-nearest"),
                 ..Default::default()
             });
             Self {
                 pipeline,
+                lit_under_stencil,
                 light_layout,
                 shadow_sampler,
                 shadow,
@@ -484,6 +521,61 @@ impl DirectPass {
             pass.set_bind_group(1, &slot.bind_group, &[]);
             pass.draw(0..scene.vertex_count, 0..1);
         }
+    }
+}
+
+impl DirectPass {
+    /// Records the direct light of light `light_index` alone, without its
+    /// shadow map, where the stencil equals [`SHAD_ZERO`] (Diefenbach &
+    /// Badler 1997, sections 4.1 and 7.2: a light is added only where the
+    /// shadow-volume count left the stencil at zero), into `pass`, which has
+    /// the HDR target and the depth pre-pass's depth-stencil attached. The
+    /// view of `slot` is bound, then the reference replaced by [`SHAD_ZERO`].
+    /// Fails when `light_index` is out of range.
+    pub fn record_light_under_stencil(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        scene: &SceneBuffers,
+        lights: &DirectLights,
+        light_index: usize,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        let Some(light) = lights.slots.get(light_index) else {
+            return Err(MprError::InvalidSetting {
+                what: "direct light",
+                message: format!("light #{light_index} of {}", lights.slots.len()),
+            });
+        };
+        if scene.vertex_count == 0 {
+            return Ok(());
+        }
+        pass.set_pipeline(&self.lit_under_stencil);
+        views.bind(pass, 0, slot);
+        pass.set_stencil_reference(SHAD_ZERO);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_bind_group(1, &light.bind_group, &[]);
+        pass.draw(0..scene.vertex_count, 0..1);
+        Ok(())
+    }
+
+    /// [`DirectPass::record_light_under_stencil`] in a render pass of its own
+    /// over `targets` (HDR loaded, depth and stencil read only): run between
+    /// the shadow-volume count of light `light_index` and its restore.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_light_under_stencil(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        lights: &DirectLights,
+        light_index: usize,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        let mut pass =
+            crate::passes::redraw::begin_over_depth(encoder, targets, "direct-under-stencil");
+        self.record_light_under_stencil(&mut pass, scene, lights, light_index, views, slot)
     }
 }
 

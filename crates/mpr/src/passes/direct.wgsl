@@ -25,6 +25,12 @@ const LIGHT_POINT: u32 = 0u;
 const LIGHT_ORIENTED_POINT: u32 = 1u;
 const LIGHT_SPOT: u32 = 2u;
 
+// Whether V comes from the light's shadow cube. The variant drawn under the
+// stencil of shadow volumes (Diefenbach & Badler 1997, sections 4.1 and
+// 7.2) is compiled with `false` (direct.rs replaces this exact line): the
+// stencil test alone decides visibility, V = 1 wherever it passes.
+const SHADOW_MAPS: bool = true;
+
 // One point light and its shadow-map lookup parameters (GpuLight in direct.rs).
 struct DirectLight {
     position: vec3f,
@@ -139,7 +145,10 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     if all(intensity == vec3f(0.0)) {
         return vec4f(0.0);
     }
-    let v = shadow_visibility(-to_light, d, cos_i);
+    var v = 1.0;
+    if SHADOW_MAPS {
+        v = shadow_visibility(-to_light, d, cos_i);
+    }
     let basis = material_basis(n);
     let f = direct_brdf(in.material, material_to_local(basis, wi_world), material_to_local(basis, wo_world));
     return vec4f(f * intensity * (cos_i * v / (d * d)), 0.0);

@@ -8,6 +8,8 @@ pub mod emission;
 pub mod gouraud;
 pub mod redraw;
 pub mod shadow;
+pub mod shadow_volume;
+pub mod shadowed_direct;
 pub mod specular;
 pub mod splat;
 pub mod tonemap;

@@ -1,0 +1,217 @@
+//! Direct light under shadow volumes instead of shadow maps (Diefenbach &
+//! Badler 1997, sections 4.1 and 7.2): per view and per point light, the
+//! view's area is set to `SHAD_ZERO`, the light's volumes are counted into
+//! the stencil with the depth-fail rule, the light is added without its
+//! shadow map where the count left the stencil at `SHAD_ZERO`, and the area
+//! is given back to the view (section 7.3), all in one render pass over the
+//! HDR target. As a [`LightPass`] it runs at every level of the specular
+//! recursion.
+//!
+//! The volumes ([`ShadowVolumeSet`]) are built for the lights' positions
+//! when [`ShadowVolumes`] is made and rebuilt, and re-uploaded, only for the
+//! objects or lights that moved ([`ShadowVolumes::refresh`], section 4.3).
+//! Every frame [`ShadowVolumes::prepare`] writes the direct lights' current
+//! positions as the points the far vertices are extruded from: equal to the
+//! built positions, the volumes are exact; moved by a jitter (the paired
+//! light jitter of section 4.4 between accumulation samples), they follow
+//! the pivot approximation without a rebuild.
+
+use std::sync::Mutex;
+
+use glam::Vec3;
+use lustre_geometry::Light;
+use lustre_geometry::Scene;
+use lustre_geometry::shadow_volume::{ShadowVolumeSet, light_position};
+
+use crate::frame::{FrameInputs, LightPass};
+use crate::passes::direct::{DirectLights, DirectPass};
+use crate::passes::shadow_volume::{ShadowVolumeBuffers, ShadowVolumePass, VolumeLights};
+use crate::view::{ViewBuffer, ViewSlot};
+use crate::{GpuContext, MprError, Result};
+
+/// The shadow volumes of a scene for a list of point lights, on the GPU
+/// (sections 4.1 and 4.3), with the pass that counts them.
+#[derive(Debug)]
+pub struct ShadowVolumes {
+    pass: ShadowVolumePass,
+    set: ShadowVolumeSet,
+    /// One vertex buffer per light.
+    buffers: Vec<ShadowVolumeBuffers>,
+    /// The positions the far vertices are extruded from, written per frame.
+    lights: Mutex<VolumeLights>,
+}
+
+fn geometry_error(e: lustre_geometry::GeometryError) -> MprError {
+    MprError::InvalidSetting {
+        what: "shadow volumes",
+        message: e.to_string(),
+    }
+}
+
+impl ShadowVolumes {
+    /// Builds the volumes of every object of `scene` for each of `lights` (at
+    /// [`light_position`]; the point lights the direct pass draws, in the
+    /// same order) and uploads them, for HDR targets of `hdr_format` (section
+    /// 4.1). Fails without a stencil, or on a light position that is not finite.
+    pub fn new(
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &Scene,
+        lights: &[Light],
+    ) -> Result<Self> {
+        let pass = ShadowVolumePass::new(ctx, hdr_format)?;
+        let positions: Vec<Vec3> = lights.iter().map(light_position).collect();
+        let set = ShadowVolumeSet::new(scene, &positions).map_err(geometry_error)?;
+        let buffers = (0..positions.len())
+            .map(|i| ShadowVolumeBuffers::upload(ctx, set.volumes_for_light(i)))
+            .collect::<Result<Vec<_>>>()?;
+        let mut volume_lights = VolumeLights::new(ctx, &pass, positions.len());
+        volume_lights.write(ctx, &pass, &positions)?;
+        Ok(Self {
+            pass,
+            set,
+            buffers,
+            lights: Mutex::new(volume_lights),
+        })
+    }
+
+    /// Rebuilds the volumes of the objects and lights that moved since they
+    /// were built (section 4.3) and re-uploads the buffers of the lights
+    /// whose volumes changed; nothing is uploaded when nothing moved. Returns
+    /// the number of volumes rebuilt.
+    pub fn refresh(&mut self, ctx: &GpuContext, scene: &Scene, lights: &[Light]) -> Result<usize> {
+        let positions: Vec<Vec3> = lights.iter().map(light_position).collect();
+        let old = self.set.lights().to_vec();
+        let rebuilt = self
+            .set
+            .refresh(scene, &positions)
+            .map_err(geometry_error)?;
+        if rebuilt == 0 {
+            return Ok(0);
+        }
+        let moved: Vec<usize> = (0..positions.len())
+            .filter(|&i| old.get(i) != Some(&positions[i]))
+            .collect();
+        // Only the moved lights' volumes were rebuilt unless an object moved too.
+        let all = positions.len() != old.len() || rebuilt > moved.len() * self.set.casters().len();
+        let upload: Vec<usize> = if all {
+            (0..positions.len()).collect()
+        } else {
+            moved
+        };
+        self.buffers.truncate(positions.len());
+        for i in upload {
+            let buffers = ShadowVolumeBuffers::upload(ctx, self.set.volumes_for_light(i))?;
+            if i < self.buffers.len() {
+                self.buffers[i] = buffers;
+            } else {
+                self.buffers.push(buffers);
+            }
+        }
+        Ok(rebuilt)
+    }
+
+    /// Writes the current positions of `direct`'s lights as the points the
+    /// volumes are extruded from this frame (section 4.4: a jittered light
+    /// pivots the volumes built for its unjittered position). Fails when
+    /// `direct` has another number of lights than the volumes.
+    pub fn prepare(&self, ctx: &GpuContext, direct: &DirectLights) -> Result<()> {
+        if direct.len() != self.buffers.len() {
+            return Err(MprError::InvalidSetting {
+                what: "shadow volumes",
+                message: format!(
+                    "{} direct lights for shadow volumes built for {} lights",
+                    direct.len(),
+                    self.buffers.len()
+                ),
+            });
+        }
+        let positions: Vec<Vec3> = direct.lights().map(|l| l.position()).collect();
+        let mut lights = self.lights.lock().unwrap_or_else(|e| e.into_inner());
+        lights.write(ctx, &self.pass, &positions)
+    }
+
+    /// The volumes on the CPU.
+    pub fn set(&self) -> &ShadowVolumeSet {
+        &self.set
+    }
+
+    /// The pass that counts them.
+    pub fn pass(&self) -> &ShadowVolumePass {
+        &self.pass
+    }
+
+    /// Records, for the view of `slot`, every light of `direct` under its
+    /// volumes (sections 4.1, 7.2, 7.3): per light one render pass over the
+    /// HDR target with begin, the volume count, the light without its shadow
+    /// map where the stencil is `SHAD_ZERO`, and the restore of the view's
+    /// reference. Run after [`ShadowVolumes::prepare`] in the same submission.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &DirectPass,
+        frame: &FrameInputs<'_>,
+        direct: &DirectLights,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        let lights = self.lights.lock().unwrap_or_else(|e| e.into_inner());
+        if direct.len() != self.buffers.len() || lights.len() != self.buffers.len() {
+            return Err(MprError::InvalidSetting {
+                what: "shadow volumes",
+                message: format!(
+                    "{} direct lights and {} prepared positions for volumes of {} lights \
+                     (call ShadowVolumes::prepare)",
+                    direct.len(),
+                    lights.len(),
+                    self.buffers.len()
+                ),
+            });
+        }
+        for (i, buffers) in self.buffers.iter().enumerate() {
+            let mut render = ShadowVolumePass::begin_pass(
+                encoder,
+                frame.targets,
+                &frame.targets.hdr.view,
+                "shadowed-direct",
+            );
+            self.pass
+                .record_begin(&mut render, slot.stencil_reference)?;
+            self.pass
+                .record_volumes(&mut render, views, slot, &lights, i, buffers)?;
+            pass.record_light_under_stencil(&mut render, frame.scene, direct, i, views, slot)?;
+            self.pass.record_end(&mut render, slot.stencil_reference)?;
+        }
+        Ok(())
+    }
+}
+
+/// The direct pass with shadow volumes in place of shadow maps, as one
+/// [`LightPass`] of the frame (Diefenbach & Badler 1997, sections 4.1, 7.1–7.3).
+#[derive(Debug, Clone, Copy)]
+pub struct ShadowedDirect<'a> {
+    /// The direct pass whose unshadowed pipeline adds each light.
+    pub direct: &'a DirectPass,
+    /// The volumes and their pass.
+    pub volumes: &'a ShadowVolumes,
+}
+
+impl LightPass for ShadowedDirect<'_> {
+    fn encode_view(
+        &self,
+        _ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        match frame.direct {
+            Some(lights) => {
+                self.volumes
+                    .encode_view(encoder, self.direct, frame, lights, views, slot)
+            }
+            None => Ok(()),
+        }
+    }
+}
