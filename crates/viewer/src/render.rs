@@ -100,6 +100,15 @@ impl Technique {
     }
 }
 
+/// How the direct light's shadows are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ShadowArg {
+    /// Silhouette shadow volumes in the stencil (Diefenbach & Badler 1997, section 4.1).
+    Volumes,
+    /// Cube shadow maps (Stürzlinger & Bastos 1997, section 2.2.1).
+    Maps,
+}
+
 /// Restriction of splats to their visible surface.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum RestrictionArg {
@@ -281,6 +290,12 @@ pub struct RenderArgs {
     /// reflectance times the scene's mean radiance instead of a further image.
     #[arg(long, default_value_t = DEFAULT_SPEC_DEPTH)]
     pub spec_depth: u32,
+    /// `--technique mpr`: shadows of the direct light by silhouette shadow
+    /// volumes (Diefenbach & Badler 1997, section 4.1; with `--light-samples`
+    /// K > 1 the K jittered lights share the volume of their area light's
+    /// centre, section 4.4's pivot approximation) or by cube shadow maps.
+    #[arg(long, value_enum, default_value_t = ShadowArg::Volumes)]
+    pub shadows: ShadowArg,
     /// Antialiasing: frames rendered with sub-pixel jittered projections and
     /// averaged, a box filter over each pixel (Diefenbach & Badler 1997,
     /// section 7); 1 renders once through the pixel centres.
@@ -557,12 +572,22 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
+    let shadow_volumes = args.technique == Technique::Mpr && args.shadows == ShadowArg::Volumes;
     let direct = if args.technique.direct_light() {
         graph = graph.with_direct(&ctx, targets.hdr_format())?;
         let pass = graph.direct.as_ref().context("direct pass")?;
         let lights = DirectLights::jittered(&ctx, pass, &scene, glossy, args.light_samples)
             .with_context(|| format!("scene `{}`", scene.name))?;
-        graph.update_shadows(&ctx, &scene_buffers, &lights)?;
+        if shadow_volumes {
+            graph = graph.with_shadow_volumes(
+                &ctx,
+                targets.hdr_format(),
+                &scene,
+                &pivot_lights(scene.lights(), args.light_samples),
+            )?;
+        } else {
+            graph.update_shadows(&ctx, &scene_buffers, &lights)?;
+        }
         Some(lights)
     } else {
         None
@@ -649,6 +674,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 &ctx.queue,
                 &jittered_point_lights(scene.lights(), args.light_samples, rotation),
             )?;
+            if shadow_volumes {
+                // The volumes follow the new positions by the pivot approximation.
+                return Ok(());
+            }
             graph.update_shadows(&ctx, &scene_buffers, lights)
         },
     )?;
@@ -691,6 +720,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "light_samples": args.technique.direct_light().then_some(args.light_samples),
         "spec_depth": (args.technique == Technique::Mpr).then_some(args.spec_depth),
+        "shadows": args.technique.direct_light().then(|| if shadow_volumes { "volumes" } else { "maps" }),
+        "shadow_volume_bytes": graph.shadow_volumes.as_ref().map(|v| v.set().byte_size()),
         "specular_faces": graph.specular.as_ref().map(|s| s.faces().len()),
         "scene_passes": scene_passes,
         "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
@@ -803,6 +834,22 @@ fn splat_setup(
         estimator,
         lambertian,
     })
+}
+
+/// The lights whose silhouettes the shadow volumes are built from, one per
+/// direct light in [`jittered_point_lights`]' order: each of an area light's
+/// `k` jittered lights gets the point light at its centre, so moving to the
+/// jittered position moves only the far vertices (Diefenbach & Badler 1997,
+/// section 4.4, the pivot approximation); point lights stay themselves.
+fn pivot_lights(lights: &[lustre_geometry::Light], k: u32) -> Vec<lustre_geometry::Light> {
+    lights
+        .iter()
+        .flat_map(|l| {
+            let centre = l.as_point_lights(1, glam::Vec2::ZERO);
+            let copies = if l.is_delta() { 1 } else { k as usize };
+            std::iter::repeat_n(centre, copies).flatten()
+        })
+        .collect()
 }
 
 /// `out` with the extension `.json`.
