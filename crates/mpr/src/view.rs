@@ -92,6 +92,34 @@ impl View {
         .with_clip_plane(keep, method)
     }
 
+    /// The virtual view through a glass slab whose near face is `plane` (its
+    /// normal towards the eye), `thickness` deep, in paraxial in-out
+    /// refraction (section 2; Heckbert & Hanrahan's paraxial refraction at
+    /// both faces): the world drawn moved by `shift` along the normal, the
+    /// eye moved back by as much, one level deeper, and everything nearer
+    /// than the far face clipped.
+    pub fn through_slab(
+        &self,
+        plane: &Plane,
+        shift: f32,
+        thickness: f32,
+        method: ClipMethod,
+    ) -> Self {
+        let translation = Mat4::from_translation(plane.normal * shift);
+        // Keep n·p - d <= -t - ε: beyond the far face, seen from the eye's side.
+        let epsilon = 1e-4 * plane.signed_distance(self.eye).abs();
+        let keep = -plane.to_vec4() - Vec4::W * (thickness + epsilon);
+        Self {
+            view: self.view * translation,
+            projection: self.projection,
+            eye: self.eye - plane.normal * shift,
+            clip_plane: None,
+            stencil_reference: self.stencil_reference + 1,
+            level: self.level + 1,
+        }
+        .with_clip_plane(keep, method)
+    }
+
     /// Clips away world points with `plane · (p, 1) < 0` by `method`.
     pub fn with_clip_plane(mut self, plane: Vec4, method: ClipMethod) -> Self {
         match method {

@@ -13,7 +13,7 @@ use glam::{Affine3A, Vec2, Vec3};
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Ray, Rgb, Scene};
 use lustre_mpr::frame::FrameInputs;
-use lustre_mpr::passes::specular::SpecularSettings;
+use lustre_mpr::passes::specular::{SpecularFace, SpecularKind, SpecularSettings, specular_faces};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::readback::read_rgba_f32;
 use lustre_mpr::{ClipMethod, FrameGraph, RenderTargets, SceneBuffers};
@@ -279,5 +279,153 @@ fn facing_mirrors_show_exactly_d_nested_images_as_the_cpu_ray_tracer_does() {
                 "{method:?} depth {depth}: {wrong} of {checked} interior pixels differ from the CPU ray tracer"
             );
         }
+    }
+}
+
+/// A glass slab (η = 1.5, 5 cm) between the camera and an emissive cube.
+fn slab_scene() -> Scene {
+    let glass = Material::new(
+        "glass",
+        MaterialModel::Dielectric {
+            ior: 1.5,
+            transmittance: Rgb::ONE,
+        },
+    );
+    let glow = Material::diffuse("glow", Rgb::ZERO).with_emission(LE);
+    let mut slab = cube("slab", Vec3::new(0.0, 0.0, 0.3), 1.0, 0);
+    // Flatten the unit cube to 2 × 2 × 0.05 m around z = 0.3.
+    for p in &mut slab.positions {
+        p.z = 0.3 + (p.z - 0.3) * 0.025;
+    }
+    let meshes = vec![slab, cube("cube", Vec3::new(0.1, 0.05, -0.6), 0.2, 1)];
+    let objects = (0..meshes.len() as u32)
+        .map(|m| Object {
+            name: meshes[m as usize].name.clone(),
+            meshes: vec![m],
+            transform: Affine3A::IDENTITY,
+        })
+        .collect();
+    let camera = Camera::look_at(
+        Vec3::new(0.25, 0.2, 1.6),
+        Vec3::new(0.0, 0.0, -0.6),
+        Vec3::Y,
+        40.0,
+    );
+    Scene::new(
+        "slab",
+        meshes,
+        vec![glass, glow],
+        objects,
+        Vec::new(),
+        camera,
+    )
+    .unwrap()
+}
+
+/// CPU twin of the paraxial slab image: where the primary ray meets the
+/// slab's near face, the scene beyond the far face seen from the eye moved
+/// back by `shift` along the normal, times the face's factor.
+fn trace_slab(scene: &Scene, bvh: &Bvh, ray: Ray, faces: &[SpecularFace]) -> Vec3 {
+    let Some(hit) = bvh.closest_hit(&ray) else {
+        return Vec3::ZERO;
+    };
+    let emitted = |hit: &lustre_geometry::Hit, dir: Vec3| {
+        let e = scene.materials()[hit.material as usize].emission;
+        if dir.dot(hit.geometric_normal) < 0.0 {
+            Vec3::new(e.x, e.y, e.z)
+        } else {
+            Vec3::ZERO
+        }
+    };
+    let Some(face) = faces.iter().find(|f| f.surface == hit.surface) else {
+        return emitted(&hit, ray.direction);
+    };
+    let SpecularKind::Slab { shift, thickness } = face.kind else {
+        panic!("the slab scene has no mirror");
+    };
+    let n = face.plane.normal;
+    let origin = ray.origin - n * shift;
+    // Start on the clip plane beyond the far face.
+    let sd = face.plane.signed_distance(origin);
+    let along = ray.direction.dot(n);
+    let lambda = (-(thickness + 1e-4 * sd.abs()) - sd) / along;
+    let beyond = Ray::new(origin + ray.direction * lambda, ray.direction);
+    match bvh.closest_hit(&beyond) {
+        Some(h) => face.factor * emitted(&h, ray.direction),
+        None => Vec3::ZERO,
+    }
+}
+
+#[test]
+fn a_glass_slab_shows_the_paraxially_shifted_scene_as_its_cpu_twin_does() {
+    let Some(ctx) = gpu_or_skip("a_glass_slab_shows_the_paraxially_shifted_scene") else {
+        return;
+    };
+    let scene = slab_scene();
+    let camera = scene.camera().with_aspect(1.0);
+    let faces = specular_faces(&scene);
+    // Every face of the box is a slab face; the two large ones are 5 cm
+    // apart: shift t (1 - 1/1.5). (The narrow sides see 2 m of glass.)
+    assert_eq!(faces.len(), 6, "{faces:?}");
+    for face in faces.iter().filter(|f| f.plane.normal.z.abs() > 0.5) {
+        let SpecularKind::Slab { shift, thickness } = face.kind else {
+            panic!("{face:?}");
+        };
+        assert!((thickness - 0.05).abs() < 1e-5, "{thickness}");
+        assert!((shift - 0.05 / 3.0).abs() < 1e-5, "{shift}");
+        assert!((face.factor.x - 0.96 * 0.96).abs() < 1e-5);
+    }
+    let bvh = Bvh::build(&scene);
+    let cpu_at = |offset: Vec2| -> Vec<Vec3> {
+        (0..SIZE)
+            .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let ray = camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, offset));
+                trace_slab(&scene, &bvh, ray, &faces)
+            })
+            .collect()
+    };
+    let cpu = cpu_at(Vec2::splat(0.5));
+    let corners: Vec<Vec<Vec3>> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
+        .iter()
+        .map(|&(x, y)| cpu_at(Vec2::new(x, y)))
+        .collect();
+    let interior: Vec<bool> = (0..cpu.len())
+        .map(|i| {
+            corners
+                .iter()
+                .all(|c| (c[i] - cpu[i]).abs().max_element() < 1e-5)
+        })
+        .collect();
+    // The cube is seen through the glass, and only through it.
+    let through = cpu
+        .iter()
+        .filter(|v| (v.x - 0.9216 * LE.x).abs() < 1e-4)
+        .count();
+    assert!(
+        through > 100,
+        "{through} pixels see the cube through the slab"
+    );
+    let mut methods = vec![ClipMethod::ObliqueNearPlane];
+    if ctx.has_clip_distances() {
+        methods.push(ClipMethod::Hardware);
+    }
+    for method in methods {
+        let (gpu, views) = gpu_image(&ctx, &scene, &camera, 1, method);
+        assert_eq!(
+            views, 2,
+            "{method:?}: the camera and the view through the near face"
+        );
+        let checked = interior.iter().filter(|&&i| i).count();
+        let wrong = (0..cpu.len())
+            .filter(|&i| interior[i])
+            .filter(|&i| {
+                (gpu[i] - cpu[i]).abs().max_element() > 1e-3 * (1.0 + cpu[i].max_element())
+            })
+            .count();
+        assert!(
+            (wrong as f64) <= 0.005 * checked as f64,
+            "{method:?}: {wrong} of {checked} interior pixels differ from the CPU twin"
+        );
     }
 }

@@ -71,30 +71,86 @@ pub fn mean_radiance(scene: &Scene) -> Vec3 {
     Vec3::new(power.x, power.y, power.z) / (std::f32::consts::PI * area)
 }
 
-/// One planar mirror face: a scene surface with a [`MaterialModel::Mirror`] material.
+/// How a specular face makes its image (section 3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpecularKind {
+    /// A planar mirror: the mirror transform of its plane.
+    Mirror,
+    /// One face of a glass slab (in-out refraction, section 2): seen through
+    /// it, a point beyond the slab appears moved towards the viewer along the
+    /// face's normal by `shift = t (1 - 1/η)`, the paraxial limit of Heckbert &
+    /// Hanrahan's refraction at both faces; geometry nearer than the far face
+    /// (`thickness` t behind this one) is clipped.
+    Slab {
+        /// Apparent displacement `t (1 - 1/η)` in m.
+        shift: f32,
+        /// Thickness t of the slab in m.
+        thickness: f32,
+    },
+}
+
+/// One planar specular face: a mirror, or a face of a glass slab.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpecularFace {
     /// Its `SurfaceId`.
     pub surface: u32,
-    /// Its plane; the mirror reflects on the side its normal points to.
+    /// Its plane; the face makes its image for eyes on the side its normal points to.
     pub plane: Plane,
+    /// Mirror or slab.
+    pub kind: SpecularKind,
+    /// What it passes of its image: the mirror's reflectance, or the slab's
+    /// transmittance times `(1 - F0)²` (Fresnel at normal incidence, both faces).
+    pub factor: Vec3,
 }
 
-/// The mirror faces of `scene`: planar surfaces whose material is a mirror.
+/// The specular faces of `scene`: planar surfaces of a mirror material, and
+/// planar faces of a dielectric whose mesh has a parallel face of the same
+/// material facing the other way behind them (a slab). A dielectric face
+/// without such a partner (a single interface) is not drawn as a specular
+/// face.
 pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
-    scene
-        .surfaces()
+    let surfaces = scene.surfaces();
+    let planar = |s: &lustre_geometry::Surface| match s.kind {
+        SurfaceKind::Planar(plane) => Some(plane),
+        SurfaceKind::Curved => None,
+    };
+    surfaces
         .iter()
         .enumerate()
         .filter_map(|(id, surface)| {
-            let SurfaceKind::Planar(plane) = surface.kind else {
-                return None;
-            };
+            let plane = planar(surface)?;
             let material = &scene.materials()[surface.material as usize];
-            matches!(material.model, MaterialModel::Mirror { .. }).then(|| SpecularFace {
-                surface: id as u32,
-                plane,
-            })
+            match material.model {
+                MaterialModel::Mirror { reflectance } => Some(SpecularFace {
+                    surface: id as u32,
+                    plane,
+                    kind: SpecularKind::Mirror,
+                    factor: Vec3::new(reflectance.x, reflectance.y, reflectance.z),
+                }),
+                MaterialModel::Dielectric { ior, transmittance } => {
+                    // The nearest parallel, opposite face of the same mesh and material behind this one.
+                    let thickness = surfaces
+                        .iter()
+                        .filter(|o| o.mesh == surface.mesh && o.material == surface.material)
+                        .filter_map(planar)
+                        .filter(|o| o.normal.dot(plane.normal) < -0.9999)
+                        .map(|o| plane.offset + o.offset)
+                        .filter(|&t| t > 0.0)
+                        .min_by(f32::total_cmp)?;
+                    let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+                    let pass = (1.0 - f0) * (1.0 - f0);
+                    Some(SpecularFace {
+                        surface: id as u32,
+                        plane,
+                        kind: SpecularKind::Slab {
+                            shift: thickness * (1.0 - 1.0 / ior),
+                            thickness,
+                        },
+                        factor: Vec3::new(transmittance.x, transmittance.y, transmittance.z) * pass,
+                    })
+                }
+                _ => None,
+            }
         })
         .collect()
 }
@@ -161,7 +217,12 @@ impl ViewTree {
                 });
             }
             let child = self.views.len();
-            self.views.push(view.reflected(&face.plane, clip));
+            self.views.push(match face.kind {
+                SpecularKind::Mirror => view.reflected(&face.plane, clip),
+                SpecularKind::Slab { shift, thickness } => {
+                    view.through_slab(&face.plane, shift, thickness, clip)
+                }
+            });
             self.children.push(Vec::new());
             self.limit_faces.push(Vec::new());
             self.children[index].push((f, child));
@@ -244,21 +305,17 @@ impl SpecularPass {
             });
         }
         let faces = specular_faces(scene);
-        let mut records: Vec<GpuFace> = scene
-            .surfaces()
-            .iter()
-            .map(|s| {
-                let material = &scene.materials()[s.material as usize];
-                match material.model {
-                    MaterialModel::Mirror { reflectance } => GpuFace {
-                        reflectance: [reflectance.x, reflectance.y, reflectance.z, 1.0],
-                    },
-                    _ => GpuFace {
-                        reflectance: [0.0; 4],
-                    },
-                }
-            })
-            .collect();
+        let mut records = vec![
+            GpuFace {
+                reflectance: [0.0; 4],
+            };
+            scene.surfaces().len()
+        ];
+        for face in &faces {
+            records[face.surface as usize] = GpuFace {
+                reflectance: face.factor.extend(1.0).to_array(),
+            };
+        }
         if records.is_empty() {
             records.push(GpuFace {
                 reflectance: [0.0; 4],

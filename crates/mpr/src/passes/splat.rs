@@ -16,10 +16,10 @@ use lustre_photon::{Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, Sur
 
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
+use crate::passes::redraw::{scene_module, view_stencil};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
 use crate::shaders::{DEPTH_WGSL, with_materials, with_view};
 use crate::target::RenderTargets;
-use crate::passes::redraw::{scene_module, view_stencil};
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
