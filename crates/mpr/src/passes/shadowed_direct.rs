@@ -35,10 +35,30 @@ use crate::{GpuContext, MprError, Result};
 pub struct ShadowVolumes {
     pass: ShadowVolumePass,
     set: ShadowVolumeSet,
-    /// One vertex buffer per light.
+    /// One vertex buffer per distinct light position.
     buffers: Vec<ShadowVolumeBuffers>,
+    /// Per light, the index of its volumes in `buffers`: the jittered lights
+    /// of one area light share the volumes of its centre (section 4.4).
+    volume_of: Vec<usize>,
     /// The positions the far vertices are extruded from, written per frame.
     lights: Mutex<VolumeLights>,
+}
+
+/// The distinct positions of `positions` in first-seen order and, per
+/// position, the index of its distinct one.
+fn distinct(positions: &[Vec3]) -> (Vec<Vec3>, Vec<usize>) {
+    let mut unique: Vec<Vec3> = Vec::new();
+    let index = positions
+        .iter()
+        .map(|p| match unique.iter().position(|u| u == p) {
+            Some(i) => i,
+            None => {
+                unique.push(*p);
+                unique.len() - 1
+            }
+        })
+        .collect();
+    (unique, index)
 }
 
 fn geometry_error(e: lustre_geometry::GeometryError) -> MprError {
@@ -61,8 +81,9 @@ impl ShadowVolumes {
     ) -> Result<Self> {
         let pass = ShadowVolumePass::new(ctx, hdr_format)?;
         let positions: Vec<Vec3> = lights.iter().map(light_position).collect();
-        let set = ShadowVolumeSet::new(scene, &positions).map_err(geometry_error)?;
-        let buffers = (0..positions.len())
+        let (unique, volume_of) = distinct(&positions);
+        let set = ShadowVolumeSet::new(scene, &unique).map_err(geometry_error)?;
+        let buffers = (0..unique.len())
             .map(|i| ShadowVolumeBuffers::upload(ctx, set.volumes_for_light(i)))
             .collect::<Result<Vec<_>>>()?;
         let mut volume_lights = VolumeLights::new(ctx, &pass, positions.len());
@@ -71,6 +92,7 @@ impl ShadowVolumes {
             pass,
             set,
             buffers,
+            volume_of,
             lights: Mutex::new(volume_lights),
         })
     }
@@ -80,7 +102,9 @@ impl ShadowVolumes {
     /// whose volumes changed; nothing is uploaded when nothing moved. Returns
     /// the number of volumes rebuilt.
     pub fn refresh(&mut self, ctx: &GpuContext, scene: &Scene, lights: &[Light]) -> Result<usize> {
-        let positions: Vec<Vec3> = lights.iter().map(light_position).collect();
+        let all_positions: Vec<Vec3> = lights.iter().map(light_position).collect();
+        let (positions, volume_of) = distinct(&all_positions);
+        self.volume_of = volume_of;
         let old = self.set.lights().to_vec();
         let rebuilt = self
             .set
@@ -116,13 +140,13 @@ impl ShadowVolumes {
     /// pivots the volumes built for its unjittered position). Fails when
     /// `direct` has another number of lights than the volumes.
     pub fn prepare(&self, ctx: &GpuContext, direct: &DirectLights) -> Result<()> {
-        if direct.len() != self.buffers.len() {
+        if direct.len() != self.volume_of.len() {
             return Err(MprError::InvalidSetting {
                 what: "shadow volumes",
                 message: format!(
                     "{} direct lights for shadow volumes built for {} lights",
                     direct.len(),
-                    self.buffers.len()
+                    self.volume_of.len()
                 ),
             });
         }
@@ -157,7 +181,7 @@ impl ShadowVolumes {
         slot: ViewSlot,
     ) -> Result<()> {
         let lights = self.lights.lock().unwrap_or_else(|e| e.into_inner());
-        if direct.len() != self.buffers.len() || lights.len() != self.buffers.len() {
+        if direct.len() != self.volume_of.len() || lights.len() != self.volume_of.len() {
             return Err(MprError::InvalidSetting {
                 what: "shadow volumes",
                 message: format!(
@@ -165,11 +189,12 @@ impl ShadowVolumes {
                      (call ShadowVolumes::prepare)",
                     direct.len(),
                     lights.len(),
-                    self.buffers.len()
+                    self.volume_of.len()
                 ),
             });
         }
-        for (i, buffers) in self.buffers.iter().enumerate() {
+        for (i, &volume) in self.volume_of.iter().enumerate() {
+            let buffers = &self.buffers[volume];
             let mut render = ShadowVolumePass::begin_pass(
                 encoder,
                 frame.targets,
