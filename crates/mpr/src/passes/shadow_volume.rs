@@ -32,6 +32,20 @@ use crate::{GpuContext, MprError, Result};
 /// compiled after the view block ([`with_view`]).
 pub const SHADOW_VOLUME_WGSL: &str = include_str!("shadow_volume.wgsl");
 
+/// Depth bias of the volumes: four units of the depth format's resolution
+/// farther (negative with reverse Z), no slope term. The front cap lies on the occluder's own lit
+/// triangles, which the depth pass drew with another vertex shader; where
+/// the two round differently by an ulp, the cap's depth fail (counted, as
+/// the CPU twin counts it) flickered into a pass, drawing specks of shadow on
+/// lit occluders (seen on an NVIDIA H100, not on lavapipe). Pushed back, the
+/// cap always fails there; the shift of shadow boundaries on receivers is
+/// far below a pixel.
+pub const VOLUME_DEPTH_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState {
+    constant: -4,
+    slope_scale: 0.0,
+    clamp: 0.0,
+};
+
 /// The stencil "zero" of the plus-minus count: three quarters of the 8-bit
 /// range (section 7.3); a pixel is lit where its stencil equals it.
 pub const SHAD_ZERO: u32 = 192;
@@ -331,7 +345,11 @@ impl ShadowVolumePass {
                         depth_write_enabled: Some(false),
                         depth_compare: Some(depth_compare),
                         stencil,
-                        bias: wgpu::DepthBiasState::default(),
+                        bias: if volume {
+                            VOLUME_DEPTH_BIAS
+                        } else {
+                            wgpu::DepthBiasState::default()
+                        },
                     }),
                     multisample: wgpu::MultisampleState::default(),
                     fragment: Some(wgpu::FragmentState {
