@@ -720,7 +720,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "light_samples": args.technique.direct_light().then_some(args.light_samples),
         "spec_depth": (args.technique == Technique::Mpr).then_some(args.spec_depth),
-        "shadows": args.technique.direct_light().then(|| if shadow_volumes { "volumes" } else { "maps" }),
+        "shadows": args.technique.direct_light().then_some(if shadow_volumes { "volumes" } else { "maps" }),
         "shadow_volume_bytes": graph.shadow_volumes.as_ref().map(|v| v.set().byte_size()),
         "specular_faces": graph.specular.as_ref().map(|s| s.faces().len()),
         "scene_passes": scene_passes,
