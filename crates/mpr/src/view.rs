@@ -145,6 +145,26 @@ impl View {
         }
     }
 
+    /// Whether the view may see any of the convex hull of `points`: false
+    /// only when every point lies outside one side of the frustum (left,
+    /// right, bottom, top, near, each a half space of world space since clip
+    /// coordinates are linear in the world point) or on the removed side of
+    /// the clip plane. Conservative: may answer true for a hull it misses.
+    pub fn may_see(&self, points: &[Vec3]) -> bool {
+        let vp = self.view_projection();
+        let clip: Vec<Vec4> = points.iter().map(|p| vp * p.extend(1.0)).collect();
+        let all = |outside: fn(Vec4) -> bool| clip.iter().all(|&c| outside(c));
+        let culled = all(|c| c.x < -c.w)
+            || all(|c| c.x > c.w)
+            || all(|c| c.y < -c.w)
+            || all(|c| c.y > c.w)
+            || all(|c| c.z > c.w)
+            || self
+                .clip_plane
+                .is_some_and(|plane| points.iter().all(|p| plane.dot(p.extend(1.0)) < 0.0));
+        !points.is_empty() && !culled
+    }
+
     /// Whether world point `p` survives this view's clipping (hardware plane and projection).
     pub fn keeps(&self, p: Vec3) -> bool {
         let clip = self.view_projection() * p.extend(1.0);
@@ -320,5 +340,80 @@ impl ViewBuffer {
     pub fn bind(&self, pass: &mut wgpu::RenderPass<'_>, group: u32, slot: ViewSlot) {
         pass.set_bind_group(group, &self.bind_group, &[slot.offset]);
         pass.set_stencil_reference(slot.stencil_reference);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera() -> Camera {
+        Camera::look_at(
+            Vec3::new(0.3, 0.2, 2.0),
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::Y,
+            50.0,
+        )
+    }
+
+    /// Depth (z/w) and whether the point is inside the clip volume (0 ≤ z ≤ w, w > 0).
+    fn depth(view: &View, p: Vec3) -> (f32, bool) {
+        let c = view.view_projection() * p.extend(1.0);
+        (c.z / c.w, c.w > 0.0 && c.z >= 0.0 && c.z <= c.w)
+    }
+
+    #[test]
+    fn the_oblique_near_plane_is_the_clip_plane_and_keeps_depth_order() {
+        // A mirror at x = -1 facing +x; the reflected view keeps x >= -1.
+        let mirror = Plane::from_point_normal(Vec3::new(-1.0, 0.0, 0.0), Vec3::X);
+        let root = View::from_camera(&camera().with_aspect(1.0));
+        let view = root.reflected(&mirror, ClipMethod::ObliqueNearPlane);
+        assert!(view.clip_plane.is_none() && view.is_mirrored());
+        // On the plane (just in front of its 1e-4 offset) depth is 1, the near plane.
+        let on = Vec3::new(-1.0 + 1e-3, 0.1, 0.2);
+        let (d, inside) = depth(&view, on);
+        assert!(inside && (d - 1.0).abs() < 1e-3, "{d}");
+        // Behind the mirror (x < -1): clipped.
+        assert!(!depth(&view, Vec3::new(-1.5, 0.0, 0.0)).1);
+        // Kept points along one ray from the virtual eye: farther is smaller (reverse Z), all in [0, 1].
+        let dir = (Vec3::new(-1.0, 0.05, 0.1) - view.eye).normalize();
+        let mut last = f32::INFINITY;
+        for t in [3.0f32, 3.5, 5.0, 10.0, 100.0] {
+            let p = view.eye + dir * t;
+            if mirror.signed_distance(p) <= 1e-3 {
+                continue;
+            }
+            let (d, inside) = depth(&view, p);
+            assert!(inside, "t = {t}: depth {d}");
+            assert!(d < last, "t = {t}: {d} after {last}");
+            last = d;
+        }
+        // The hardware variant keeps the same points by its plane.
+        let hw = root.reflected(&mirror, ClipMethod::Hardware);
+        assert!(hw.keeps(Vec3::new(0.0, 0.0, 0.0)));
+        assert!(!hw.keeps(Vec3::new(-1.5, 0.0, 0.0)));
+    }
+
+    #[test]
+    fn may_see_culls_by_frustum_side_and_clip_plane_only() {
+        let root = View::from_camera(&camera().with_aspect(1.0));
+        // A quad in front of the camera, one behind it, one far to the right.
+        let quad = |c: Vec3| [c + Vec3::Y * 0.1, c - Vec3::Y * 0.1, c + Vec3::Z * 0.1];
+        assert!(root.may_see(&quad(Vec3::new(-1.0, 0.0, 0.0))));
+        assert!(!root.may_see(&quad(Vec3::new(0.3, 0.2, 4.0))));
+        assert!(!root.may_see(&quad(Vec3::new(20.0, 0.0, 0.0))));
+        // A triangle straddling the frustum's left side is kept.
+        let wide = [
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::new(-30.0, 0.0, 0.0),
+            Vec3::new(-1.0, 0.1, 0.0),
+        ];
+        assert!(root.may_see(&wide));
+        assert!(!root.may_see(&[]));
+        // Through a mirror at x = -1, what lies behind the mirror is clipped.
+        let mirror = Plane::from_point_normal(Vec3::new(-1.0, 0.0, 0.0), Vec3::X);
+        let view = root.reflected(&mirror, ClipMethod::Hardware);
+        assert!(!view.may_see(&quad(Vec3::new(-2.0, 0.0, 0.0))));
+        assert!(view.may_see(&quad(Vec3::new(0.5, 0.0, 0.0))));
     }
 }

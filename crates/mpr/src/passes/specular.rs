@@ -101,6 +101,8 @@ pub struct SpecularFace {
     /// What it passes of its image: the mirror's reflectance, or the slab's
     /// transmittance times `(1 - F0)²` (Fresnel at normal incidence, both faces).
     pub factor: Vec3,
+    /// The corners of its triangles in world space, for culling against a view.
+    pub corners: Vec<Vec3>,
 }
 
 /// The specular faces of `scene`: planar surfaces of a mirror material, and
@@ -114,6 +116,16 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
         SurfaceKind::Planar(plane) => Some(plane),
         SurfaceKind::Curved => None,
     };
+    let corners = |surface: &lustre_geometry::Surface| -> Vec<Vec3> {
+        let positions = scene.world_positions(surface.mesh);
+        let mesh = &scene.meshes()[surface.mesh as usize];
+        surface
+            .triangles
+            .iter()
+            .flat_map(|&t| mesh.indices[t as usize])
+            .map(|i| positions[i as usize])
+            .collect()
+    };
     surfaces
         .iter()
         .enumerate()
@@ -126,6 +138,7 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                     plane,
                     kind: SpecularKind::Mirror,
                     factor: Vec3::new(reflectance.x, reflectance.y, reflectance.z),
+                    corners: corners(surface),
                 }),
                 MaterialModel::Dielectric { ior, transmittance } => {
                     // The nearest parallel, opposite face of the same mesh and material behind this one.
@@ -147,6 +160,7 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                             thickness,
                         },
                         factor: Vec3::new(transmittance.x, transmittance.y, transmittance.z) * pass,
+                        corners: corners(surface),
                     })
                 }
                 _ => None,
@@ -160,7 +174,9 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
 /// `draw_spec_objects`), or the faces at the recursion limit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ViewTree {
-    /// Every view; index 0 is the camera.
+    /// Every view; index 0 is the camera. A view exists for each face
+    /// that may be seen (turned towards the eye, inside the frustum, not
+    /// wholly clipped: [`View::may_see`]).
     pub views: Vec<View>,
     /// Per view: `(face index, child view index)` for each face it recurses into.
     pub children: Vec<Vec<(usize, usize)>>,
@@ -201,7 +217,9 @@ impl ViewTree {
     ) -> Result<()> {
         let view = self.views[index];
         for (f, face) in faces.iter().enumerate() {
-            if face.plane.signed_distance(view.eye) <= 0.0 {
+            // Viewpoint culling (section 8.2): a face turned away from the
+            // eye, outside the frustum or wholly clipped makes no image.
+            if face.plane.signed_distance(view.eye) <= 0.0 || !view.may_see(&face.corners) {
                 continue;
             }
             if view.level >= max_depth {
