@@ -695,6 +695,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     write_outputs(args, &image)?;
     timings.insert("write".into(), json!(ms(start)));
     let scene_passes = graph.view_tree(&ctx, &camera)?.scene_passes();
+    // Multi-pass pipeline rendering's pass counts (tables 1-3, equations 7 and 8).
+    let mpr_passes = json!({
+        "shadow_volume_bytes": graph.shadow_volumes.as_ref().map(|v| v.set().byte_size()),
+        "specular_faces": graph.specular.as_ref().map(|s| s.faces().len()),
+        "scene_passes": scene_passes,
+        "shadow_passes": graph.shadow_volumes.as_ref().and(direct.as_ref()).map(|d| scene_passes * d.len()),
+        "equation_8_scene_passes": graph.specular.as_ref().map(|s| {
+            (s.faces().len() as f64).powi(args.spec_depth as i32) + 1.0
+        }),
+        "equation_7_shadow_passes_per_light": graph.specular.as_ref().map(|s| {
+            let (n, d) = (s.faces().len() as f64, f64::from(args.spec_depth));
+            n * (d * d + 3.0 * d) / 2.0 + 1.0
+        }),
+        "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
+    });
     let total: f64 = timings.values().filter_map(serde_json::Value::as_f64).sum();
     timings.insert("total".into(), json!(total));
 
@@ -720,11 +735,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "light_samples": args.technique.direct_light().then_some(args.light_samples),
         "spec_depth": (args.technique == Technique::Mpr).then_some(args.spec_depth),
+        "passes": mpr_passes,
         "shadows": args.technique.direct_light().then_some(if shadow_volumes { "volumes" } else { "maps" }),
-        "shadow_volume_bytes": graph.shadow_volumes.as_ref().map(|v| v.set().byte_size()),
-        "specular_faces": graph.specular.as_ref().map(|s| s.faces().len()),
-        "scene_passes": scene_passes,
-        "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
         "direct_lights": direct.as_ref().map(DirectLights::len),
         "aa": args.aa,
         "aa_splats": args.aa_splats,
