@@ -1,0 +1,181 @@
+//! Frame times of multi-pass pipeline rendering on `bathroom` at 640×480
+//! (Diefenbach & Badler 1997, section 8, table 2), on the adapter
+//! `GpuContext::new(AdapterPreference::Hardware)` gives (printed).
+//!
+//! Configurations, each a frame of the frame graph (clear, `draw_window` of
+//! every view: depth pass, specular masks and restores, emitters, direct
+//! light), encode + submit + `device.poll(wait)`, with everything built
+//! before timing; the indirect term (splats, diffuse textures) is left out,
+//! as the paper's table 2 frames used a constant ambient term:
+//!
+//! - `d1-maps`: specular depth 1, the area lights as one cosine point light
+//!   each with cube shadow maps;
+//! - `d1-volumes`, `d2-volumes`: depth 1 or 2, shadow volumes;
+//! - `d2-volumes-k4`: depth 2, shadow volumes, 4 jittered point lights per
+//!   area light (soft shadows, section 4.4).
+//!
+//! Criterion times at least 10 frames per configuration. Without an adapter
+//! the bench prints why and measures nothing.
+
+// criterion's macros generate undocumented public items.
+#![allow(missing_docs)]
+
+use std::time::Duration;
+
+use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
+use lustre_geometry::builtin;
+use lustre_geometry::light::jittered_point_lights;
+use lustre_mpr::frame::FrameInputs;
+use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::direct::DirectLights;
+use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
+use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::{
+    AdapterPreference, FrameGraph, GpuContext, MprError, RenderTargets, SceneBuffers,
+};
+
+/// Image width (the paper's bathroom was 623×942; 640×480 is `lustre render`'s default).
+const WIDTH: u32 = 640;
+/// Image height.
+const HEIGHT: u32 = 480;
+
+/// One configuration: specular depth, shadow volumes or maps, point lights per area light.
+struct Config {
+    name: &'static str,
+    depth: u32,
+    volumes: bool,
+    light_samples: u32,
+}
+
+const CONFIGS: &[Config] = &[
+    Config {
+        name: "d1-maps",
+        depth: 1,
+        volumes: false,
+        light_samples: 1,
+    },
+    Config {
+        name: "d1-volumes",
+        depth: 1,
+        volumes: true,
+        light_samples: 1,
+    },
+    Config {
+        name: "d2-volumes",
+        depth: 2,
+        volumes: true,
+        light_samples: 1,
+    },
+    Config {
+        name: "d2-volumes-k4",
+        depth: 2,
+        volumes: true,
+        light_samples: 4,
+    },
+];
+
+fn mpr(c: &mut Criterion) {
+    let ctx = match GpuContext::new(AdapterPreference::Hardware) {
+        Ok(ctx) => ctx,
+        Err(e @ MprError::NoAdapter { .. }) => {
+            eprintln!("mpr bench: {e}; nothing measured");
+            return;
+        }
+        Err(e) => panic!("mpr bench: {e}"),
+    };
+    eprintln!("mpr bench on {}", ctx.adapter());
+    let mut scene = builtin::bathroom();
+    scene.set_camera(scene.camera().with_aspect(WIDTH as f32 / HEIGHT as f32));
+    let targets = RenderTargets::new(&ctx, WIDTH, HEIGHT).unwrap();
+    let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
+    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("mpr-bench-output"),
+        size: wgpu::Extent3d {
+            width: WIDTH,
+            height: HEIGHT,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let output_view = output.create_view(&Default::default());
+    let camera = *scene.camera();
+    let mut group = c.benchmark_group("mpr_bathroom");
+    group
+        .sample_size(10)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(5));
+    for config in CONFIGS {
+        let hdr = targets.hdr_format();
+        let mut graph = FrameGraph::new(&ctx, format)
+            .unwrap()
+            .with_emission(&ctx, hdr, &scene)
+            .unwrap()
+            .with_direct(&ctx, hdr)
+            .unwrap()
+            .with_specular(
+                &ctx,
+                hdr,
+                &scene,
+                SpecularSettings {
+                    max_depth: config.depth,
+                    limit_radiance: mean_radiance(&scene),
+                    clip: None,
+                },
+            )
+            .unwrap();
+        let pass = graph.direct.as_ref().unwrap();
+        let lights =
+            DirectLights::jittered(&ctx, pass, &scene, GlossyModel::Exact, config.light_samples)
+                .unwrap();
+        if config.volumes {
+            // Every jittered light pivots the volume of its area light's centre.
+            let centres: Vec<_> = scene
+                .lights()
+                .iter()
+                .flat_map(|l| {
+                    let centre =
+                        jittered_point_lights(std::slice::from_ref(l), 1, glam::Vec2::ZERO);
+                    std::iter::repeat_n(centre, config.light_samples as usize).flatten()
+                })
+                .collect();
+            graph = graph
+                .with_shadow_volumes(&ctx, hdr, &scene, &centres)
+                .unwrap();
+        } else {
+            graph.update_shadows(&ctx, &buffers, &lights).unwrap();
+        }
+        let frame = FrameInputs {
+            scene: &buffers,
+            camera: &camera,
+            tonemap: &Tonemap::default(),
+            targets: &targets,
+            output: &output_view,
+            splats: None,
+            direct: Some(&lights),
+            diffuse: None,
+        };
+        let views = graph.render(&ctx, &frame).unwrap();
+        eprintln!(
+            "{}: {views} scene passes, {} direct lights",
+            config.name,
+            lights.len()
+        );
+        group.bench_function(config.name, |b| {
+            b.iter(|| {
+                graph.render(&ctx, &frame).unwrap();
+                ctx.wait().unwrap();
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, mpr);
+criterion_main!(benches);
