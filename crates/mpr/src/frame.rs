@@ -386,7 +386,16 @@ impl FrameGraph {
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("frame"),
                 });
-            self.encode_light(ctx, &mut encoder, frame, &light, &views, &tree, &slots)?;
+            self.encode_light(
+                ctx,
+                &mut encoder,
+                frame,
+                &light,
+                &views,
+                &tree,
+                &slots,
+                true,
+            )?;
             self.tonemap.encode(
                 &ctx.device,
                 &mut encoder,
@@ -479,6 +488,7 @@ impl FrameGraph {
                     &views,
                     &tree,
                     &slots,
+                    true,
                 )?;
                 accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
                 if s + 1 == samples {
@@ -507,6 +517,8 @@ impl FrameGraph {
                                 &views,
                                 &tree,
                                 &slots,
+                                // The limit faces' light is in the average already.
+                                false,
                             )?;
                         }
                         accumulate.encode(&ctx.device, &mut encoder, frame.targets, 1.0, false);
@@ -623,16 +635,18 @@ impl FrameGraph {
         views: &ViewBuffer,
         tree: &ViewTree,
         slots: &[ViewSlot],
+        limit: bool,
     ) -> Result<()> {
         clear_hdr(encoder, frame.targets);
-        self.draw_window(ctx, encoder, frame, light, views, tree, slots, 0)
+        self.draw_window(ctx, encoder, frame, light, views, tree, slots, 0, limit)
     }
 
     /// `draw_window` of section 7.1 for view `index` of `tree`: its depth
     /// pass (clearing for the camera, inside its mask for a virtual view),
     /// each specular face masked, drawn from its virtual view and restored
-    /// (`draw_spec_objects`), the faces at the recursion limit, then the
-    /// light passes under the view.
+    /// (`draw_spec_objects`), the faces at the recursion limit (with
+    /// `limit`; a pass that redraws only part of the light leaves them out),
+    /// then the light passes under the view.
     #[allow(clippy::too_many_arguments)]
     fn draw_window(
         &self,
@@ -644,6 +658,7 @@ impl FrameGraph {
         tree: &ViewTree,
         slots: &[ViewSlot],
         index: usize,
+        limit: bool,
     ) -> Result<()> {
         let slot = slots[index];
         self.depth
@@ -651,17 +666,19 @@ impl FrameGraph {
         if let Some(specular) = &self.specular {
             for &(face, child) in &tree.children[index] {
                 specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
-                self.draw_window(ctx, encoder, frame, light, views, tree, slots, child)?;
+                self.draw_window(ctx, encoder, frame, light, views, tree, slots, child, limit)?;
                 specular.encode_restore(encoder, frame.scene, frame.targets, views, slot, face);
             }
-            specular.encode_limit(
-                encoder,
-                frame.scene,
-                frame.targets,
-                views,
-                slot,
-                &tree.limit_faces[index],
-            );
+            if limit {
+                specular.encode_limit(
+                    encoder,
+                    frame.scene,
+                    frame.targets,
+                    views,
+                    slot,
+                    &tree.limit_faces[index],
+                );
+            }
         }
         for pass in light {
             pass.encode_view(ctx, encoder, frame, views, slot)?;
