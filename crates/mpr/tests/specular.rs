@@ -430,3 +430,162 @@ fn a_glass_slab_shows_the_paraxially_shifted_scene_as_its_cpu_twin_does() {
         );
     }
 }
+
+/// Whether the primary ray reaches a mirror face at the recursion limit
+/// (its `depth`-th bounce lands on a mirror's front), as the CPU twin of the
+/// limit faces.
+fn reaches_limit(scene: &Scene, bvh: &Bvh, mut ray: Ray, depth: u32) -> bool {
+    for bounce in 0..=depth {
+        let Some(hit) = bvh.closest_hit(&ray) else {
+            return false;
+        };
+        let front = ray.direction.dot(hit.geometric_normal) < 0.0;
+        if !(front
+            && matches!(
+                scene.materials()[hit.material as usize].model,
+                MaterialModel::Mirror { .. }
+            ))
+        {
+            return false;
+        }
+        if bounce == depth {
+            return true;
+        }
+        let n = hit.geometric_normal;
+        ray = Ray::new(
+            hit.position + 1e-4 * n,
+            ray.direction - 2.0 * ray.direction.dot(n) * n,
+        );
+    }
+    false
+}
+
+/// With antialiasing, splats drawn once re-run the recursion into a cleared
+/// target added to the average; the faces at the limit must show
+/// `R^(d+1) L_lim` once, not twice (a bug this test pins).
+#[test]
+fn limit_faces_show_their_limit_radiance_once_under_accumulation_with_splats() {
+    let Some(ctx) = gpu_or_skip("limit_faces_show_their_limit_radiance_once") else {
+        return;
+    };
+    let scene = facing_mirrors();
+    let camera = scene.camera().with_aspect(1.0);
+    let depth = 1;
+    let limit = Vec3::splat(0.05);
+    let bvh = Bvh::build(&scene);
+    let at = |offset: Vec2| -> Vec<bool> {
+        (0..SIZE)
+            .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                reaches_limit(
+                    &scene,
+                    &bvh,
+                    camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, offset)),
+                    depth,
+                )
+            })
+            .collect()
+    };
+    // Pixels at the limit for every sub-pixel position.
+    let corners: Vec<Vec<bool>> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
+        .iter()
+        .map(|&(x, y)| at(Vec2::new(x, y)))
+        .collect();
+    let limit_pixels: Vec<usize> = (0..(SIZE * SIZE) as usize)
+        .filter(|&i| corners.iter().all(|c| c[i]))
+        .collect();
+    assert!(
+        limit_pixels.len() > 50,
+        "{} limit pixels",
+        limit_pixels.len()
+    );
+
+    let options = lustre_photon::TraceOptions {
+        photons: 20_000,
+        seed: 3,
+        ..Default::default()
+    };
+    let map =
+        lustre_photon::trace_photons(&scene, &bvh, &options, &lustre_photon::NoProgress).unwrap();
+    let estimator = lustre_photon::SplatEstimator::build(
+        &scene,
+        &map,
+        lustre_photon::EstimatorOptions::default(),
+    )
+    .unwrap();
+    let splats = lustre_mpr::passes::splat::SplatBuffers::new(
+        &ctx,
+        &scene,
+        &estimator,
+        lustre_mpr::material::GlossyModel::Exact,
+    )
+    .unwrap();
+    let targets = RenderTargets::new(&ctx, SIZE, SIZE).unwrap();
+    let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("output"),
+        size: wgpu::Extent3d {
+            width: SIZE,
+            height: SIZE,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let hdr = targets.hdr_format();
+    let graph = FrameGraph::new(&ctx, format)
+        .unwrap()
+        .with_splats(&ctx, hdr, estimator.options().kernel)
+        .unwrap()
+        .with_accumulation(&ctx, hdr)
+        .unwrap()
+        .with_specular(
+            &ctx,
+            hdr,
+            &scene,
+            SpecularSettings {
+                max_depth: depth,
+                limit_radiance: limit,
+                clip: None,
+            },
+        )
+        .unwrap();
+    graph
+        .render_accumulated(
+            &ctx,
+            &FrameInputs {
+                scene: &buffers,
+                camera: &camera,
+                tonemap: &Tonemap::default(),
+                targets: &targets,
+                output: &output.create_view(&Default::default()),
+                splats: Some(lustre_mpr::frame::SplatInputs {
+                    buffers: &splats,
+                    restriction: lustre_mpr::passes::splat::Restriction::SurfaceId,
+                    filtering: lustre_mpr::passes::splat::KernelFiltering::PixelCentre,
+                }),
+                direct: None,
+                diffuse: None,
+            },
+            4,
+            lustre_mpr::frame::AccumulatedSplats::Once,
+            &mut |_| Ok(()),
+        )
+        .unwrap();
+    let image = read_rgba_f32(&ctx, &targets.hdr.texture).unwrap();
+    // The level-1 view sees the far mirror at the limit (R L_lim), restored
+    // through the near one (R again). Mirrors take no splats (no diffuse lobe).
+    let expected = REFLECTANCE * REFLECTANCE * limit.x;
+    for &i in &limit_pixels {
+        let got = image[i][0];
+        assert!(
+            (got - expected).abs() <= 1e-4 * expected,
+            "pixel {i}: {got} where the limit radiance R^2 L_lim = {expected}"
+        );
+    }
+}
