@@ -512,3 +512,86 @@ fn moved_object_rebuilds_its_volumes_and_the_frame_follows() {
     assert!(total > (SIZE * SIZE / 3) as usize);
     assert!(agree as f64 >= 0.995 * total as f64, "{agree}/{total}");
 }
+
+/// Shadow volumes drawn inside mirror images (mirrored views, clockwise
+/// fronts, clip planes) light `mirrors` as the shadow maps do, which the
+/// tests above hold to BVH shadow rays: per pixel, the direct light of the
+/// ceiling light's centre through two levels of specular images, with volumes
+/// and with maps, away from edges of the maps' image (shadow boundaries,
+/// where the two legitimately differ by rasterisation, and surface edges).
+#[test]
+fn shadow_volumes_inside_mirror_images_light_as_the_shadow_maps_do() {
+    let Some(ctx) = gpu_or_skip("shadow_volumes_inside_mirror_images_light_as_the_shadow_maps_do")
+    else {
+        return;
+    };
+    let scene = builtin::mirrors();
+    let camera = scene.camera().with_aspect(1.0);
+    let lights = jittered_point_lights(scene.lights(), 1, Vec2::ZERO);
+    let hdr = ctx.hdr_format();
+    let render = |volumes: bool| {
+        let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)
+            .unwrap()
+            .with_direct(&ctx, hdr)
+            .unwrap()
+            .with_specular(
+                &ctx,
+                hdr,
+                &scene,
+                lustre_mpr::passes::specular::SpecularSettings {
+                    max_depth: 2,
+                    limit_radiance: Vec3::ZERO,
+                    clip: None,
+                },
+            )
+            .unwrap();
+        if volumes {
+            graph = graph
+                .with_shadow_volumes(&ctx, hdr, &scene, &lights)
+                .unwrap();
+        }
+        render_graph(&ctx, &graph, &scene, &camera, &lights)
+    };
+    let (with_volumes, ids) = render(true);
+    let (with_maps, map_ids) = render(false);
+    assert_eq!(ids, map_ids, "both frames see the same surfaces");
+    let luminance = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let max = with_maps.iter().map(luminance).fold(0.0f32, f32::max);
+    let s = SIZE as i32;
+    let mirror_ids: Vec<u32> = lustre_mpr::passes::specular::specular_faces(&scene)
+        .iter()
+        .map(|f| f.surface)
+        .collect();
+    let (mut agree, mut compared, mut in_mirrors) = (0usize, 0usize, 0usize);
+    for y in 2..s - 2 {
+        for x in 2..s - 2 {
+            let i = (y * s + x) as usize;
+            let l = luminance(&with_maps[i]);
+            // An edge of the maps' image within 2 px: left out.
+            let edge = (-2..=2).any(|dy| {
+                (-2..=2).any(|dx| {
+                    let j = ((y + dy) * s + x + dx) as usize;
+                    ids[j] != ids[i] || (luminance(&with_maps[j]) - l).abs() > 0.1 * l + 1e-3 * max
+                })
+            });
+            if edge || ids[i] == NO_SURFACE {
+                continue;
+            }
+            compared += 1;
+            in_mirrors += usize::from(mirror_ids.contains(&ids[i]));
+            // Tolerance of the direct tests: f32 shading, relative 1e-3 plus 1e-4 of the maximum.
+            agree += usize::from((0..3).all(|k| {
+                (with_volumes[i][k] - with_maps[i][k]).abs() <= 1e-3 * with_maps[i][k] + 1e-4 * max
+            }));
+        }
+    }
+    eprintln!("mirrors: {agree}/{compared} pixels agree, {in_mirrors} of them seen in the mirrors");
+    assert!(
+        in_mirrors > 300,
+        "{in_mirrors} compared pixels lie in the mirror images"
+    );
+    assert!(
+        agree as f64 >= 0.995 * compared as f64,
+        "{agree} of {compared} pixels agree"
+    );
+}
