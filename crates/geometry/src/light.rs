@@ -471,6 +471,23 @@ pub fn jittered_point_lights(lights: &[Light], k: u32, rotation: Vec2) -> Vec<Li
         .collect()
 }
 
+/// The lights shadow volumes are built from, one per light of
+/// [`jittered_point_lights`]`(lights, k, _)` in its order: each of an area
+/// light's `k` jittered lights gets the point light at its centre, so moving
+/// to the jittered position moves only the volume's far vertices (Diefenbach
+/// & Badler 1997, section 4.4, the pivot approximation); point lights stay
+/// themselves.
+pub fn pivot_point_lights(lights: &[Light], k: u32) -> Vec<Light> {
+    lights
+        .iter()
+        .flat_map(|l| {
+            let centre = l.as_point_lights(1, Vec2::ZERO);
+            let copies = if l.is_delta() { 1 } else { k as usize };
+            std::iter::repeat_n(centre, copies).flatten()
+        })
+        .collect()
+}
+
 /// The `i`-th of `n` offsets in [0, 1)²: the Hammersley set
 /// `((i + ½)/n, φ₂(i) + ½/2^⌈log₂ n⌉)`, stratified in x for every `n` and in y
 /// when `n` is a power of two; `n = 1` is the centre (0.5, 0.5). The jitter pattern

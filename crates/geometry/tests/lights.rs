@@ -450,3 +450,27 @@ fn centred_hammersley_is_stratified() {
         }
     }
 }
+
+#[test]
+fn pivot_lights_put_each_jittered_light_at_its_area_lights_centroid() {
+    let rect = rect_light();
+    let Light::Area(area) = &rect else {
+        panic!("rect_light is an area light");
+    };
+    let centroid = area.shape.centroid();
+    let point = point_lights().remove(0);
+    let lights = vec![rect.clone(), point.clone()];
+    for k in [1, 4, 16] {
+        let jittered = lustre_geometry::light::jittered_point_lights(&lights, k, Vec2::ZERO);
+        let pivots = lustre_geometry::light::pivot_point_lights(&lights, k);
+        // One pivot per direct light, in the same order: k for the area light, the point light itself.
+        assert_eq!(pivots.len(), jittered.len(), "k = {k}");
+        for p in &pivots[..k as usize] {
+            let Light::OrientedPoint(p) = p else {
+                panic!("an area light's pivot is an oriented point light");
+            };
+            assert!((p.position - centroid).length() < 1e-6, "k = {k}");
+        }
+        assert_eq!(pivots[k as usize], point, "k = {k}");
+    }
+}

@@ -24,7 +24,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
 use lustre_geometry::builtin;
-use lustre_geometry::light::jittered_point_lights;
+use lustre_geometry::light::pivot_point_lights;
 use lustre_mpr::frame::FrameInputs;
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::direct::DirectLights;
@@ -136,15 +136,7 @@ fn mpr(c: &mut Criterion) {
                 .unwrap();
         if config.volumes {
             // Every jittered light pivots the volume of its area light's centre.
-            let centres: Vec<_> = scene
-                .lights()
-                .iter()
-                .flat_map(|l| {
-                    let centre =
-                        jittered_point_lights(std::slice::from_ref(l), 1, glam::Vec2::ZERO);
-                    std::iter::repeat_n(centre, config.light_samples as usize).flatten()
-                })
-                .collect();
+            let centres = pivot_point_lights(scene.lights(), config.light_samples);
             graph = graph
                 .with_shadow_volumes(&ctx, hdr, &scene, &centres)
                 .unwrap();

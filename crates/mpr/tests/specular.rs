@@ -23,6 +23,27 @@ const SIZE: u32 = 96;
 const REFLECTANCE: f32 = 0.8;
 const LE: Vec3 = Vec3::new(1.0, 0.5, 0.25);
 
+/// Format of the tone-mapped output the frames write (not read back).
+const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// A `SIZE`² render target of [`OUTPUT_FORMAT`] for the frame graph's tone map.
+fn output_texture(ctx: &lustre_mpr::GpuContext) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("output"),
+        size: wgpu::Extent3d {
+            width: SIZE,
+            height: SIZE,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: OUTPUT_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    })
+}
+
 /// A quad with corners `a, b, c, d` counter-clockwise seen from its front.
 fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Mesh {
     Mesh::flat(name, &corners, &[[0, 1, 2], [0, 2, 3]], material)
@@ -164,21 +185,8 @@ fn gpu_image(
 ) -> (Vec<Vec3>, usize) {
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
-    let format = wgpu::TextureFormat::Rgba8Unorm;
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("output"),
-        size: wgpu::Extent3d {
-            width: SIZE,
-            height: SIZE,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
+    let format = OUTPUT_FORMAT;
+    let output = output_texture(ctx);
     let graph = FrameGraph::new(ctx, format)
         .unwrap()
         .with_emission(ctx, targets.hdr_format(), scene)
@@ -522,21 +530,8 @@ fn limit_faces_show_their_limit_radiance_once_under_accumulation_with_splats() {
     .unwrap();
     let targets = RenderTargets::new(&ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
-    let format = wgpu::TextureFormat::Rgba8Unorm;
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("output"),
-        size: wgpu::Extent3d {
-            width: SIZE,
-            height: SIZE,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
+    let format = OUTPUT_FORMAT;
+    let output = output_texture(&ctx);
     let hdr = targets.hdr_format();
     let graph = FrameGraph::new(&ctx, format)
         .unwrap()

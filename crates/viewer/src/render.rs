@@ -39,7 +39,7 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
-use lustre_geometry::light::{jittered_point_lights, paired_rotation};
+use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
@@ -583,7 +583,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 &ctx,
                 targets.hdr_format(),
                 &scene,
-                &pivot_lights(scene.lights(), args.light_samples),
+                &pivot_point_lights(scene.lights(), args.light_samples),
             )?;
         } else {
             graph.update_shadows(&ctx, &scene_buffers, &lights)?;
@@ -846,22 +846,6 @@ fn splat_setup(
         estimator,
         lambertian,
     })
-}
-
-/// The lights whose silhouettes the shadow volumes are built from, one per
-/// direct light in [`jittered_point_lights`]' order: each of an area light's
-/// `k` jittered lights gets the point light at its centre, so moving to the
-/// jittered position moves only the far vertices (Diefenbach & Badler 1997,
-/// section 4.4, the pivot approximation); point lights stay themselves.
-fn pivot_lights(lights: &[lustre_geometry::Light], k: u32) -> Vec<lustre_geometry::Light> {
-    lights
-        .iter()
-        .flat_map(|l| {
-            let centre = l.as_point_lights(1, glam::Vec2::ZERO);
-            let copies = if l.is_delta() { 1 } else { k as usize };
-            std::iter::repeat_n(centre, copies).flatten()
-        })
-        .collect()
 }
 
 /// `out` with the extension `.json`.

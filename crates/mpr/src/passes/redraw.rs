@@ -18,21 +18,32 @@ pub const ADDITIVE: wgpu::BlendState = wgpu::BlendState {
     alpha: wgpu::BlendComponent::OVER,
 };
 
-/// The stencil test of a pass drawn under a view: pass where the stencil equals
-/// the view's reference (its recursion level, section 7.3), never write it.
-pub fn view_stencil() -> wgpu::StencilState {
+/// A stencil state that passes where the stencil equals the reference and
+/// applies `pass_op` where depth and stencil tests pass (both faces); a
+/// `Keep` state has no write mask.
+pub fn stencil_equal(pass_op: wgpu::StencilOperation) -> wgpu::StencilState {
     let face = wgpu::StencilFaceState {
         compare: wgpu::CompareFunction::Equal,
         fail_op: wgpu::StencilOperation::Keep,
         depth_fail_op: wgpu::StencilOperation::Keep,
-        pass_op: wgpu::StencilOperation::Keep,
+        pass_op,
     };
     wgpu::StencilState {
         front: face,
         back: face,
         read_mask: 0xff,
-        write_mask: 0,
+        write_mask: if pass_op == wgpu::StencilOperation::Keep {
+            0
+        } else {
+            0xff
+        },
     }
+}
+
+/// The stencil test of a pass drawn under a view: pass where the stencil equals
+/// the view's reference (its recursion level, section 7.3), never write it.
+pub fn view_stencil() -> wgpu::StencilState {
+    stencil_equal(wgpu::StencilOperation::Keep)
 }
 
 /// A scene pass's shader module: `source` (its complete WGSL, view block

@@ -25,7 +25,7 @@ use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Plane, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::passes::redraw::{additive_target, scene_module, view_stencil};
+use crate::passes::redraw::{additive_target, scene_module, stencil_equal, view_stencil};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
 use crate::shaders::with_view;
 use crate::target::{RenderTargets, SURFACE_ID_FORMAT};
@@ -281,22 +281,6 @@ pub struct SpecularPass {
     restore: wgpu::RenderPipeline,
     limit: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
-}
-
-/// A stencil state comparing `Equal` and applying `pass_op` where both tests pass.
-fn stencil_equal(pass_op: wgpu::StencilOperation) -> wgpu::StencilState {
-    let face = wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Equal,
-        fail_op: wgpu::StencilOperation::Keep,
-        depth_fail_op: wgpu::StencilOperation::Keep,
-        pass_op,
-    };
-    wgpu::StencilState {
-        front: face,
-        back: face,
-        read_mask: 0xff,
-        write_mask: 0xff,
-    }
 }
 
 impl SpecularPass {

@@ -434,22 +434,6 @@ const ADD: wgpu::BlendState = wgpu::BlendState {
     },
 };
 
-/// Stencil state that keeps the stencil and passes where it equals the reference.
-fn stencil_equal() -> wgpu::StencilState {
-    let face = wgpu::StencilFaceState {
-        compare: wgpu::CompareFunction::Equal,
-        fail_op: wgpu::StencilOperation::Keep,
-        depth_fail_op: wgpu::StencilOperation::Keep,
-        pass_op: wgpu::StencilOperation::Keep,
-    };
-    wgpu::StencilState {
-        front: face,
-        back: face,
-        read_mask: 0xff,
-        write_mask: 0,
-    }
-}
-
 /// Stencil state that writes the reference wherever depth and stencil tests pass.
 fn stencil_replace() -> wgpu::StencilState {
     let face = wgpu::StencilFaceState {
@@ -598,7 +582,7 @@ impl SplatPass {
                         format: depth_format,
                         depth_write_enabled: Some(false),
                         depth_compare: Some(wgpu::CompareFunction::Always),
-                        stencil: stencil_equal(),
+                        stencil: view_stencil(),
                         bias: wgpu::DepthBiasState::default(),
                     }),
                 );
