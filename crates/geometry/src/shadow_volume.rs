@@ -143,6 +143,39 @@ impl ShadowVolume {
         self.vertices.len() * VolumeVertex::GPU_SIZE
     }
 
+    /// The volume moved by the affine map `m` (a mirror's reflection or a
+    /// slab's shift): every corner mapped, the light it was built for mapped
+    /// with it, so the far vertices extrude from `m(light)` in the mapped
+    /// directions, and the winding reversed where `m` mirrors, so the faces
+    /// still point outward (section 4.3: a shadow bent by a specular face is
+    /// a transformed copy of the original volume).
+    pub fn transformed(&self, m: Affine3A) -> ShadowVolume {
+        let mirrors = m.matrix3.determinant() < 0.0;
+        let mut vertices: Vec<VolumeVertex> = self
+            .vertices
+            .iter()
+            .map(|v| VolumeVertex {
+                position: m.transform_point3(v.position),
+                extruded: v.extruded,
+            })
+            .collect();
+        if mirrors {
+            for tri in vertices.chunks_exact_mut(3) {
+                tri.swap(1, 2);
+            }
+        }
+        ShadowVolume {
+            object: self.object,
+            light_index: self.light_index,
+            light: m.transform_point3(self.light),
+            transform: m * self.transform,
+            vertices,
+            cap_triangles: self.cap_triangles,
+            silhouette_edges: self.silhouette_edges,
+            side_quads: self.side_quads,
+        }
+    }
+
     /// The vertices in the GPU form, ready to upload as a vertex buffer.
     pub fn gpu_vertices(&self) -> Vec<[f32; 4]> {
         self.vertices.iter().map(VolumeVertex::gpu).collect()
@@ -362,6 +395,25 @@ impl ObjectTopology {
     }
 }
 
+/// Which of an object's triangles cast a volume, and with which winding.
+#[derive(Clone, Copy)]
+struct Selection<'a> {
+    /// Keeps a triangle (world positions, own winding) when true.
+    keep: &'a dyn Fn(&[Vec3; 3]) -> bool,
+    /// Takes every kept triangle with the opposite winding.
+    reversed: bool,
+}
+
+/// Every triangle, as wound.
+fn everything(_: &[Vec3; 3]) -> bool {
+    true
+}
+
+const ALL: Selection<'static> = Selection {
+    keep: &everything,
+    reversed: false,
+};
+
 /// Builds the volume of one object for one light from the object's current pose.
 fn build_volume(
     scene: &Scene,
@@ -369,6 +421,18 @@ fn build_volume(
     object: ObjectId,
     light_index: usize,
     light: Vec3,
+) -> ShadowVolume {
+    build_selected(scene, topology, object, light_index, light, ALL)
+}
+
+/// [`build_volume`] over the triangles `selection` keeps, in its winding.
+fn build_selected(
+    scene: &Scene,
+    topology: &ObjectTopology,
+    object: ObjectId,
+    light_index: usize,
+    light: Vec3,
+    selection: Selection<'_>,
 ) -> ShadowVolume {
     let world: Vec<Vec<Vec3>> = topology
         .meshes
@@ -380,8 +444,16 @@ fn build_volume(
     let mut back = Vec::new();
     let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
     for (slot, &m) in topology.meshes.iter().enumerate() {
-        for tri in &scene.meshes()[m as usize].indices {
+        for &tri in &scene.meshes()[m as usize].indices {
             let p = tri.map(|i| world[slot][i as usize]);
+            if !(selection.keep)(&p) {
+                continue;
+            }
+            let (tri, p) = if selection.reversed {
+                ([tri[0], tri[2], tri[1]], [p[0], p[2], p[1]])
+            } else {
+                (tri, p)
+            };
             let [p0, p1, p2] = p.map(Vec3::as_dvec3);
             let n = (p1 - p0).cross(p2 - p0);
             let to_light = l - p0;
@@ -561,6 +633,39 @@ impl ShadowVolumeSet {
         }
         self.lights = lights.to_vec();
         Ok(rebuilt)
+    }
+
+    /// The volume of caster `caster` (an index into [`ShadowVolumeSet::casters`])
+    /// for a point light at `light` cast only by the triangles `keep`
+    /// selects (world positions, as wound), each taken with the opposite
+    /// winding when `reversed`: the volumes of a virtual light, cast by the
+    /// geometry on one side of a specular face, and the light volume behind a
+    /// face (Diefenbach & Badler 1997, sections 4.2 and 4.3). Uses the set's
+    /// welding of the object; fails on an unknown caster or a light that is
+    /// not finite.
+    pub fn volume_where(
+        &self,
+        scene: &Scene,
+        caster: usize,
+        light: Vec3,
+        keep: &dyn Fn(&[Vec3; 3]) -> bool,
+        reversed: bool,
+    ) -> Result<ShadowVolume> {
+        check_lights(&[light])?;
+        let Some(&object) = self.casters.get(caster) else {
+            return Err(GeometryError::UnknownObject(format!("caster #{caster}")));
+        };
+        if object as usize >= scene.objects().len() {
+            return Err(GeometryError::UnknownObject(format!("#{object}")));
+        }
+        let selection = Selection { keep, reversed };
+        let topology = &self.topologies[caster];
+        Ok(if topology.matches(scene, object) {
+            build_selected(scene, topology, object, 0, light, selection)
+        } else {
+            let fresh = ObjectTopology::new(scene, object);
+            build_selected(scene, &fresh, object, 0, light, selection)
+        })
     }
 
     /// The casting objects.

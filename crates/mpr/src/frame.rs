@@ -285,6 +285,29 @@ impl FrameGraph {
         Ok(self)
     }
 
+    /// Adds the virtual lights of the scene's specular faces to the shadow
+    /// volumes (Diefenbach & Badler 1997, sections 4.2, 4.3): every point
+    /// light reflected and refracted through chains of at most
+    /// `settings.depth` faces, bounded by light volumes and shadowed by
+    /// transformed shadow volumes. Fails without
+    /// [`FrameGraph::with_shadow_volumes`].
+    pub fn with_virtual_lights(
+        mut self,
+        ctx: &GpuContext,
+        scene: &lustre_geometry::Scene,
+        settings: crate::virtual_light::VirtualLightSettings,
+    ) -> Result<Self> {
+        let Some(volumes) = self.shadow_volumes.take() else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "virtual lights",
+                message: "they need shadow volumes (with_shadow_volumes first)".into(),
+            });
+        };
+        let faces = crate::passes::specular::specular_faces(scene);
+        self.shadow_volumes = Some(volumes.with_virtual_lights(ctx, scene, &faces, settings)?);
+        Ok(self)
+    }
+
     /// Rebuilds and re-uploads the shadow volumes of the objects and lights
     /// that moved (section 4.3; [`ShadowVolumes::refresh`]); returns the
     /// number of volumes rebuilt, 0 without shadow volumes.
@@ -303,7 +326,7 @@ impl FrameGraph {
     /// Writes the direct lights' positions for the shadow volumes, before a submission.
     fn prepare_shadow_volumes(&self, ctx: &GpuContext, passes: &ResolvedPasses<'_>) -> Result<()> {
         match (&self.shadow_volumes, passes.direct) {
-            (Some(volumes), Some((lights, _))) => volumes.prepare(ctx, lights),
+            (Some(volumes), Some((lights, pass))) => volumes.prepare(ctx, pass, lights),
             _ => Ok(()),
         }
     }

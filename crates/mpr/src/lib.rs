@@ -42,6 +42,7 @@ pub mod scene_buffers;
 pub mod shaders;
 pub mod target;
 pub mod view;
+pub mod virtual_light;
 
 pub use device::{AdapterPreference, AdapterSummary, GpuContext};
 pub use error::{MprError, Result};

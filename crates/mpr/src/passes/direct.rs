@@ -31,7 +31,7 @@
 use std::cell::Cell;
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Vec2, Vec3};
+use glam::{Affine3A, Vec2, Vec3};
 use lustre_brdf::models::{DiefenbachPhong, Mixture};
 use lustre_brdf::{BoxedBrdf, Fresnel};
 use lustre_geometry::light::{Light, jittered_point_lights};
@@ -132,6 +132,20 @@ impl GpuLight {
     pub fn position(&self) -> Vec3 {
         Vec3::from_array(self.position)
     }
+
+    /// The virtual light seen through specular faces whose transforms compose
+    /// to `m` (Diefenbach & Badler 1997, section 4.2: a reflected or
+    /// refracted light): position mapped by `m`, emission axis by its linear
+    /// part, intensity times `factor` (the faces' reflectance or transmittance).
+    pub fn through(&self, m: Affine3A, factor: Vec3) -> Self {
+        let axis = m.matrix3 * Vec3::from_array(self.axis);
+        Self {
+            position: m.transform_point3(self.position()).to_array(),
+            intensity: (Vec3::from_array(self.intensity) * factor).to_array(),
+            axis: axis.normalize_or_zero().to_array(),
+            ..*self
+        }
+    }
 }
 
 /// One light's uniform block, shadow cube and bind group.
@@ -218,56 +232,120 @@ impl DirectLights {
                 },
             )
         })?;
-        let mut slots = Vec::with_capacity(gpu_lights.len());
-        for light in gpu_lights {
-            let cube = pass.shadow.create_cube(ctx, settings.size)?;
-            let (uniforms, bind_group) = ctx.checked("direct light creation", || {
-                let uniforms = wgpu::util::DeviceExt::create_buffer_init(
-                    &ctx.device,
-                    &wgpu::util::BufferInitDescriptor {
-                        label: Some("direct-light"),
-                        contents: bytemuck::bytes_of(&light),
-                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    },
-                );
-                let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("direct-light"),
-                    layout: &pass.light_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: materials_buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: uniforms.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(&cube.view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: wgpu::BindingResource::Sampler(&pass.shadow_sampler),
-                        },
-                    ],
-                });
-                (uniforms, bind_group)
-            })?;
-            pass.shadow
-                .prepare(&ctx.queue, &cube, light.position(), settings.near);
-            slots.push(LightSlot {
-                light: Cell::new(light),
-                uniforms,
-                cube,
-                bind_group,
-            });
-        }
+        let slots = gpu_lights
+            .into_iter()
+            .map(|light| Self::slot(ctx, pass, &materials_buffer, light, &settings))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             slots,
             materials: materials_buffer,
             material_count: materials.len(),
             settings,
+        })
+    }
+
+    /// Point lights given in GPU form that share `self`'s materials and have
+    /// no shadow map (a one-texel cube that no pass draws): the virtual
+    /// lights of Diefenbach & Badler 1997, section 4.2, drawn only under the
+    /// stencil of their light and shadow volumes
+    /// ([`DirectPass::record_light_under_stencil`]).
+    pub fn unshadowed_like(
+        &self,
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        lights: &[GpuLight],
+    ) -> Result<Self> {
+        let settings = ShadowSettings {
+            size: 1,
+            ..self.settings
+        };
+        let slots = lights
+            .iter()
+            .map(|&light| Self::slot(ctx, pass, &self.materials, light, &settings))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self {
+            slots,
+            materials: self.materials.clone(),
+            material_count: self.material_count,
+            settings,
+        })
+    }
+
+    /// Whether `other` reads the same material buffer (see [`DirectLights::unshadowed_like`]).
+    pub fn shares_materials(&self, other: &DirectLights) -> bool {
+        self.materials == other.materials
+    }
+
+    /// Rewrites the lights (same count) from their GPU form, applied at the
+    /// next submit; their shadow cubes are not redrawn (for
+    /// [`DirectLights::unshadowed_like`] lights, which have none).
+    pub fn set_gpu_lights(&self, queue: &wgpu::Queue, lights: &[GpuLight]) -> Result<()> {
+        if lights.len() != self.slots.len() {
+            return Err(MprError::InvalidSetting {
+                what: "direct lights",
+                message: format!(
+                    "{} lights given for {} slots",
+                    lights.len(),
+                    self.slots.len()
+                ),
+            });
+        }
+        for (slot, &light) in self.slots.iter().zip(lights) {
+            slot.light.set(light);
+            queue.write_buffer(&slot.uniforms, 0, bytemuck::bytes_of(&light));
+        }
+        Ok(())
+    }
+
+    /// One light's uniform block, shadow cube of `settings.size` and bind group.
+    fn slot(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        materials_buffer: &wgpu::Buffer,
+        light: GpuLight,
+        settings: &ShadowSettings,
+    ) -> Result<LightSlot> {
+        let cube = pass.shadow.create_cube(ctx, settings.size)?;
+        let (uniforms, bind_group) = ctx.checked("direct light creation", || {
+            let uniforms = wgpu::util::DeviceExt::create_buffer_init(
+                &ctx.device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("direct-light"),
+                    contents: bytemuck::bytes_of(&light),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                },
+            );
+            let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("direct-light"),
+                layout: &pass.light_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: materials_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: uniforms.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&cube.view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Sampler(&pass.shadow_sampler),
+                    },
+                ],
+            });
+            (uniforms, bind_group)
+        })?;
+        pass.shadow
+            .prepare(&ctx.queue, &cube, light.position(), settings.near);
+        Ok(LightSlot {
+            light: Cell::new(light),
+            uniforms,
+            cube,
+            bind_group,
         })
     }
 
@@ -663,6 +741,38 @@ pub fn direct_pixels_cpu_with_lights(
     height: u32,
     glossy: GlossyModel,
 ) -> Result<Vec<DirectPixel>> {
+    let eps = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
+    let shadow_ray = |_: usize, p: Vec3, direction: Vec3, distance: f32| {
+        !bvh.any_hit(&Ray::segment(p, direction, eps, distance - eps))
+    };
+    direct_pixels_cpu_where(
+        scene,
+        lights,
+        bvh,
+        camera,
+        width,
+        height,
+        glossy,
+        &shadow_ray,
+    )
+}
+
+/// [`direct_pixels_cpu_with_lights`] with the visibility of light `j` from
+/// a hit point decided by `reaches(j, point, direction, distance)` (unit
+/// direction and distance to the light) instead of a BVH shadow ray: the
+/// CPU twin of lights that reach a point along other paths, such as the
+/// virtual lights of specular faces ([`crate::virtual_light::path_visible`]).
+#[allow(clippy::too_many_arguments)]
+pub fn direct_pixels_cpu_where(
+    scene: &Scene,
+    lights: &[Light],
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    glossy: GlossyModel,
+    reaches: &dyn Fn(usize, Vec3, Vec3, f32) -> bool,
+) -> Result<Vec<DirectPixel>> {
     if let Some(i) = lights.iter().position(|l| !l.is_delta()) {
         return Err(area_light_error(i));
     }
@@ -676,7 +786,6 @@ pub fn direct_pixels_cpu_with_lights(
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let eps = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
     let rays: Vec<Ray> = (0..height)
         .flat_map(|y| (0..width).map(move |x| (x, y)))
         .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
@@ -712,9 +821,7 @@ pub fn direct_pixels_cpu_with_lights(
                 if wi_local.z <= 0.0 {
                     continue;
                 }
-                let shadow =
-                    Ray::segment(hit.position, sample.direction, eps, sample.distance - eps);
-                if bvh.any_hit(&shadow) {
+                if !reaches(j, hit.position, sample.direction, sample.distance) {
                     continue;
                 }
                 if j < 64 {

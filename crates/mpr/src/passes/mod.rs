@@ -6,6 +6,7 @@ pub mod diffuse_texture;
 pub mod direct;
 pub mod emission;
 pub mod gouraud;
+pub mod light_volume;
 pub mod redraw;
 pub mod shadow;
 pub mod shadow_volume;

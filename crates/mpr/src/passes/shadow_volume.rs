@@ -62,6 +62,20 @@ pub struct VolumeLight {
     /// the light the volumes were built for, or a jittered one (the pivot
     /// approximation of section 4.4).
     pub position: [f32; 4],
+    /// Column-major affine map applied after the extrusion: the identity for
+    /// a real light's shadows, the transforms of the specular faces a virtual
+    /// light's shadow or light volume passes after it is cast (section 4.3).
+    pub transform: [[f32; 4]; 4],
+}
+
+impl VolumeLight {
+    /// The block of volumes extruded from `position`, then moved by `transform`.
+    pub fn new(position: Vec3, transform: glam::Affine3A) -> Self {
+        Self {
+            position: position.extend(1.0).to_array(),
+            transform: glam::Mat4::from(transform).to_cols_array_2d(),
+        }
+    }
 }
 
 /// The light positions of the shadow-volume passes (section 4.4), one
@@ -127,7 +141,25 @@ impl VolumeLights {
         pass: &ShadowVolumePass,
         lights: &[Vec3],
     ) -> Result<()> {
-        if let Some(i) = lights.iter().position(|l| !l.is_finite()) {
+        let blocks: Vec<VolumeLight> = lights
+            .iter()
+            .map(|&l| VolumeLight::new(l, glam::Affine3A::IDENTITY))
+            .collect();
+        self.write_blocks(ctx, pass, &blocks)
+    }
+
+    /// Writes whole blocks (position and transform), block `i` at offset `i`.
+    /// Fails on a position or transform that is not finite.
+    pub fn write_blocks(
+        &mut self,
+        ctx: &GpuContext,
+        pass: &ShadowVolumePass,
+        lights: &[VolumeLight],
+    ) -> Result<()> {
+        if let Some(i) = lights.iter().position(|l| {
+            !(l.position.iter().all(|v| v.is_finite())
+                && l.transform.iter().flatten().all(|v| v.is_finite()))
+        }) {
             return Err(MprError::InvalidSetting {
                 what: "shadow volumes",
                 message: format!("light #{i} position is not finite"),
@@ -142,13 +174,10 @@ impl VolumeLights {
         }
         let mut bytes = vec![0u8; self.stride as usize * lights.len()];
         self.offsets.clear();
-        for (i, l) in lights.iter().enumerate() {
+        for (i, block) in lights.iter().enumerate() {
             let offset = i * self.stride as usize;
-            let block = VolumeLight {
-                position: l.extend(1.0).to_array(),
-            };
             bytes[offset..offset + size_of::<VolumeLight>()]
-                .copy_from_slice(bytemuck::bytes_of(&block));
+                .copy_from_slice(bytemuck::bytes_of(block));
             self.offsets
                 .push(u32::try_from(offset).map_err(|_| MprError::InvalidSetting {
                     what: "shadow volumes",
@@ -481,12 +510,31 @@ impl ShadowVolumePass {
     /// [`ShadowVolumePass::record_end`] restores. Leaves the stencil reference
     /// at [`SHAD_ZERO`].
     pub fn record_begin(&self, pass: &mut wgpu::RenderPass<'_>, view_reference: u32) -> Result<()> {
+        self.record_begin_at(pass, view_reference, SHAD_ZERO)
+    }
+
+    /// [`ShadowVolumePass::record_begin`] with the area set to `start`
+    /// (`SHAD_ZERO + m` before `m` light volumes are counted inverted,
+    /// section 4.2, so that only their intersection comes back to
+    /// [`SHAD_ZERO`]). Fails unless `SHAD_ZERO <= start < 256`.
+    pub fn record_begin_at(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        view_reference: u32,
+        start: u32,
+    ) -> Result<()> {
         Self::check_reference(view_reference)?;
+        if !(SHAD_ZERO..256).contains(&start) {
+            return Err(MprError::InvalidSetting {
+                what: "shadow volumes",
+                message: format!("stencil start {start} outside {SHAD_ZERO}..256"),
+            });
+        }
         pass.set_pipeline(&self.mark);
         pass.set_stencil_reference(view_reference);
         pass.draw(0..3, 0..1);
         pass.set_pipeline(&self.replace_high);
-        pass.set_stencil_reference(SHAD_ZERO);
+        pass.set_stencil_reference(start);
         pass.draw(0..3, 0..1);
         Ok(())
     }
@@ -508,6 +556,24 @@ impl ShadowVolumePass {
         light: usize,
         volumes: &ShadowVolumeBuffers,
     ) -> Result<()> {
+        self.record_volumes_as(pass, views, slot, lights, light, volumes, slot.mirrored)
+    }
+
+    /// [`ShadowVolumePass::record_volumes`] with the front faces' winding
+    /// given: clockwise counts a volume drawn through a mirroring transform
+    /// (or view) as a plain one does, and counts a plain volume inverted
+    /// (−1 inside: the light volumes of section 4.2).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_volumes_as(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+        lights: &VolumeLights,
+        light: usize,
+        volumes: &ShadowVolumeBuffers,
+        clockwise: bool,
+    ) -> Result<()> {
         let Some(&offset) = lights.offsets.get(light) else {
             return Err(MprError::InvalidSetting {
                 what: "shadow volumes",
@@ -520,7 +586,7 @@ impl ShadowVolumePass {
         if volumes.vertex_count == 0 {
             return Ok(());
         }
-        pass.set_pipeline(if slot.mirrored {
+        pass.set_pipeline(if clockwise {
             &self.volumes_cw
         } else {
             &self.volumes_ccw

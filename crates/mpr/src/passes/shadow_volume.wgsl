@@ -10,6 +10,7 @@
 // | P      | world position of a volume vertex                             | m    |
 // | w      | 1 for a finite vertex, 0 for one extruded to infinity         | -    |
 // | L      | light position of this pass (jittered for soft shadows, 4.4)  | m    |
+// | M      | affine map after extrusion (faces passed, 4.3; else identity) | -    |
 // | VP     | the view's view-projection, reverse Z, infinite far plane     | -    |
 // | (P-L,0)| the point at infinity in direction P - L: depth 0            | -    |
 
@@ -17,6 +18,9 @@
 struct VolumeLight {
     // xyz: L; w unused.
     position: vec4f,
+    // Affine map applied after the extrusion (identity for a real light;
+    // the specular faces' transforms for a virtual light's volumes, 4.3).
+    transform: mat4x4f,
 }
 
 @group(1) @binding(0) var<uniform> volume_light: VolumeLight;
@@ -36,6 +40,7 @@ fn vs_volume(@location(0) v: vec4f) -> VertexOutput {
     if v.w == 0.0 {
         world = vec4f(v.xyz - volume_light.position.xyz, 0.0);
     }
+    world = volume_light.transform * world;
     var out: VertexOutput;
     out.clip = view.view_projection * world;
     //clip_distances: out.clip_distances[0] = view_clip_distance(world.xyz) - (1.0 - world.w) * view.clip_plane.w;

@@ -25,8 +25,11 @@ use lustre_geometry::shadow_volume::{ShadowVolumeSet, light_position};
 
 use crate::frame::{FrameInputs, LightPass};
 use crate::passes::direct::{DirectLights, DirectPass};
+use crate::passes::light_volume::VirtualLights;
 use crate::passes::shadow_volume::{ShadowVolumeBuffers, ShadowVolumePass, VolumeLights};
+use crate::passes::specular::SpecularFace;
 use crate::view::{ViewBuffer, ViewSlot};
+use crate::virtual_light::VirtualLightSettings;
 use crate::{GpuContext, MprError, Result};
 
 /// The shadow volumes of a scene for a list of point lights, on the GPU
@@ -42,6 +45,10 @@ pub struct ShadowVolumes {
     volume_of: Vec<usize>,
     /// The positions the far vertices are extruded from, written per frame.
     lights: Mutex<VolumeLights>,
+    /// The distinct light positions the volumes were built for.
+    positions: Vec<Vec3>,
+    /// The lights reflected and refracted by specular faces (sections 4.2, 4.3).
+    virtual_lights: Option<VirtualLights>,
 }
 
 /// The distinct positions of `positions` in first-seen order and, per
@@ -94,7 +101,46 @@ impl ShadowVolumes {
             buffers,
             volume_of,
             lights: Mutex::new(volume_lights),
+            positions: unique,
+            virtual_lights: None,
         })
+    }
+
+    /// Adds the virtual lights of `faces` (the specular pass's faces) for
+    /// these lights, with their light and shadow volumes (sections 4.2, 4.3);
+    /// `settings.depth == 0` removes them.
+    pub fn with_virtual_lights(
+        mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        faces: &[SpecularFace],
+        settings: VirtualLightSettings,
+    ) -> Result<Self> {
+        self.virtual_lights = if settings.depth == 0 || faces.is_empty() {
+            None
+        } else {
+            Some(VirtualLights::new(
+                ctx,
+                &self.pass,
+                scene,
+                &self.set,
+                faces,
+                &self.positions,
+                settings,
+            )?)
+        };
+        Ok(self)
+    }
+
+    /// The virtual lights, if any.
+    pub fn virtual_lights(&self) -> Option<&VirtualLights> {
+        self.virtual_lights.as_ref()
+    }
+
+    /// The distinct light positions the volumes are built for, and per
+    /// light the index of its position.
+    pub fn positions(&self) -> (&[Vec3], &[usize]) {
+        (&self.positions, &self.volume_of)
     }
 
     /// Rebuilds the volumes of the objects and lights that moved since they
@@ -112,6 +158,14 @@ impl ShadowVolumes {
             .map_err(geometry_error)?;
         if rebuilt == 0 {
             return Ok(0);
+        }
+        self.positions = positions.clone();
+        if let Some(v) = self.virtual_lights.take() {
+            // Virtual lights depend on every caster and light: rebuilt whole.
+            let (faces, settings) = (v.faces().to_vec(), v.settings());
+            self.virtual_lights = Some(VirtualLights::new(
+                ctx, &self.pass, scene, &self.set, &faces, &positions, settings,
+            )?);
         }
         let moved: Vec<usize> = (0..positions.len())
             .filter(|&i| old.get(i) != Some(&positions[i]))
@@ -139,7 +193,12 @@ impl ShadowVolumes {
     /// volumes are extruded from this frame (section 4.4: a jittered light
     /// pivots the volumes built for its unjittered position). Fails when
     /// `direct` has another number of lights than the volumes.
-    pub fn prepare(&self, ctx: &GpuContext, direct: &DirectLights) -> Result<()> {
+    pub fn prepare(
+        &self,
+        ctx: &GpuContext,
+        direct_pass: &DirectPass,
+        direct: &DirectLights,
+    ) -> Result<()> {
         if direct.len() != self.volume_of.len() {
             return Err(MprError::InvalidSetting {
                 what: "shadow volumes",
@@ -152,7 +211,11 @@ impl ShadowVolumes {
         }
         let positions: Vec<Vec3> = direct.lights().map(|l| l.position()).collect();
         let mut lights = self.lights.lock().unwrap_or_else(|e| e.into_inner());
-        lights.write(ctx, &self.pass, &positions)
+        lights.write(ctx, &self.pass, &positions)?;
+        match &self.virtual_lights {
+            Some(v) => v.prepare(ctx, &self.pass, direct_pass, direct, &self.volume_of),
+            None => Ok(()),
+        }
     }
 
     /// The volumes on the CPU.
@@ -207,6 +270,10 @@ impl ShadowVolumes {
                 .record_volumes(&mut render, views, slot, &lights, i, buffers)?;
             pass.record_light_under_stencil(&mut render, frame.scene, direct, i, views, slot)?;
             self.pass.record_end(&mut render, slot.stencil_reference)?;
+            drop(render);
+            if let Some(v) = &self.virtual_lights {
+                v.encode_view(encoder, &self.pass, pass, frame, views, slot, i, volume)?;
+            }
         }
         Ok(())
     }

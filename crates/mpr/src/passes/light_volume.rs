@@ -1,0 +1,368 @@
+//! Light volumes and specular shadow volumes of virtual lights on the GPU
+//! (Diefenbach & Badler 1997, sections 4.2, 4.3 and 7.1's `make_shadows` /
+//! `make_spec_shadows`): every point light reflected or refracted by chains
+//! of specular faces ([`crate::virtual_light`]) adds its light, per view,
+//! where the stencil says it arrives.
+//!
+//! Per view, real light and chain `F₁ … F_k`, one render pass over the HDR
+//! target: the view's area is set to `SHAD_ZERO + k`; each face's light
+//! volume (the face's triangles, reversed, extruded from the virtual light
+//! `L_j` that shines through it, moved by the faces after it) is counted
+//! with the opposite sign, so only their intersection, where the light
+//! passed every face, comes down to `SHAD_ZERO`; then each stretch's shadow
+//! volumes (cast from `L_j` by the geometry that may block that stretch,
+//! moved by the faces after it: section 4.3's transformed copies) count up
+//! as the real light's do; the virtual light, its intensity times the
+//! faces' factors, is added where the stencil is `SHAD_ZERO`, and the area
+//! goes back to the view.
+//!
+//! Volumes are built once per central light position and chain prefix and
+//! shared by every chain that begins with it (figure 6's reuse: `S₀₁₂` is
+//! `S₀₁` moved by the second mirror). Jittered lights (section 4.4) pivot
+//! them: per frame the jittered light is carried through each prefix and
+//! its position and the suffix transform are written as one
+//! [`VolumeLight`] block per draw.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use glam::Vec3;
+use lustre_geometry::Scene;
+use lustre_geometry::shadow_volume::{ShadowVolume, ShadowVolumeSet};
+
+use crate::frame::FrameInputs;
+use crate::passes::direct::{DirectLights, DirectPass, GpuLight};
+use crate::passes::shadow_volume::{
+    SHAD_ZERO, ShadowVolumeBuffers, ShadowVolumePass, VolumeLight, VolumeLights,
+};
+use crate::passes::specular::SpecularFace;
+use crate::view::{ViewBuffer, ViewSlot};
+use crate::virtual_light::{
+    MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, shadow_generations, specular_paths,
+};
+use crate::{GpuContext, MprError, Result};
+
+/// One volume draw of a virtual light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Draw {
+    /// Index into [`VirtualLights::buffers`].
+    buffer: usize,
+    /// The stretch (shadows) or face (light volume) index `j` it belongs to.
+    j: usize,
+    /// Counted inverted (a light volume).
+    light_volume: bool,
+}
+
+/// The chains of one central light position and their draws.
+#[derive(Debug, Clone)]
+struct Chains {
+    paths: Vec<SpecularPath>,
+    draws: Vec<Vec<Draw>>,
+}
+
+/// What one prefix's volume is (the cache key's kind).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+enum Role {
+    /// Face `j`'s light volume.
+    LightVolume,
+    /// Stretch `j`'s shadows, bounded by the next face (`true` when `j < k`).
+    Shadows(bool),
+}
+
+/// Per frame state: the draw blocks and the virtual lights' direct slots.
+#[derive(Debug)]
+struct FrameState {
+    blocks: VolumeLights,
+    /// Per real light: the index of its first virtual light in `direct`.
+    first: Vec<usize>,
+    direct: Option<DirectLights>,
+    /// Per real light and chain: the first block of its draws.
+    first_block: Vec<Vec<usize>>,
+}
+
+/// The virtual lights of a scene's specular faces for the real point
+/// lights of the direct pass (sections 4.2, 4.3), with their volumes on the GPU.
+#[derive(Debug)]
+pub struct VirtualLights {
+    settings: VirtualLightSettings,
+    faces: Vec<SpecularFace>,
+    /// Per distinct central light position.
+    chains: Vec<Chains>,
+    buffers: Vec<ShadowVolumeBuffers>,
+    bytes: usize,
+    frame: Mutex<FrameState>,
+}
+
+/// A triangle's corners as exact bits, to find a face's own triangles.
+fn triangle_key(t: &[Vec3; 3]) -> [u32; 9] {
+    let mut key = [0u32; 9];
+    for (i, p) in t.iter().enumerate() {
+        key[3 * i..3 * i + 3].copy_from_slice(&p.to_array().map(f32::to_bits));
+    }
+    key
+}
+
+/// The keys of `face`'s triangles (its `corners`, three per triangle).
+fn face_triangles(face: &SpecularFace) -> Vec<[u32; 9]> {
+    face.corners
+        .chunks_exact(3)
+        .map(|t| triangle_key(&[t[0], t[1], t[2]]))
+        .collect()
+}
+
+impl VirtualLights {
+    /// Builds the chains of `faces` (at most `settings.depth` long) for
+    /// each of `positions` (the distinct central light positions of `set`)
+    /// and uploads their light and shadow volumes, cast by `set`'s casters.
+    pub fn new(
+        ctx: &GpuContext,
+        pass: &ShadowVolumePass,
+        scene: &Scene,
+        set: &ShadowVolumeSet,
+        faces: &[SpecularFace],
+        positions: &[Vec3],
+        settings: VirtualLightSettings,
+    ) -> Result<Self> {
+        if settings.depth > MAX_SHADOW_DEPTH {
+            return Err(MprError::InvalidSetting {
+                what: "shadow recursion depth",
+                message: format!(
+                    "{} exceeds {MAX_SHADOW_DEPTH} (one stencil value per face above SHAD_ZERO)",
+                    settings.depth
+                ),
+            });
+        }
+        let epsilon = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
+        let mut volumes: Vec<Vec<ShadowVolume>> = Vec::new();
+        let mut cache: HashMap<(usize, Vec<usize>, usize, Role), usize> = HashMap::new();
+        let mut chains = Vec::with_capacity(positions.len());
+        for (c, &light) in positions.iter().enumerate() {
+            let paths = specular_paths(faces, light, settings.depth);
+            let mut draws = Vec::with_capacity(paths.len());
+            for path in &paths {
+                let k = path.len();
+                let mut list = Vec::new();
+                for j in 1..=k {
+                    let key = (c, path.faces[..j].to_vec(), j, Role::LightVolume);
+                    let buffer = match cache.get(&key) {
+                        Some(&b) => b,
+                        None => {
+                            let face = &faces[path.faces[j - 1]];
+                            let source = path.prefix[j].transform_point3(light);
+                            let own = face_triangles(face);
+                            let keep = |t: &[Vec3; 3]| own.contains(&triangle_key(t));
+                            let built = (0..set.casters().len())
+                                .map(|caster| set.volume_where(scene, caster, source, &keep, true))
+                                .collect::<lustre_geometry::Result<Vec<_>>>()
+                                .map_err(geometry_error)?;
+                            volumes.push(built.into_iter().filter(|v| !v.is_empty()).collect());
+                            cache.insert(key, volumes.len() - 1);
+                            volumes.len() - 1
+                        }
+                    };
+                    list.push(Draw {
+                        buffer,
+                        j,
+                        light_volume: true,
+                    });
+                }
+                for j in path.shadowed_stretches(settings.shadows) {
+                    let bounded = j < k;
+                    let prefix = path.faces[..if bounded { j + 1 } else { k }].to_vec();
+                    let key = (c, prefix, j, Role::Shadows(bounded));
+                    let buffer = match cache.get(&key) {
+                        Some(&b) => b,
+                        None => {
+                            let bounds = path.stretch_bounds(faces, j);
+                            let source = path.prefix[j].transform_point3(light);
+                            let keep =
+                                |t: &[Vec3; 3]| bounds.iter().all(|h| h.holds_triangle(t, epsilon));
+                            let built = (0..set.casters().len())
+                                .map(|caster| set.volume_where(scene, caster, source, &keep, false))
+                                .collect::<lustre_geometry::Result<Vec<_>>>()
+                                .map_err(geometry_error)?;
+                            volumes.push(built.into_iter().filter(|v| !v.is_empty()).collect());
+                            cache.insert(key, volumes.len() - 1);
+                            volumes.len() - 1
+                        }
+                    };
+                    list.push(Draw {
+                        buffer,
+                        j,
+                        light_volume: false,
+                    });
+                }
+                draws.push(list);
+            }
+            chains.push(Chains { paths, draws });
+        }
+        let bytes = volumes.iter().flatten().map(ShadowVolume::byte_size).sum();
+        let buffers = volumes
+            .iter()
+            .map(|v| ShadowVolumeBuffers::upload(ctx, v))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self {
+            settings,
+            faces: faces.to_vec(),
+            chains,
+            buffers,
+            bytes,
+            frame: Mutex::new(FrameState {
+                blocks: VolumeLights::new(ctx, pass, 1),
+                first: Vec::new(),
+                direct: None,
+                first_block: Vec::new(),
+            }),
+        })
+    }
+
+    /// The settings they were built with.
+    pub fn settings(&self) -> VirtualLightSettings {
+        self.settings
+    }
+
+    /// The specular faces they pass.
+    pub fn faces(&self) -> &[SpecularFace] {
+        &self.faces
+    }
+
+    /// The chains of the `i`-th central light position.
+    pub fn paths(&self, position: usize) -> &[SpecularPath] {
+        self.chains
+            .get(position)
+            .map(|c| c.paths.as_slice())
+            .unwrap_or_default()
+    }
+
+    /// Bytes of the light and shadow volumes on the GPU (section 4.3's storage).
+    pub fn byte_size(&self) -> usize {
+        self.bytes
+    }
+
+    /// Shadow-volume generations per image for the `i`-th central light
+    /// position: 1 for the light itself and one per drawn stretch of each
+    /// chain (equation 7's count, section 8.1).
+    pub fn shadow_generations(&self, position: usize) -> usize {
+        shadow_generations(self.paths(position), self.settings.shadows)
+    }
+
+    /// Writes, for the real lights `direct` holds now (light `i` has the
+    /// chains of central position `chain_of[i]`), every virtual light and
+    /// every draw's block: the jittered light carried through each prefix,
+    /// the suffix transform (section 4.4's pivot, carried through the faces).
+    pub fn prepare(
+        &self,
+        ctx: &GpuContext,
+        pass: &ShadowVolumePass,
+        direct_pass: &DirectPass,
+        direct: &DirectLights,
+        chain_of: &[usize],
+    ) -> Result<()> {
+        let mut frame = self.frame.lock().unwrap_or_else(|e| e.into_inner());
+        let mut lights: Vec<GpuLight> = Vec::new();
+        let mut blocks: Vec<VolumeLight> = Vec::new();
+        let mut first = Vec::with_capacity(chain_of.len());
+        let mut first_block = Vec::with_capacity(chain_of.len());
+        for (light, &c) in direct.lights().zip(chain_of) {
+            first.push(lights.len());
+            let chains = &self.chains[c];
+            let mut starts = Vec::with_capacity(chains.paths.len());
+            for (path, draws) in chains.paths.iter().zip(&chains.draws) {
+                lights.push(light.through(path.transform(), path.factor));
+                starts.push(blocks.len());
+                for draw in draws {
+                    let source = path.prefix[draw.j].transform_point3(light.position());
+                    blocks.push(VolumeLight::new(source, path.suffix(draw.j)));
+                }
+            }
+            first_block.push(starts);
+        }
+        frame.blocks.write_blocks(ctx, pass, &blocks)?;
+        let reusable = frame
+            .direct
+            .as_ref()
+            .is_some_and(|d| d.len() == lights.len() && d.shares_materials(direct));
+        if reusable {
+            if let Some(d) = &frame.direct {
+                d.set_gpu_lights(&ctx.queue, &lights)?;
+            }
+        } else {
+            frame.direct = Some(direct.unshadowed_like(ctx, direct_pass, &lights)?);
+        }
+        frame.first = first;
+        frame.first_block = first_block;
+        Ok(())
+    }
+
+    /// Records, for the view of `slot`, the virtual lights of real light
+    /// `light` (sections 4.2, 4.3, 7.1): per chain one render pass with the
+    /// light volumes, the shadow volumes, the light under the stencil and
+    /// the restore. Run after [`VirtualLights::prepare`] in the same submission.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: &ShadowVolumePass,
+        direct_pass: &DirectPass,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+        light: usize,
+        chain: usize,
+    ) -> Result<()> {
+        let state = self.frame.lock().unwrap_or_else(|e| e.into_inner());
+        let (Some(direct), Some(&first), Some(starts)) = (
+            state.direct.as_ref(),
+            state.first.get(light),
+            state.first_block.get(light),
+        ) else {
+            return Err(MprError::InvalidSetting {
+                what: "virtual lights",
+                message: format!("light #{light} was not prepared (call VirtualLights::prepare)"),
+            });
+        };
+        let chains = &self.chains[chain];
+        for (p, (path, draws)) in chains.paths.iter().zip(&chains.draws).enumerate() {
+            let mut render = ShadowVolumePass::begin_pass(
+                encoder,
+                frame.targets,
+                &frame.targets.hdr.view,
+                "virtual-light",
+            );
+            pass.record_begin_at(
+                &mut render,
+                slot.stencil_reference,
+                SHAD_ZERO + path.len() as u32,
+            )?;
+            for (d, draw) in draws.iter().enumerate() {
+                let mirrors = path.suffix(draw.j).matrix3.determinant() < 0.0;
+                pass.record_volumes_as(
+                    &mut render,
+                    views,
+                    slot,
+                    &state.blocks,
+                    starts[p] + d,
+                    &self.buffers[draw.buffer],
+                    slot.mirrored ^ mirrors ^ draw.light_volume,
+                )?;
+            }
+            direct_pass.record_light_under_stencil(
+                &mut render,
+                frame.scene,
+                direct,
+                first + p,
+                views,
+                slot,
+            )?;
+            pass.record_end(&mut render, slot.stencil_reference)?;
+        }
+        Ok(())
+    }
+}
+
+fn geometry_error(e: lustre_geometry::GeometryError) -> MprError {
+    MprError::InvalidSetting {
+        what: "virtual light volumes",
+        message: e.to_string(),
+    }
+}

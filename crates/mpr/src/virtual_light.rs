@@ -1,0 +1,593 @@
+//! Virtual lights: a light reflected or refracted by chains of specular
+//! faces (Diefenbach & Badler 1997, sections 4.2, 4.3 and 7.1's
+//! `make_spec_shadows`), on the CPU: which chains reach which face, the
+//! transform and the factor of each chain, which geometry may cast a
+//! shadow into each stretch of its path, the pass count of equation 7, and
+//! the CPU twin that follows the unfolded path with ray casts.
+//!
+//! A chain `F₁ … F_k` of [`SpecularFace`]s takes a point light at `L₀ = L`
+//! to the virtual lights `L_j = T_j(L_{j−1})`, where `T_j` is `F_j`'s
+//! transform: the mirror reflection of its plane, or the slab's paraxial
+//! shift `t (1 − 1/η)` along its normal (the same maps the specular images
+//! use, [`View::reflected`](crate::View::reflected) and
+//! [`View::through_slab`](crate::View::through_slab)). Light from `L` that
+//! passed `F₁ … F_k` reaches a point `P` on the outgoing side of `F_k` as
+//! if from `L_k`, with the intensity times the faces' factors, when
+//!
+//! * for every `j`, the line from `L_j` to the point the path reached next
+//!   crosses `F_j`'s polygon (the *light volume* of section 4.2, the
+//!   stencilled intersection of one volume per face), and
+//! * no geometry blocks any stretch of the path: stretch `j` runs from
+//!   `F_j` (the light for `j = 0`) to `F_{j+1}` (the receiver for `j = k`);
+//!   only geometry on the outgoing side of `F_j` and the incoming side of
+//!   `F_{j+1}` can block it, and the shadow it casts is its volume from
+//!   `L_j` moved by `T_k ∘ … ∘ T_{j+1}` (section 4.3: a shadow bent by
+//!   specular faces is a transformed copy, figure 6's `S₀₁₂` from `S₀₁`).
+//!
+//! Exact for mirrors; for slabs the paraxial approximation of the images.
+//! A chain continues from `F_j` to a face that its light can reach:
+//! `L_j` on the incoming side of the next face, and the next face's corners,
+//! projected from `L_j` onto `F_j`'s plane, overlapping `F_j`'s extent there
+//! (the viewpoint culling of section 8, done per light).
+
+use glam::{Affine3A, Vec3};
+use lustre_geometry::{Bvh, Light, Ray};
+
+use crate::passes::specular::{SpecularFace, SpecularKind};
+
+/// How much of the shadowing of virtual lights is drawn (Diefenbach &
+/// Badler 1997, section 8.1, table 2: "Spec Shad", "2+ Bounces").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpecularShadows {
+    /// Every stretch of every path casts its shadows (table 2 (a)).
+    #[default]
+    All,
+    /// Shadows that pass more than one specular face before the receiver
+    /// are left out (table 2 (b)).
+    OneBounce,
+    /// Virtual lights are bounded by their light volumes only (table 2 (c)).
+    Off,
+}
+
+/// The settings of virtual lights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VirtualLightSettings {
+    /// Shadow recursion depth (section 8.1): the longest chain of faces a
+    /// light is followed through; 0 draws no virtual light.
+    pub depth: u32,
+    /// Which of their shadows are drawn.
+    pub shadows: SpecularShadows,
+}
+
+impl Default for VirtualLightSettings {
+    fn default() -> Self {
+        Self {
+            depth: 1,
+            shadows: SpecularShadows::All,
+        }
+    }
+}
+
+/// The most faces a chain may pass (the stencil counts one light volume per
+/// face above `SHAD_ZERO`, which leaves 63 values).
+pub const MAX_SHADOW_DEPTH: u32 = 8;
+
+/// The map a face applies to what is seen, and lit, through it: the mirror
+/// reflection of its plane, or the slab's shift toward its outgoing side.
+pub fn face_transform(face: &SpecularFace) -> Affine3A {
+    match face.kind {
+        SpecularKind::Mirror => {
+            let n = face.plane.normal;
+            let linear =
+                glam::Mat3::IDENTITY - 2.0 * glam::Mat3::from_cols(n * n.x, n * n.y, n * n.z);
+            Affine3A::from_mat3_translation(linear, 2.0 * face.plane.offset * n)
+        }
+        SpecularKind::Slab { shift, .. } => Affine3A::from_translation(face.plane.normal * shift),
+    }
+}
+
+/// A half-space `normal · p ≥ offset`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HalfSpace {
+    /// Unit normal pointing inside.
+    pub normal: Vec3,
+    /// Offset along the normal.
+    pub offset: f32,
+}
+
+impl HalfSpace {
+    /// How far inside `p` lies (negative outside).
+    pub fn depth(&self, p: Vec3) -> f32 {
+        self.normal.dot(p) - self.offset
+    }
+
+    /// Whether a triangle lies inside up to `epsilon` and not wholly on the
+    /// boundary: the geometry that may block a stretch of a path. Triangles
+    /// that cross the boundary are left out.
+    pub fn holds_triangle(&self, t: &[Vec3; 3], epsilon: f32) -> bool {
+        let d = t.map(|p| self.depth(p));
+        d.iter().all(|&d| d >= -epsilon) && d.iter().any(|&d| d > epsilon)
+    }
+}
+
+/// Where light leaves `face`: in front of a mirror, on the normal's side of a slab face.
+pub fn outgoing(face: &SpecularFace) -> HalfSpace {
+    HalfSpace {
+        normal: face.plane.normal,
+        offset: face.plane.offset,
+    }
+}
+
+/// Where light must come from to pass `face`: in front of a mirror, beyond
+/// the far face of a slab.
+pub fn incoming(face: &SpecularFace) -> HalfSpace {
+    match face.kind {
+        SpecularKind::Mirror => outgoing(face),
+        SpecularKind::Slab { thickness, .. } => HalfSpace {
+            normal: -face.plane.normal,
+            offset: -face.plane.offset + thickness,
+        },
+    }
+}
+
+/// One chain of faces a light passes, with what it does to the light.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpecularPath {
+    /// Indices of the faces, in the order the light meets them.
+    pub faces: Vec<usize>,
+    /// `A_j = T_j ∘ … ∘ T₁` for `j = 0..=k` (`A₀` the identity): the virtual
+    /// light after `j` faces is `A_j(L)`.
+    pub prefix: Vec<Affine3A>,
+    /// Product of the faces' factors (reflectance, transmittance).
+    pub factor: Vec3,
+}
+
+impl SpecularPath {
+    /// Number of faces `k`.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Whether the chain has no face.
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
+
+    /// `A_k`: the whole chain's transform.
+    pub fn transform(&self) -> Affine3A {
+        *self.prefix.last().unwrap_or(&Affine3A::IDENTITY)
+    }
+
+    /// `T_k ∘ … ∘ T_{j+1}`: what moves stretch `j`'s shadows and face
+    /// `j`'s light volume (`j ≤ k`) to where the path ends.
+    pub fn suffix(&self, j: usize) -> Affine3A {
+        self.transform() * self.prefix[j].inverse()
+    }
+
+    /// The half-spaces whose geometry may block stretch `j` (`0..=k`): the
+    /// outgoing side of `F_j` (`j ≥ 1`) and the incoming side of `F_{j+1}` (`j < k`).
+    pub fn stretch_bounds(&self, faces: &[SpecularFace], j: usize) -> Vec<HalfSpace> {
+        let mut bounds = Vec::new();
+        if j >= 1 {
+            bounds.push(outgoing(&faces[self.faces[j - 1]]));
+        }
+        if j < self.len() {
+            bounds.push(incoming(&faces[self.faces[j]]));
+        }
+        bounds
+    }
+
+    /// The stretches whose shadows are drawn under `shadows`: all `0..=k`,
+    /// the last two ([`SpecularShadows::OneBounce`]) or none.
+    pub fn shadowed_stretches(&self, shadows: SpecularShadows) -> std::ops::Range<usize> {
+        let k = self.len();
+        match shadows {
+            SpecularShadows::All => 0..k + 1,
+            SpecularShadows::OneBounce => k.saturating_sub(1)..k + 1,
+            SpecularShadows::Off => 0..0,
+        }
+    }
+}
+
+/// An orthonormal basis of a plane with normal `n`.
+fn plane_basis(n: Vec3) -> (Vec3, Vec3) {
+    let u = n.any_orthonormal_vector();
+    (u, n.cross(u))
+}
+
+/// Whether light from `source` through `from` may reach `to`: some corner
+/// of `to` lies beyond `from`, and the corners' central projection from
+/// `source` onto `from`'s plane overlaps `from`'s extent there (conservative:
+/// a corner not beyond the plane keeps the face).
+fn reaches(source: Vec3, from: &SpecularFace, to: &SpecularFace) -> bool {
+    let out = outgoing(from);
+    let ds = out.depth(source);
+    let depths: Vec<f32> = to.corners.iter().map(|&c| out.depth(c)).collect();
+    if depths.iter().all(|&d| d <= 0.0) {
+        return false;
+    }
+    if depths.iter().any(|&d| d <= 0.0) || ds >= 0.0 {
+        return true;
+    }
+    let (u, v) = plane_basis(from.plane.normal);
+    let extent = |points: &mut dyn Iterator<Item = Vec3>| {
+        points.fold(
+            (
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+            ),
+            |b, p| {
+                let (x, y) = (p.dot(u), p.dot(v));
+                (b.0.min(x), b.1.max(x), b.2.min(y), b.3.max(y))
+            },
+        )
+    };
+    let face = extent(&mut from.corners.iter().copied());
+    let projected = extent(&mut to.corners.iter().zip(&depths).map(|(&c, &d)| {
+        let t = ds / (ds - d);
+        source + (c - source) * t
+    }));
+    projected.0 <= face.1 && face.0 <= projected.1 && projected.2 <= face.3 && face.2 <= projected.3
+}
+
+/// Every chain of at most `depth` faces that light from a point light at
+/// `light` can pass (section 7.1, `make_spec_shadows` recursing per face),
+/// depth first, each with its transforms and factor.
+pub fn specular_paths(faces: &[SpecularFace], light: Vec3, depth: u32) -> Vec<SpecularPath> {
+    let mut out = Vec::new();
+    let root = SpecularPath {
+        faces: Vec::new(),
+        prefix: vec![Affine3A::IDENTITY],
+        factor: Vec3::ONE,
+    };
+    grow(faces, light, depth, &root, &mut out);
+    out
+}
+
+fn grow(
+    faces: &[SpecularFace],
+    light: Vec3,
+    depth: u32,
+    path: &SpecularPath,
+    out: &mut Vec<SpecularPath>,
+) {
+    if path.len() >= depth as usize {
+        return;
+    }
+    let source = path.transform().transform_point3(light);
+    for (f, face) in faces.iter().enumerate() {
+        if incoming(face).depth(source) <= 0.0 {
+            continue;
+        }
+        if let Some(&last) = path.faces.last()
+            && (last == f || !reaches(source, &faces[last], face))
+        {
+            continue;
+        }
+        let mut next = path.clone();
+        next.faces.push(f);
+        next.prefix.push(face_transform(face) * path.transform());
+        next.factor *= face.factor;
+        out.push(next.clone());
+        grow(faces, light, depth, &next, out);
+    }
+}
+
+/// Shadow-volume generations per light and image (section 8.1): one for
+/// the light itself, and per path one for each stretch drawn under
+/// `shadows` (`k + 1` for a chain of `k` faces with every shadow).
+pub fn shadow_generations(paths: &[SpecularPath], shadows: SpecularShadows) -> usize {
+    1 + paths
+        .iter()
+        .map(|p| p.shadowed_stretches(shadows).len())
+        .sum::<usize>()
+}
+
+/// Equation 7's count of shadow generations per image and light,
+/// `n (d² + 3d)/2 + 1`, for `n` specular faces and shadow depth `d`: exact
+/// when the light of every face goes on through one face per level.
+pub fn equation_7(n: usize, d: u32) -> usize {
+    let d = d as usize;
+    n * (d * d + 3 * d) / 2 + 1
+}
+
+/// The point light `light` seen through `path`: moved by its transform, its
+/// axis by the linear part, its intensity times the factor; `None` for an
+/// area light.
+pub fn virtual_light(light: &Light, path: &SpecularPath) -> Option<Light> {
+    let m = path.transform();
+    let axis = |a: Vec3| (m.matrix3 * a).normalize_or_zero();
+    let scale = |i: lustre_geometry::Rgb| {
+        i * lustre_geometry::Rgb::new(path.factor.x, path.factor.y, path.factor.z)
+    };
+    Some(match light {
+        Light::Point(p) => Light::Point(lustre_geometry::light::PointLight {
+            position: m.transform_point3(p.position),
+            intensity: scale(p.intensity),
+        }),
+        Light::OrientedPoint(p) => {
+            Light::OrientedPoint(lustre_geometry::light::OrientedPointLight {
+                position: m.transform_point3(p.position),
+                normal: axis(p.normal),
+                intensity: scale(p.intensity),
+            })
+        }
+        Light::Spot(s) => Light::Spot(lustre_geometry::light::SpotLight {
+            position: m.transform_point3(s.position),
+            direction: axis(s.direction),
+            intensity: scale(s.intensity),
+            ..*s
+        }),
+        Light::Area(_) => return None,
+    })
+}
+
+/// Whether `x`, on `face`'s plane, lies in one of its triangles.
+fn in_face(face: &SpecularFace, x: Vec3) -> bool {
+    let n = face.plane.normal;
+    face.corners.chunks_exact(3).any(|t| {
+        let inside = |a: Vec3, b: Vec3| (b - a).cross(x - a).dot(n) >= 0.0;
+        let ccw = (t[1] - t[0]).cross(t[2] - t[0]).dot(n) >= 0.0;
+        let (a, b, c) = if ccw {
+            (t[0], t[1], t[2])
+        } else {
+            (t[0], t[2], t[1])
+        };
+        inside(a, b) && inside(b, c) && inside(c, a)
+    })
+}
+
+/// CPU twin of a virtual light's stencil (sections 4.2, 4.3): whether light
+/// from a point light at `light` reaches `p` through `path`, followed back
+/// from `p` by ray casts. Per face from the last, the line from the virtual
+/// light `L_j` to the point reached must leave `F_j` on its outgoing side
+/// and cross its polygon at `X`; the stretch from `X` to that point must be
+/// free in `bvh` (ends shortened by `epsilon`). A mirror's path goes on
+/// from `X`; a slab's from where the line from `L_{j−1}` with the same
+/// direction meets the far face (a slab keeps a ray's direction; the
+/// stretch inside it is not tested). Finally the stretch from the light.
+pub fn path_visible(
+    bvh: &Bvh,
+    faces: &[SpecularFace],
+    path: &SpecularPath,
+    light: Vec3,
+    p: Vec3,
+    epsilon: f32,
+) -> bool {
+    let free = |a: Vec3, b: Vec3| {
+        let d = b - a;
+        let len = d.length();
+        len <= 2.0 * epsilon || !bvh.any_hit(&Ray::segment(a, d / len, epsilon, len - epsilon))
+    };
+    let mut point = p;
+    for j in (1..=path.len()).rev() {
+        let face = &faces[path.faces[j - 1]];
+        let source = path.prefix[j].transform_point3(light);
+        let out = outgoing(face);
+        let (ds, dp) = (out.depth(source), out.depth(point));
+        if !(ds < 0.0 && dp > 0.0) {
+            return false;
+        }
+        let x = source + (point - source) * (ds / (ds - dp));
+        if !in_face(face, x) || !free(x, point) {
+            return false;
+        }
+        point = match face.kind {
+            SpecularKind::Mirror => x,
+            SpecularKind::Slab { thickness, .. } => {
+                let previous = path.prefix[j - 1].transform_point3(light);
+                let dir = point - source;
+                let far = HalfSpace {
+                    normal: face.plane.normal,
+                    offset: face.plane.offset - thickness,
+                };
+                let (d0, slope) = (far.depth(previous), far.normal.dot(dir));
+                if slope >= 0.0 || d0 >= 0.0 {
+                    return false;
+                }
+                previous + dir * (-d0 / slope)
+            }
+        };
+    }
+    free(light, point)
+}
+
+/// CPU twin of the virtual lights (sections 4.2, 4.3, every shadow drawn):
+/// per pixel centre's closest hit, for every point light of `lights` and
+/// every chain of at most `depth` faces that its position passes, the
+/// light's [`virtual_light`] times `f_r cos θi` where [`path_visible`] (with
+/// the tolerance of the direct CPU twin, `1e-4` of the scene's extent). Bit
+/// `v` of a pixel's `visible` is the `v`-th virtual light, lights in order
+/// and each light's chains in [`specular_paths`] order.
+#[allow(clippy::too_many_arguments)]
+pub fn virtual_direct_pixels_cpu(
+    scene: &lustre_geometry::Scene,
+    lights: &[Light],
+    faces: &[SpecularFace],
+    depth: u32,
+    bvh: &Bvh,
+    camera: &lustre_geometry::Camera,
+    width: u32,
+    height: u32,
+    glossy: crate::material::GlossyModel,
+) -> crate::Result<Vec<crate::passes::direct::DirectPixel>> {
+    let mut virtual_lights = Vec::new();
+    let mut origins = Vec::new();
+    for light in lights {
+        let position = lustre_geometry::shadow_volume::light_position(light);
+        for path in specular_paths(faces, position, depth) {
+            if let Some(v) = virtual_light(light, &path) {
+                virtual_lights.push(v);
+                origins.push((position, path));
+            }
+        }
+    }
+    let epsilon = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
+    let reaches = |v: usize, p: Vec3, _: Vec3, _: f32| {
+        let (position, path) = &origins[v];
+        path_visible(bvh, faces, path, *position, p, epsilon)
+    };
+    crate::passes::direct::direct_pixels_cpu_where(
+        scene,
+        &virtual_lights,
+        bvh,
+        camera,
+        width,
+        height,
+        glossy,
+        &reaches,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lustre_geometry::Plane;
+
+    fn mirror(point: Vec3, normal: Vec3, half: f32) -> SpecularFace {
+        let (u, v) = plane_basis(normal);
+        let c = |a: f32, b: f32| point + half * (a * u + b * v);
+        let corners = vec![
+            c(-1., -1.),
+            c(1., -1.),
+            c(1., 1.),
+            c(-1., -1.),
+            c(1., 1.),
+            c(-1., 1.),
+        ];
+        SpecularFace {
+            surface: 0,
+            plane: Plane::from_point_normal(point, normal),
+            kind: SpecularKind::Mirror,
+            factor: Vec3::splat(0.9),
+            corners,
+        }
+    }
+
+    /// Two facing mirrors 2 m apart, 1 m wide, with the light between them.
+    fn facing_pair() -> Vec<SpecularFace> {
+        vec![
+            mirror(Vec3::new(-1.0, 0.0, 0.0), Vec3::X, 0.5),
+            mirror(Vec3::new(1.0, 0.0, 0.0), -Vec3::X, 0.5),
+        ]
+    }
+
+    #[test]
+    fn mirror_transform_reflects_and_slab_shifts() {
+        let m = mirror(Vec3::new(-1.0, 0.0, 0.0), Vec3::X, 0.5);
+        let t = face_transform(&m);
+        assert!(
+            (t.transform_point3(Vec3::new(0.5, 0.2, 0.3)) - Vec3::new(-2.5, 0.2, 0.3)).length()
+                < 1e-6
+        );
+        assert!(t.matrix3.determinant() < 0.0);
+        let slab = SpecularFace {
+            kind: SpecularKind::Slab {
+                shift: 0.01,
+                thickness: 0.03,
+            },
+            ..m
+        };
+        let t = face_transform(&slab);
+        assert!((t.transform_point3(Vec3::ZERO) - Vec3::new(0.01, 0.0, 0.0)).length() < 1e-7);
+        // Light comes into a slab face from beyond its far face only.
+        assert!(incoming(&slab).depth(Vec3::new(-1.05, 0.0, 0.0)) > 0.0);
+        assert!(incoming(&slab).depth(Vec3::new(-1.02, 0.0, 0.0)) < 0.0);
+        assert!(incoming(&slab).depth(Vec3::new(0.0, 0.0, 0.0)) < 0.0);
+    }
+
+    /// Facing mirrors: the light's chains alternate A, B, A… or B, A, B…,
+    /// one continuation per level, so the shadow generations per light are
+    /// exactly equation 7's `n (d² + 3d)/2 + 1` with `n = 2`, for d = 1…4;
+    /// virtual lights sit at the images of the light in the mirror pair.
+    #[test]
+    fn facing_mirrors_need_equation_7_shadow_generations() {
+        let faces = facing_pair();
+        let light = Vec3::new(0.2, 0.0, 0.0);
+        for d in 1..=4 {
+            let paths = specular_paths(&faces, light, d);
+            assert_eq!(paths.len(), 2 * d as usize, "d = {d}");
+            assert_eq!(
+                shadow_generations(&paths, SpecularShadows::All),
+                equation_7(2, d),
+                "d = {d}"
+            );
+        }
+        let paths = specular_paths(&faces, light, 2);
+        let positions: Vec<Vec3> = paths
+            .iter()
+            .map(|p| p.transform().transform_point3(light))
+            .collect();
+        // A (x = -1): -2.2; then B (x = 1): 4.2; B: 1.8; then A: -3.8.
+        let expected = [-2.2, 4.2, 1.8, -3.8];
+        for (p, e) in positions.iter().zip(expected) {
+            assert!((p.x - e).abs() < 1e-5 && p.y.abs() < 1e-6, "{p} vs {e}");
+        }
+        assert!((paths[1].factor - Vec3::splat(0.81)).length() < 1e-6);
+        // One mirror: one chain at any depth; equation 7 counts n = 1, d = 1.
+        let one = &faces[..1];
+        assert_eq!(
+            shadow_generations(&specular_paths(one, light, 1), SpecularShadows::All),
+            equation_7(1, 1)
+        );
+        assert_eq!(specular_paths(one, light, 3).len(), 1);
+        // Table 2's reductions: without shadows through 2+ faces, without any.
+        let paths = specular_paths(&faces, light, 2);
+        assert_eq!(
+            shadow_generations(&paths, SpecularShadows::OneBounce),
+            1 + 2 * 2 + 2 * 2
+        );
+        assert_eq!(shadow_generations(&paths, SpecularShadows::Off), 1);
+    }
+
+    /// A face the light cannot reach through the previous face is culled:
+    /// a second pair of mirrors far to the side.
+    #[test]
+    fn chains_skip_faces_outside_the_light_volume() {
+        let mut faces = facing_pair();
+        faces.push(mirror(Vec3::new(1.0, 10.0, 0.0), -Vec3::X, 0.5));
+        let light = Vec3::new(0.2, 0.0, 0.0);
+        let paths = specular_paths(&faces, light, 2);
+        let chains: Vec<Vec<usize>> = paths.iter().map(|p| p.faces.clone()).collect();
+        assert_eq!(
+            chains,
+            vec![vec![0], vec![0, 1], vec![1], vec![1, 0], vec![2]]
+        );
+    }
+
+    /// Stretch bounds: the outgoing side of the face before, the incoming
+    /// side of the face after; the mirror itself (in its plane) never blocks.
+    #[test]
+    fn stretches_are_bounded_by_their_faces() {
+        let faces = facing_pair();
+        let path = &specular_paths(&faces, Vec3::new(0.2, 0.0, 0.0), 2)[1];
+        assert_eq!(path.stretch_bounds(&faces, 0).len(), 1);
+        assert_eq!(path.stretch_bounds(&faces, 1).len(), 2);
+        assert_eq!(path.stretch_bounds(&faces, 2).len(), 1);
+        let own = [
+            faces[0].corners[0],
+            faces[0].corners[1],
+            faces[0].corners[2],
+        ];
+        assert!(!outgoing(&faces[0]).holds_triangle(&own, 1e-5));
+        let between = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.1, 0.0, 0.0),
+            Vec3::new(0.0, 0.1, 0.0),
+        ];
+        assert!(
+            path.stretch_bounds(&faces, 1)
+                .iter()
+                .all(|h| h.holds_triangle(&between, 1e-5))
+        );
+        assert_eq!(path.shadowed_stretches(SpecularShadows::OneBounce), 1..3);
+        // suffix(j) ∘ prefix(j) = the whole transform.
+        for j in 0..=2 {
+            let q = Vec3::new(0.3, 0.1, -0.2);
+            let a = (path.suffix(j) * path.prefix[j]).transform_point3(q);
+            assert!((a - path.transform().transform_point3(q)).length() < 1e-5);
+        }
+    }
+}

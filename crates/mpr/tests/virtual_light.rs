@@ -1,0 +1,238 @@
+//! Virtual lights on the GPU (Diefenbach & Badler 1997, sections 4.2, 4.3,
+//! 7.1): `mirrors` at 96×96, its ceiling light as one point light, through
+//! the frame graph with shadow volumes and virtual lights up to two
+//! mirrors deep, against the CPU twin that follows every unfolded light
+//! path with BVH ray casts (`virtual_light::path_visible`): the real
+//! light's direct radiance plus each virtual light's where its whole path
+//! is free. Pixels whose 5×5 neighbourhood changes surface or the set of
+//! lights that reach it are left out (light-volume and shadow boundaries
+//! are decided by rasterisation there); ≥ 99.5 % of the rest agree within
+//! the direct tests' tolerance, and the virtual lights must matter in a
+//! good share of them, which the frame without them fails.
+
+mod support;
+
+use glam::Vec2;
+use lustre_geometry::light::jittered_point_lights;
+use lustre_geometry::{Bvh, Camera, Light, Scene, builtin};
+use lustre_mpr::frame::FrameInputs;
+use lustre_mpr::material::{GlossyModel, scene_materials};
+use lustre_mpr::passes::direct::{DirectLights, DirectPixel, direct_pixels_cpu_with_lights};
+use lustre_mpr::passes::shadow::ShadowSettings;
+use lustre_mpr::passes::specular::specular_faces;
+use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::readback::{read_rgba_f32, read_u32};
+use lustre_mpr::virtual_light::{
+    SpecularShadows, VirtualLightSettings, specular_paths, virtual_direct_pixels_cpu,
+};
+use lustre_mpr::{FrameGraph, GpuContext, NO_SURFACE, RenderTargets, SceneBuffers};
+use support::gpu_or_skip;
+
+const SIZE: u32 = 96;
+const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// One frame's HDR radiance and surface ids: direct light under shadow
+/// volumes, with virtual lights of `depth` when `depth > 0`.
+fn render(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    depth: u32,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
+    let hdr = ctx.hdr_format();
+    let mut graph = FrameGraph::new(ctx, OUTPUT_FORMAT)
+        .unwrap()
+        .with_direct(ctx, hdr)
+        .unwrap()
+        .with_shadow_volumes(ctx, hdr, scene, lights)
+        .unwrap();
+    if depth > 0 {
+        graph = graph
+            .with_virtual_lights(
+                ctx,
+                scene,
+                VirtualLightSettings {
+                    depth,
+                    shadows: SpecularShadows::All,
+                },
+            )
+            .unwrap();
+    }
+    let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
+    let buffers = SceneBuffers::upload(ctx, scene).unwrap();
+    let direct = DirectLights::with_settings(
+        ctx,
+        graph.direct.as_ref().unwrap(),
+        lights,
+        &scene_materials(scene, GlossyModel::Exact).unwrap(),
+        ShadowSettings::default(),
+    )
+    .unwrap();
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("virtual-output"),
+        size: wgpu::Extent3d {
+            width: SIZE,
+            height: SIZE,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: OUTPUT_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let view = output.create_view(&wgpu::TextureViewDescriptor::default());
+    graph
+        .render(
+            ctx,
+            &FrameInputs {
+                scene: &buffers,
+                camera,
+                tonemap: &Tonemap::default(),
+                targets: &targets,
+                output: &view,
+                splats: None,
+                direct: Some(&direct),
+                diffuse: None,
+            },
+        )
+        .unwrap();
+    (
+        read_rgba_f32(ctx, &targets.hdr.texture).unwrap(),
+        read_u32(ctx, &targets.surface_id.texture).unwrap(),
+    )
+}
+
+/// `(agree, compared, pixels where the virtual lights add ≥ 5 %)` of `gpu`
+/// against `real + virtual` over pixels whose 5×5 neighbourhood shows one
+/// surface and one set of reaching lights on the CPU, and the same surface on the GPU.
+fn agreement(
+    gpu: &[[f32; 4]],
+    ids: &[u32],
+    real: &[DirectPixel],
+    virt: &[DirectPixel],
+) -> (usize, usize, usize) {
+    let total = |i: usize| -> [f32; 3] {
+        std::array::from_fn(|k| real[i].radiance[k] + virt[i].radiance[k])
+    };
+    let max = (0..real.len())
+        .flat_map(|i| total(i))
+        .fold(0.0f32, f32::max);
+    let s = SIZE as i32;
+    let (mut agree, mut compared, mut lit_virtually) = (0, 0, 0);
+    for y in 2..s - 2 {
+        for x in 2..s - 2 {
+            let i = (y * s + x) as usize;
+            if real[i].surface == NO_SURFACE {
+                continue;
+            }
+            let steady = (-2..=2).all(|dy| {
+                (-2..=2).all(|dx| {
+                    let j = ((y + dy) * s + x + dx) as usize;
+                    real[j].surface == real[i].surface
+                        && ids[j] == real[i].surface
+                        && real[j].visible == real[i].visible
+                        && virt[j].visible == virt[i].visible
+                })
+            });
+            if !steady {
+                continue;
+            }
+            let expected = total(i);
+            compared += 1;
+            let v = virt[i].radiance.iter().sum::<f32>();
+            lit_virtually += usize::from(v >= 0.05 * expected.iter().sum::<f32>() && v > 0.0);
+            // The direct tests' tolerance: f32 shading, 1e-3 relative plus 1e-4 of the maximum.
+            agree += usize::from(
+                (0..3).all(|k| (gpu[i][k] - expected[k]).abs() <= 1e-3 * expected[k] + 1e-4 * max),
+            );
+        }
+    }
+    (agree, compared, lit_virtually)
+}
+
+/// Virtual lights through one and two mirrors light `mirrors` as the
+/// unfolded ray paths do, from the scene camera and from a camera looking
+/// at the wall behind the ball, where the reflected light of both mirrors
+/// and the ball's and pedestal's bent shadows fall.
+#[test]
+fn virtual_lights_match_unfolded_light_paths() {
+    let Some(ctx) = gpu_or_skip("virtual_lights_match_unfolded_light_paths") else {
+        return;
+    };
+    let scene = builtin::mirrors();
+    let bvh = Bvh::build(&scene);
+    let lights = jittered_point_lights(scene.lights(), 1, Vec2::ZERO);
+    let faces = specular_faces(&scene);
+    assert_eq!(faces.len(), 2);
+    let back_wall = Camera::look_at(
+        glam::Vec3::new(0.6, 1.2, 1.4),
+        glam::Vec3::new(-0.6, 0.5, -1.5),
+        glam::Vec3::Y,
+        75.0,
+    );
+    for (name, camera) in [
+        ("scene camera", scene.camera().with_aspect(1.0)),
+        ("back wall", back_wall.with_aspect(1.0)),
+    ] {
+        for depth in [1, 2] {
+            let paths = specular_paths(
+                &faces,
+                lustre_geometry::shadow_volume::light_position(&lights[0]),
+                depth,
+            );
+            assert_eq!(paths.len(), 2 * depth as usize);
+            let real = direct_pixels_cpu_with_lights(
+                &scene,
+                &lights,
+                &bvh,
+                &camera,
+                SIZE,
+                SIZE,
+                GlossyModel::Exact,
+            )
+            .unwrap();
+            let virt = virtual_direct_pixels_cpu(
+                &scene,
+                &lights,
+                &faces,
+                depth,
+                &bvh,
+                &camera,
+                SIZE,
+                SIZE,
+                GlossyModel::Exact,
+            )
+            .unwrap();
+            let (gpu, ids) = render(&ctx, &scene, &camera, &lights, depth);
+            let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
+            eprintln!(
+                "{name}, depth {depth}: {agree}/{compared} pixels agree, \
+                 {lit} of them with >= 5 % of their light from virtual lights"
+            );
+            assert!(
+                compared > (SIZE * SIZE / 3) as usize,
+                "{name}: {compared} compared"
+            );
+            assert!(
+                lit > compared / 5,
+                "{name}: virtual lights matter in {lit} pixels"
+            );
+            assert!(
+                agree as f64 >= 0.995 * compared as f64,
+                "{name}, depth {depth}: {agree}/{compared}"
+            );
+            if depth == 1 {
+                // Without virtual lights the same comparison fails.
+                let (plain, plain_ids) = render(&ctx, &scene, &camera, &lights, 0);
+                let (agree, compared, _) = agreement(&plain, &plain_ids, &real, &virt);
+                assert!(
+                    (agree as f64) < 0.9 * compared as f64,
+                    "{name}: {agree}/{compared} agree without virtual lights"
+                );
+            }
+        }
+    }
+}
