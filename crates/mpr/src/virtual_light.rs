@@ -441,6 +441,72 @@ pub fn virtual_direct_pixels_cpu(
     )
 }
 
+/// Per hit record of a photon map (the records of one photon consecutive,
+/// in hit order from bounce 1, as `lustre_photon::trace_photons` writes
+/// them): whether the photon reached it through a chain of at most `depth`
+/// specular faces and nothing else, the light the virtual lights draw,
+/// which the photon splats must then leave out so that it is added once
+/// (section 6: the indirect term beside the direct terms). A link of the
+/// chain is a hit on a mirror face, or a hit on a slab's far face followed
+/// by a hit on the face itself (the transmission through the slab that the
+/// slab's virtual light stands for); a photon Fresnel-reflected off the
+/// glass, or scattered by any other surface, leaves the chain. (A photon
+/// reflected inside a slab back and forth twice passes for two
+/// transmissions: light of the order `F⁴`, left to the virtual lights.)
+pub fn drawn_by_virtual_lights(
+    records: &[lustre_photon::HitRecord],
+    faces: &[SpecularFace],
+    depth: u32,
+) -> Vec<bool> {
+    let mirrors: std::collections::HashSet<u32> = faces
+        .iter()
+        .filter(|f| f.kind == SpecularKind::Mirror)
+        .map(|f| f.surface)
+        .collect();
+    // Far face → face: a slab's two faces, each the other's far face.
+    let mut slabs = std::collections::HashMap::new();
+    for f in faces {
+        let SpecularKind::Slab { thickness, .. } = f.kind else {
+            continue;
+        };
+        let far = faces.iter().find(|g| {
+            matches!(g.kind, SpecularKind::Slab { .. })
+                && g.plane.normal.dot(f.plane.normal) < -0.9999
+                && (f.plane.offset + g.plane.offset - thickness).abs() <= 1e-4 * thickness.max(1e-6)
+        });
+        if let Some(g) = far {
+            slabs.insert(g.surface, f.surface);
+        }
+    }
+    let mut out = Vec::with_capacity(records.len());
+    // The chain so far: links, a slab entered but not left, still a chain.
+    let (mut links, mut entered, mut chain) = (0u32, None::<u32>, false);
+    let mut previous_bounce = 0u8;
+    for r in records {
+        if r.bounce == 1 || r.bounce != previous_bounce.wrapping_add(1) {
+            (links, entered, chain) = (0, None, r.bounce == 1);
+        }
+        previous_bounce = r.bounce;
+        out.push(chain && entered.is_none() && (1..=depth).contains(&links));
+        if !chain {
+            continue;
+        }
+        match entered.take() {
+            Some(exit) => {
+                chain = r.surface == exit;
+                links += 1;
+            }
+            None if mirrors.contains(&r.surface) => links += 1,
+            None => match slabs.get(&r.surface) {
+                Some(&exit) => entered = Some(exit),
+                None => chain = false,
+            },
+        }
+        chain &= links <= depth;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -540,6 +606,66 @@ mod tests {
             1 + 2 * 2 + 2 * 2
         );
         assert_eq!(shadow_generations(&paths, SpecularShadows::Off), 1);
+    }
+
+    fn record(surface: u32, bounce: u8) -> lustre_photon::HitRecord {
+        lustre_photon::HitRecord {
+            surface,
+            triangle: 0,
+            position: glam::Vec2::ZERO,
+            direction: Vec3::Y,
+            light: 0,
+            bounce,
+            rho: Vec3::ONE,
+        }
+    }
+
+    /// Photon paths through mirrors (surfaces 0, 1) and a slab (faces 2, 3)
+    /// to a diffuse wall (9): records after 1..=depth whole links are drawn
+    /// by virtual lights; a slab hit without its far face (a Fresnel
+    /// reflection), a diffuse bounce, or more links than the depth are not.
+    #[test]
+    fn photon_records_on_virtual_light_chains() {
+        let mut faces = facing_pair();
+        faces[1].surface = 1;
+        let slab = |surface: u32, x: f32, n: Vec3| SpecularFace {
+            surface,
+            kind: SpecularKind::Slab {
+                shift: 0.01,
+                thickness: 0.03,
+            },
+            ..mirror(Vec3::new(x, 0.0, 3.0), n, 0.5)
+        };
+        faces.push(slab(2, 0.0, Vec3::X));
+        faces.push(slab(3, -0.03, -Vec3::X));
+        let paths: [(&[u32], [bool; 1]); 7] = [
+            (&[0, 9], [true]),
+            (&[0, 1, 9], [false]),
+            (&[3, 2, 9], [true]),
+            (&[2, 9], [false]),
+            (&[9, 0, 9], [false]),
+            (&[9], [false]),
+            (&[2, 3, 9], [true]),
+        ];
+        for depth in [1, 2] {
+            let mut records = Vec::new();
+            let mut last = Vec::new();
+            for (surfaces, _) in &paths {
+                for (b, &s) in surfaces.iter().enumerate() {
+                    records.push(record(s, b as u8 + 1));
+                }
+                last.push(records.len() - 1);
+            }
+            let drawn = drawn_by_virtual_lights(&records, &faces, depth);
+            let got: Vec<bool> = last.iter().map(|&i| drawn[i]).collect();
+            let mut want: Vec<bool> = paths.iter().map(|p| p.1[0]).collect();
+            if depth == 2 {
+                want[1] = true;
+            }
+            assert_eq!(got, want, "depth {depth}");
+            // Records on the chain itself (mirror and slab hits) other than after a whole link.
+            assert!(!drawn[0], "the first hit is the real light's");
+        }
     }
 
     /// A face the light cannot reach through the previous face is culled:

@@ -46,15 +46,18 @@ use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
-use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
+use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance, specular_faces};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::virtual_light::{
+    MAX_SHADOW_DEPTH, SpecularShadows, VirtualLightSettings, drawn_by_virtual_lights, equation_7,
+};
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
 };
 use lustre_photon::{
-    BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, Progress, SplatEstimator,
-    Support, TraceOptions, trace_photons,
+    BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, PhotonMap, Progress,
+    SplatEstimator, Support, TraceOptions, trace_photons,
 };
 use serde_json::json;
 
@@ -107,6 +110,27 @@ pub enum ShadowArg {
     Volumes,
     /// Cube shadow maps (Stürzlinger & Bastos 1997, section 2.2.1).
     Maps,
+}
+
+/// Which shadows of virtual lights are drawn (Diefenbach & Badler 1997, table 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SpecShadowsArg {
+    /// Every stretch of every light path casts shadows (table 2 (a)).
+    All,
+    /// Shadows that pass two or more specular faces are left out (table 2 (b)).
+    OneBounce,
+    /// No shadows of virtual lights, light volumes only (table 2 (c)).
+    Off,
+}
+
+impl SpecShadowsArg {
+    fn setting(self) -> SpecularShadows {
+        match self {
+            Self::All => SpecularShadows::All,
+            Self::OneBounce => SpecularShadows::OneBounce,
+            Self::Off => SpecularShadows::Off,
+        }
+    }
 }
 
 /// Restriction of splats to their visible surface.
@@ -296,6 +320,18 @@ pub struct RenderArgs {
     /// centre, section 4.4's pivot approximation) or by cube shadow maps.
     #[arg(long, value_enum, default_value_t = ShadowArg::Volumes)]
     pub shadows: ShadowArg,
+    /// `--technique mpr` with shadow volumes: shadow recursion depth, the
+    /// longest chain of mirrors and glass slabs a light is followed through
+    /// as a virtual light with its light volume and bent shadows (Diefenbach
+    /// & Badler 1997, sections 4.2, 4.3 and 8.1); 0 adds no virtual light.
+    /// Default 1, and 0 with `--shadows maps`, which has no virtual lights.
+    #[arg(long)]
+    pub shadow_depth: Option<u32>,
+    /// `--technique mpr`: which shadows of virtual lights are drawn
+    /// (Diefenbach & Badler 1997, table 2: all, none through two or more
+    /// faces, or none: light volumes only).
+    #[arg(long, value_enum, default_value_t = SpecShadowsArg::All)]
+    pub spec_shadows: SpecShadowsArg,
     /// Antialiasing: frames rendered with sub-pixel jittered projections and
     /// averaged, a box filter over each pixel (Diefenbach & Badler 1997,
     /// section 7); 1 renders once through the pixel centres.
@@ -367,6 +403,8 @@ pub const DEFAULT_SUPPORT_C: f32 = 1.25;
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 /// Default `--spec-depth`: two levels of specular images (the paper's figure 18(a)).
 pub const DEFAULT_SPEC_DEPTH: u32 = 2;
+/// Default `--shadow-depth` with shadow volumes: lights followed through one specular face.
+pub const DEFAULT_SHADOW_DEPTH: u32 = 1;
 
 /// The default `--aa`, chosen by error against the Mitsuba reference and
 /// time on lavapipe: with 16 light samples on `cornell` at 256×256 relMSE
@@ -428,6 +466,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.aa == 0 {
         bail!("--aa 0: at least one sample per pixel is needed");
     }
+    let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
+        ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
+        ShadowArg::Maps => 0,
+    });
+    if args.shadow_depth.is_some() && args.technique != Technique::Mpr {
+        bail!("--shadow-depth: virtual lights belong to --technique mpr");
+    }
+    if shadow_depth > 0 && args.shadows == ShadowArg::Maps {
+        bail!("--shadow-depth {shadow_depth}: virtual lights need --shadows volumes");
+    }
+    if shadow_depth > MAX_SHADOW_DEPTH {
+        bail!("--shadow-depth {shadow_depth}: at most {MAX_SHADOW_DEPTH}");
+    }
     let density = args.technique.estimator(args.radius, args.k);
     match density {
         Some(Estimator::PhotonMaps { k: 0 }) => {
@@ -482,7 +533,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let (splatting, vertex) = match density {
         None => (
-            Some(splat_setup(args, &scene, &bvh, kernel, &mut timings)?),
+            Some(splat_setup(
+                args,
+                &scene,
+                &bvh,
+                kernel,
+                (args.technique == Technique::Mpr).then_some(shadow_depth),
+                &mut timings,
+            )?),
             None,
         ),
         Some(estimator) => {
@@ -585,6 +643,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 &scene,
                 &pivot_point_lights(scene.lights(), args.light_samples),
             )?;
+            if shadow_depth > 0 {
+                graph = graph.with_virtual_lights(
+                    &ctx,
+                    &scene,
+                    VirtualLightSettings {
+                        depth: shadow_depth,
+                        shadows: args.spec_shadows.setting(),
+                    },
+                )?;
+            }
         } else {
             graph.update_shadows(&ctx, &scene_buffers, &lights)?;
         }
@@ -700,13 +768,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "shadow_volume_bytes": graph.shadow_volumes.as_ref().map(|v| v.set().byte_size()),
         "specular_faces": graph.specular.as_ref().map(|s| s.faces().len()),
         "scene_passes": scene_passes,
-        "shadow_passes": graph.shadow_volumes.as_ref().and(direct.as_ref()).map(|d| scene_passes * d.len()),
+        "shadow_passes": graph.shadow_volumes.as_ref().map(|v| scene_passes * v.shadow_generations()),
+        "virtual_light_volume_bytes": graph.shadow_volumes.as_ref().and_then(|v| v.virtual_lights()).map(|v| v.byte_size()),
+        "shadow_depth": (args.technique == Technique::Mpr).then_some(shadow_depth),
+        "spec_shadows": (shadow_depth > 0).then(|| format!("{:?}", args.spec_shadows)),
         "equation_8_scene_passes": graph.specular.as_ref().map(|s| {
             (s.faces().len() as f64).powi(args.spec_depth as i32) + 1.0
         }),
-        "equation_7_shadow_passes_per_light": graph.specular.as_ref().map(|s| {
-            let (n, d) = (s.faces().len() as f64, f64::from(args.spec_depth));
-            n * (d * d + 3.0 * d) / 2.0 + 1.0
+        "shadow_generations_per_light": graph.shadow_volumes.as_ref().map(|v| {
+            let (_, of) = v.positions();
+            of.iter().map(|&c| v.virtual_lights().map_or(1, |l| l.shadow_generations(c))).collect::<Vec<_>>()
+        }),
+        "equation_7_shadow_generations_per_light": graph.specular.as_ref().map(|s| {
+            equation_7(s.faces().len(), shadow_depth)
         }),
         "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
     });
@@ -780,6 +854,7 @@ fn splat_setup(
     scene: &Scene,
     bvh: &Bvh,
     kernel: Kernel,
+    virtual_depth: Option<u32>,
     timings: &mut serde_json::Map<String, serde_json::Value>,
 ) -> anyhow::Result<Splatting> {
     let start = Instant::now();
@@ -797,9 +872,24 @@ fn splat_setup(
         },
         ..TraceOptions::default()
     };
-    let map = trace_photons(scene, bvh, &options, &TraceBar(bar))
+    let mut map = trace_photons(scene, bvh, &options, &TraceBar(bar))
         .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
     timings.insert("trace".into(), json!(ms(start)));
+    // Light that passed only mirrors and slabs is drawn by the virtual
+    // lights (Diefenbach & Badler 1997, sections 4.2, 6): the splats leave it out.
+    if let Some(depth) = virtual_depth.filter(|&d| d > 0) {
+        let faces = specular_faces(scene);
+        let drawn = drawn_by_virtual_lights(map.records(), &faces, depth);
+        let kept = map
+            .records()
+            .iter()
+            .zip(&drawn)
+            .filter(|&(_, &d)| !d)
+            .map(|(r, _)| *r)
+            .collect();
+        map = PhotonMap::from_parts(map.lights().to_vec(), kept)
+            .context("cannot leave the virtual lights' photons out")?;
+    }
     eprintln!(
         "traced {} photons: {} hit records ({} indirect)",
         map.emitted(),

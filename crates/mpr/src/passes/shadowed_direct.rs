@@ -132,6 +132,19 @@ impl ShadowVolumes {
         Ok(self)
     }
 
+    /// Shadow-volume generations per image over all lights: per light 1,
+    /// plus its virtual lights' drawn stretches (equation 7's count, section 8.1).
+    pub fn shadow_generations(&self) -> usize {
+        self.volume_of
+            .iter()
+            .map(|&c| {
+                self.virtual_lights
+                    .as_ref()
+                    .map_or(1, |v| v.shadow_generations(c))
+            })
+            .sum()
+    }
+
     /// The virtual lights, if any.
     pub fn virtual_lights(&self) -> Option<&VirtualLights> {
         self.virtual_lights.as_ref()
