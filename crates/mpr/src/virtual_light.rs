@@ -384,7 +384,7 @@ pub fn path_visible(
                     offset: face.plane.offset - thickness,
                 };
                 let (d0, slope) = (far.depth(previous), far.normal.dot(dir));
-                if slope >= 0.0 || d0 >= 0.0 {
+                if slope <= 0.0 || d0 >= 0.0 {
                     return false;
                 }
                 previous + dir * (-d0 / slope)

@@ -153,6 +153,72 @@ fn agreement(
     (agree, compared, lit_virtually)
 }
 
+/// Virtual lights through the glass of `bathroom`'s shower door (a slab:
+/// the paraxial shift of section 4.2) and its vanity mirror light it as the
+/// unfolded paths do, seen from inside the shower, where the overhead
+/// light falls through the door onto the tub and the tiles.
+#[test]
+fn virtual_lights_through_glass_match_unfolded_light_paths() {
+    let Some(ctx) = gpu_or_skip("virtual_lights_through_glass_match_unfolded_light_paths") else {
+        return;
+    };
+    let scene = builtin::bathroom();
+    let bvh = Bvh::build(&scene);
+    let lights = jittered_point_lights(scene.lights(), 1, Vec2::ZERO);
+    let faces = specular_faces(&scene);
+    let slabs = faces
+        .iter()
+        .filter(|f| {
+            matches!(
+                f.kind,
+                lustre_mpr::passes::specular::SpecularKind::Slab { .. }
+            )
+        })
+        .count();
+    assert!(slabs >= 2, "{slabs} slab faces");
+    let camera = Camera::look_at(
+        glam::Vec3::new(1.35, 1.7, 0.2),
+        glam::Vec3::new(1.1, 0.3, -1.2),
+        glam::Vec3::Y,
+        70.0,
+    )
+    .with_aspect(1.0);
+    let real = direct_pixels_cpu_with_lights(
+        &scene,
+        &lights,
+        &bvh,
+        &camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    let virt = virtual_direct_pixels_cpu(
+        &scene,
+        &lights,
+        &faces,
+        1,
+        &bvh,
+        &camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    let (gpu, ids) = render(&ctx, &scene, &camera, &lights, 1);
+    let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
+    eprintln!(
+        "bathroom: {agree}/{compared} pixels agree, \
+         {lit} of them with >= 5 % of their light from virtual lights"
+    );
+    assert!(compared > (SIZE * SIZE / 4) as usize, "{compared} compared");
+    assert!(lit > compared / 20, "virtual lights matter in {lit} pixels");
+    assert!(
+        agree as f64 >= 0.995 * compared as f64,
+        "{agree}/{compared}"
+    );
+}
+
 /// Virtual lights through one and two mirrors light `mirrors` as the
 /// unfolded ray paths do, from the scene camera and from a camera looking
 /// at the wall behind the ball, where the reflected light of both mirrors
