@@ -12,7 +12,13 @@
 //!   each with cube shadow maps;
 //! - `d1-volumes`, `d2-volumes`: depth 1 or 2, shadow volumes;
 //! - `d2-volumes-k4`: depth 2, shadow volumes, 4 jittered point lights per
-//!   area light (soft shadows, section 4.4).
+//!   area light (soft shadows, section 4.4);
+//! - table 2's configurations, specular depth 2 with virtual lights through
+//!   the mirror and the door (sections 4.2, 4.3): `t2a-shadow-d2` (shadow
+//!   depth 2, every specular shadow), `t2b-shadow-d2-one-bounce` (no
+//!   shadows through two or more faces), `t2c-shadow-d2-no-spec-shadows`
+//!   (light volumes only), `t2e-shadow-d1` (shadow depth 1). Table 2's (d),
+//!   the door made a non-refracting surface, has no counterpart.
 //!
 //! Criterion times at least 10 frames per configuration. Without an adapter
 //! the bench prints why and measures nothing.
@@ -30,6 +36,7 @@ use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::virtual_light::{SpecularShadows, VirtualLightSettings};
 use lustre_mpr::{
     AdapterPreference, FrameGraph, GpuContext, MprError, RenderTargets, SceneBuffers,
 };
@@ -39,13 +46,19 @@ const WIDTH: u32 = 640;
 /// Image height.
 const HEIGHT: u32 = 480;
 
-/// One configuration: specular depth, shadow volumes or maps, point lights per area light.
+/// One configuration: specular depth, shadow volumes or maps, point lights
+/// per area light, shadow recursion depth and specular shadows of the
+/// virtual lights (0: none).
 struct Config {
     name: &'static str,
     depth: u32,
     volumes: bool,
     light_samples: u32,
+    shadow_depth: u32,
+    spec_shadows: SpecularShadows,
 }
+
+const NO_VIRTUAL: (u32, SpecularShadows) = (0, SpecularShadows::All);
 
 const CONFIGS: &[Config] = &[
     Config {
@@ -53,24 +66,65 @@ const CONFIGS: &[Config] = &[
         depth: 1,
         volumes: false,
         light_samples: 1,
+        shadow_depth: NO_VIRTUAL.0,
+        spec_shadows: NO_VIRTUAL.1,
     },
     Config {
         name: "d1-volumes",
         depth: 1,
         volumes: true,
         light_samples: 1,
+        shadow_depth: NO_VIRTUAL.0,
+        spec_shadows: NO_VIRTUAL.1,
     },
     Config {
         name: "d2-volumes",
         depth: 2,
         volumes: true,
         light_samples: 1,
+        shadow_depth: NO_VIRTUAL.0,
+        spec_shadows: NO_VIRTUAL.1,
     },
     Config {
         name: "d2-volumes-k4",
         depth: 2,
         volumes: true,
         light_samples: 4,
+        shadow_depth: NO_VIRTUAL.0,
+        spec_shadows: NO_VIRTUAL.1,
+    },
+    // Table 2: virtual lights through the mirror and the door, specular depth 2.
+    Config {
+        name: "t2a-shadow-d2",
+        depth: 2,
+        volumes: true,
+        light_samples: 1,
+        shadow_depth: 2,
+        spec_shadows: SpecularShadows::All,
+    },
+    Config {
+        name: "t2b-shadow-d2-one-bounce",
+        depth: 2,
+        volumes: true,
+        light_samples: 1,
+        shadow_depth: 2,
+        spec_shadows: SpecularShadows::OneBounce,
+    },
+    Config {
+        name: "t2c-shadow-d2-no-spec-shadows",
+        depth: 2,
+        volumes: true,
+        light_samples: 1,
+        shadow_depth: 2,
+        spec_shadows: SpecularShadows::Off,
+    },
+    Config {
+        name: "t2e-shadow-d1",
+        depth: 2,
+        volumes: true,
+        light_samples: 1,
+        shadow_depth: 1,
+        spec_shadows: SpecularShadows::All,
     },
 ];
 
@@ -140,6 +194,18 @@ fn mpr(c: &mut Criterion) {
             graph = graph
                 .with_shadow_volumes(&ctx, hdr, &scene, &centres)
                 .unwrap();
+            if config.shadow_depth > 0 {
+                graph = graph
+                    .with_virtual_lights(
+                        &ctx,
+                        &scene,
+                        VirtualLightSettings {
+                            depth: config.shadow_depth,
+                            shadows: config.spec_shadows,
+                        },
+                    )
+                    .unwrap();
+            }
         } else {
             graph.update_shadows(&ctx, &buffers, &lights).unwrap();
         }
@@ -154,10 +220,18 @@ fn mpr(c: &mut Criterion) {
             diffuse: None,
         };
         let views = graph.render(&ctx, &frame).unwrap();
+        let volumes = graph.shadow_volumes.as_ref();
         eprintln!(
-            "{}: {views} scene passes, {} direct lights",
+            "{}: {views} scene passes, {} direct lights, {} shadow generations per image \
+             ({} shadow passes), volumes {} + {} bytes",
             config.name,
-            lights.len()
+            lights.len(),
+            volumes.map_or(0, |v| v.shadow_generations()),
+            volumes.map_or(0, |v| v.shadow_generations() * views),
+            volumes.map_or(0, |v| v.set().byte_size()),
+            volumes
+                .and_then(|v| v.virtual_lights())
+                .map_or(0, |v| v.byte_size())
         );
         group.bench_function(config.name, |b| {
             b.iter(|| {
