@@ -31,15 +31,9 @@ use support::gpu_or_skip;
 const SIZE: u32 = 96;
 const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-/// One frame's HDR radiance and surface ids: direct light under shadow
-/// volumes, with virtual lights of `depth` when `depth > 0`.
-fn render(
-    ctx: &GpuContext,
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
-    depth: u32,
-) -> (Vec<[f32; 4]>, Vec<u32>) {
+/// A frame graph with direct light under shadow volumes, with virtual
+/// lights of `depth` when `depth > 0`.
+fn graph(ctx: &GpuContext, scene: &Scene, lights: &[Light], depth: u32) -> FrameGraph {
     let hdr = ctx.hdr_format();
     let mut graph = FrameGraph::new(ctx, OUTPUT_FORMAT)
         .unwrap()
@@ -59,6 +53,34 @@ fn render(
             )
             .unwrap();
     }
+    graph
+}
+
+/// One frame's HDR radiance and surface ids through [`graph`].
+fn render(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    depth: u32,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
+    render_with(
+        ctx,
+        &graph(ctx, scene, lights, depth),
+        scene,
+        camera,
+        lights,
+    )
+}
+
+/// One frame of `graph`'s HDR radiance and surface ids.
+fn render_with(
+    ctx: &GpuContext,
+    graph: &FrameGraph,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+) -> (Vec<[f32; 4]>, Vec<u32>) {
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let direct = DirectLights::with_settings(
@@ -301,4 +323,73 @@ fn virtual_lights_match_unfolded_light_paths() {
             }
         }
     }
+}
+
+/// Moving the pedestal and ball rebuilds the volumes, the virtual lights'
+/// with them (section 4.3: regenerated when an object moves), and the frame
+/// then matches the unfolded paths of the moved scene.
+#[test]
+fn virtual_lights_follow_a_moved_object() {
+    let Some(ctx) = gpu_or_skip("virtual_lights_follow_a_moved_object") else {
+        return;
+    };
+    let mut scene = builtin::mirrors();
+    let lights = jittered_point_lights(scene.lights(), 1, Vec2::ZERO);
+    let mut graph = graph(&ctx, &scene, &lights, 1);
+    let before = graph
+        .shadow_volumes
+        .as_ref()
+        .and_then(|v| v.virtual_lights())
+        .map(|v| v.byte_size())
+        .unwrap();
+    for name in ["pedestal", "ball"] {
+        let object = scene.objects().iter().position(|o| o.name == name).unwrap() as u32;
+        let moved = glam::Affine3A::from_translation(glam::Vec3::new(0.7, 0.0, -0.5))
+            * scene.objects()[object as usize].transform;
+        scene.set_object_transform(object, moved).unwrap();
+    }
+    assert_eq!(
+        graph.update_shadow_volumes(&ctx, &scene, &lights).unwrap(),
+        2
+    );
+    let after = graph
+        .shadow_volumes
+        .as_ref()
+        .and_then(|v| v.virtual_lights())
+        .map(|v| v.byte_size())
+        .unwrap();
+    eprintln!("virtual light volumes: {before} bytes before, {after} after the move");
+    let camera = scene.camera().with_aspect(1.0);
+    let bvh = Bvh::build(&scene);
+    let faces = specular_faces(&scene);
+    let real = direct_pixels_cpu_with_lights(
+        &scene,
+        &lights,
+        &bvh,
+        &camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    let virt = virtual_direct_pixels_cpu(
+        &scene,
+        &lights,
+        &faces,
+        1,
+        &bvh,
+        &camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    let (gpu, ids) = render_with(&ctx, &graph, &scene, &camera, &lights);
+    let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
+    eprintln!("moved: {agree}/{compared} pixels agree, {lit} lit by virtual lights");
+    assert!(compared > (SIZE * SIZE / 3) as usize && lit > compared / 5);
+    assert!(
+        agree as f64 >= 0.995 * compared as f64,
+        "{agree}/{compared}"
+    );
 }
