@@ -120,6 +120,32 @@ impl View {
         .with_clip_plane(keep, method)
     }
 
+    /// The virtual view through a single refracting interface `plane` (its
+    /// normal towards the eye), in Heckbert & Hanrahan's paraxial refraction
+    /// (section 3): the world beyond the plane drawn scaled along the normal
+    /// by `ratio` (`n_eye / n_beyond`: a point at depth `d` is seen at
+    /// `ratio · d`), the eye moved to the point the scaling maps onto it (at
+    /// `1 / ratio` of its height, where refracted rays seem to come from),
+    /// one level deeper, and everything on the eye's side clipped. The
+    /// scaling fixes the plane, so the image lands on the face as it is: the
+    /// quad-to-quad fit the paper applies to its refracted image from a
+    /// moved viewpoint is the identity here.
+    pub fn through_interface(&self, plane: &Plane, ratio: f32, method: ClipMethod) -> Self {
+        let scale = interface_scaling(plane, ratio);
+        let height = plane.signed_distance(self.eye);
+        let epsilon = 1e-4 * height.abs();
+        let keep = -plane.to_vec4() - Vec4::W * epsilon;
+        Self {
+            view: self.view * scale,
+            projection: self.projection,
+            eye: self.eye + plane.normal * height * (1.0 / ratio - 1.0),
+            clip_plane: None,
+            stencil_reference: self.stencil_reference + 1,
+            level: self.level + 1,
+        }
+        .with_clip_plane(keep, method)
+    }
+
     /// Clips away world points with `plane · (p, 1) < 0` by `method`.
     pub fn with_clip_plane(mut self, plane: Vec4, method: ClipMethod) -> Self {
         match method {
@@ -171,6 +197,22 @@ impl View {
         let plane_ok = self.clip_plane.is_none_or(|c| c.dot(p.extend(1.0)) >= 0.0);
         plane_ok && clip.w > 0.0 && clip.z <= clip.w && clip.z >= 0.0
     }
+}
+
+/// The scaling by `ratio` along `plane`'s normal about the plane (Heckbert &
+/// Hanrahan's paraxial refraction at one interface): `p ↦ p − (1 − ratio)
+/// d(p) n`, `d` the signed distance. Its determinant is `ratio > 0`.
+pub fn interface_scaling(plane: &Plane, ratio: f32) -> Mat4 {
+    let n = plane.normal;
+    let k = 1.0 - ratio;
+    let linear = glam::Mat3::IDENTITY - k * glam::Mat3::from_cols(n * n.x, n * n.y, n * n.z);
+    let translation = k * plane.offset * n;
+    Mat4::from_cols(
+        linear.x_axis.extend(0.0),
+        linear.y_axis.extend(0.0),
+        linear.z_axis.extend(0.0),
+        translation.extend(1.0),
+    )
 }
 
 /// Lengyel's oblique near plane for a reverse-Z projection with an infinite

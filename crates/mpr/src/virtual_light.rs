@@ -83,6 +83,9 @@ pub fn face_transform(face: &SpecularFace) -> Affine3A {
             Affine3A::from_mat3_translation(linear, 2.0 * face.plane.offset * n)
         }
         SpecularKind::Slab { shift, .. } => Affine3A::from_translation(face.plane.normal * shift),
+        SpecularKind::Interface { ratio } => {
+            Affine3A::from_mat4(crate::view::interface_scaling(&face.plane, ratio))
+        }
     }
 }
 
@@ -126,6 +129,10 @@ pub fn incoming(face: &SpecularFace) -> HalfSpace {
         SpecularKind::Slab { thickness, .. } => HalfSpace {
             normal: -face.plane.normal,
             offset: -face.plane.offset + thickness,
+        },
+        SpecularKind::Interface { .. } => HalfSpace {
+            normal: -face.plane.normal,
+            offset: -face.plane.offset,
         },
     }
 }
@@ -345,7 +352,7 @@ fn in_face(face: &SpecularFace, x: Vec3) -> bool {
 /// light `L_j` to the point reached must leave `F_j` on its outgoing side
 /// and cross its polygon at `X`; the stretch from `X` to that point must be
 /// free in `bvh` (ends shortened by `epsilon`). A mirror's path goes on
-/// from `X`; a slab's from where the line from `L_{j−1}` with the same
+/// from `X` (a mirror's and an interface's); a slab's from where the line from `L_{j−1}` with the same
 /// direction meets the far face (a slab keeps a ray's direction; the
 /// stretch inside it is not tested). Finally the stretch from the light.
 pub fn path_visible(
@@ -375,7 +382,7 @@ pub fn path_visible(
             return false;
         }
         point = match face.kind {
-            SpecularKind::Mirror => x,
+            SpecularKind::Mirror | SpecularKind::Interface { .. } => x,
             SpecularKind::Slab { thickness, .. } => {
                 let previous = path.prefix[j - 1].transform_point3(light);
                 let dir = point - source;
@@ -478,15 +485,34 @@ pub fn drawn_by_virtual_lights(
             slabs.insert(g.surface, f.surface);
         }
     }
+    // Interface surface → its normal: a hit there is a link when the photon
+    // went on to the other side (refracted, not reflected).
+    let interfaces: std::collections::HashMap<u32, Vec3> = faces
+        .iter()
+        .filter(|f| matches!(f.kind, SpecularKind::Interface { .. }))
+        .map(|f| (f.surface, f.plane.normal))
+        .collect();
     let mut out = Vec::with_capacity(records.len());
     // The chain so far: links, a slab entered but not left, still a chain.
     let (mut links, mut entered, mut chain) = (0u32, None::<u32>, false);
     let mut previous_bounce = 0u8;
+    // The interface hit whose side the next record decides: its normal and `n · wᵢ`.
+    let mut crossing: Option<(Vec3, f32)> = None;
     for r in records {
         if r.bounce == 1 || r.bounce != previous_bounce.wrapping_add(1) {
-            (links, entered, chain) = (0, None, r.bounce == 1);
+            (links, entered, chain, crossing) = (0, None, r.bounce == 1, None);
         }
         previous_bounce = r.bounce;
+        if let Some((n, before)) = crossing.take() {
+            // Refracted: it went on across the plane, so the next hit also
+            // looks back across it, `n · wᵢ` keeps its sign (reflected, it flips).
+            if before * n.dot(r.direction) > 0.0 {
+                links += 1;
+            } else {
+                chain = false;
+            }
+            chain &= links <= depth;
+        }
         out.push(chain && entered.is_none() && (1..=depth).contains(&links));
         if !chain {
             continue;
@@ -497,9 +523,10 @@ pub fn drawn_by_virtual_lights(
                 links += 1;
             }
             None if mirrors.contains(&r.surface) => links += 1,
-            None => match slabs.get(&r.surface) {
-                Some(&exit) => entered = Some(exit),
-                None => chain = false,
+            None => match (slabs.get(&r.surface), interfaces.get(&r.surface)) {
+                (Some(&exit), _) => entered = Some(exit),
+                (None, Some(&n)) => crossing = Some((n, n.dot(r.direction))),
+                (None, None) => chain = false,
             },
         }
         chain &= links <= depth;

@@ -584,3 +584,217 @@ fn limit_faces_show_their_limit_radiance_once_under_accumulation_with_splats() {
         );
     }
 }
+
+/// An open glass quad (η = 1.5, a single interface, 2 × 2 m in the plane
+/// z = 0.3 facing +z) with an emissive cube beyond each side of it.
+fn interface_scene() -> Scene {
+    let glass = Material::new(
+        "glass",
+        MaterialModel::Dielectric {
+            ior: 1.5,
+            transmittance: Rgb::ONE,
+        },
+    );
+    let glow = Material::diffuse("glow", Rgb::ZERO).with_emission(LE);
+    let z = 0.3;
+    let meshes = vec![
+        quad(
+            "interface",
+            [
+                Vec3::new(-1.0, -1.0, z),
+                Vec3::new(1.0, -1.0, z),
+                Vec3::new(1.0, 1.0, z),
+                Vec3::new(-1.0, 1.0, z),
+            ],
+            0,
+        ),
+        cube("below", Vec3::new(0.1, 0.05, -0.6), 0.2, 1),
+        cube("above", Vec3::new(-0.1, 0.0, 1.1), 0.15, 1),
+    ];
+    let objects = (0..meshes.len() as u32)
+        .map(|m| Object {
+            name: meshes[m as usize].name.clone(),
+            meshes: vec![m],
+            transform: Affine3A::IDENTITY,
+        })
+        .collect();
+    let camera = Camera::look_at(
+        Vec3::new(0.35, 0.25, 1.8),
+        Vec3::new(0.0, 0.0, -0.6),
+        Vec3::Y,
+        40.0,
+    );
+    Scene::new(
+        "interface",
+        meshes,
+        vec![glass, glow],
+        objects,
+        Vec::new(),
+        camera,
+    )
+    .unwrap()
+}
+
+/// CPU twin of the paraxial image of a single interface: where the primary
+/// ray meets the interface, the scene beyond it seen from the eye moved to
+/// `1/ratio` of its height (the paraxial source of the refracted rays),
+/// from just beyond the plane, times the face's factor.
+fn trace_interface(scene: &Scene, bvh: &Bvh, ray: Ray, faces: &[SpecularFace]) -> Vec3 {
+    let Some(hit) = bvh.closest_hit(&ray) else {
+        return Vec3::ZERO;
+    };
+    let emitted = |hit: &lustre_geometry::Hit, dir: Vec3| {
+        let e = scene.materials()[hit.material as usize].emission;
+        if dir.dot(hit.geometric_normal) < 0.0 {
+            Vec3::new(e.x, e.y, e.z)
+        } else {
+            Vec3::ZERO
+        }
+    };
+    let Some(face) = faces
+        .iter()
+        .find(|f| f.surface == hit.surface && f.plane.signed_distance(ray.origin) > 0.0)
+    else {
+        return emitted(&hit, ray.direction);
+    };
+    let SpecularKind::Interface { ratio } = face.kind else {
+        panic!("the interface scene has no slab or mirror");
+    };
+    let n = face.plane.normal;
+    let height = face.plane.signed_distance(ray.origin);
+    let eye = ray.origin + n * height * (1.0 / ratio - 1.0);
+    let direction = (hit.position - eye).normalize();
+    // Start on the clip plane a hair beyond the interface.
+    let sd = face.plane.signed_distance(eye);
+    let lambda = (-(1e-4 * height) - sd) / direction.dot(n);
+    match bvh.closest_hit(&Ray::new(eye + direction * lambda, direction)) {
+        Some(h) => face.factor * emitted(&h, direction),
+        None => Vec3::ZERO,
+    }
+}
+
+/// A single refracting interface (section 3, Heckbert & Hanrahan's
+/// paraxial refraction) shows the scene beyond it scaled along its normal
+/// by `n_eye / n_beyond` as the CPU twin does, from above (1/η) and from
+/// below (η, the quad's turned-round face), with both clip methods; the
+/// cube beyond appears through the interface and, from above, nearer than
+/// it is (more pixels than the plain view of the same cube would cover).
+#[test]
+fn a_single_interface_shows_the_paraxially_scaled_scene_as_its_cpu_twin_does() {
+    let Some(ctx) = gpu_or_skip("a_single_interface_shows_the_paraxially_scaled_scene") else {
+        return;
+    };
+    let scene = interface_scene();
+    let faces = specular_faces(&scene);
+    assert_eq!(faces.len(), 2, "{faces:?}");
+    let ratios: Vec<f32> = faces
+        .iter()
+        .map(|f| match f.kind {
+            SpecularKind::Interface { ratio } => ratio,
+            _ => panic!("{f:?}"),
+        })
+        .collect();
+    assert!((ratios[0] - 1.0 / 1.5).abs() < 1e-6 && (ratios[1] - 1.5).abs() < 1e-6);
+    assert!((faces[0].factor.x - 0.96).abs() < 1e-5);
+    let bvh = Bvh::build(&scene);
+    let below = Camera::look_at(
+        Vec3::new(-0.3, -0.2, -1.4),
+        Vec3::new(-0.1, 0.0, 1.1),
+        Vec3::Y,
+        40.0,
+    );
+    for (name, camera) in [
+        ("from above", scene.camera().with_aspect(1.0)),
+        ("from below", below.with_aspect(1.0)),
+    ] {
+        let cpu_at = |offset: Vec2| -> Vec<Vec3> {
+            (0..SIZE)
+                .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
+                .map(|(x, y)| {
+                    let ray = camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, offset));
+                    trace_interface(&scene, &bvh, ray, &faces)
+                })
+                .collect()
+        };
+        let cpu = cpu_at(Vec2::splat(0.5));
+        let corners: Vec<Vec<Vec3>> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
+            .iter()
+            .map(|&(x, y)| cpu_at(Vec2::new(x, y)))
+            .collect();
+        let interior: Vec<bool> = (0..cpu.len())
+            .map(|i| {
+                corners
+                    .iter()
+                    .all(|c| (c[i] - cpu[i]).abs().max_element() < 1e-5)
+            })
+            .collect();
+        let through = cpu
+            .iter()
+            .filter(|v| (v.x - 0.96 * LE.x).abs() < 1e-4)
+            .count();
+        assert!(
+            through > 100,
+            "{name}: {through} pixels see a cube through the interface"
+        );
+        let mut methods = vec![ClipMethod::ObliqueNearPlane];
+        if ctx.has_clip_distances() {
+            methods.push(ClipMethod::Hardware);
+        }
+        for method in methods {
+            let (gpu, views) = gpu_image(&ctx, &scene, &camera, 1, method);
+            assert_eq!(
+                views, 2,
+                "{name}, {method:?}: the camera and the view through the face"
+            );
+            let checked = interior.iter().filter(|&&i| i).count();
+            let wrong = (0..cpu.len())
+                .filter(|&i| interior[i])
+                .filter(|&i| {
+                    (gpu[i] - cpu[i]).abs().max_element() > 1e-3 * (1.0 + cpu[i].max_element())
+                })
+                .count();
+            eprintln!(
+                "{name}, {method:?}: {through} pixels through the interface, {wrong} of {checked} differ"
+            );
+            assert!(
+                (wrong as f64) <= 0.005 * checked as f64,
+                "{name}, {method:?}: {wrong} of {checked} interior pixels differ from the CPU twin"
+            );
+        }
+        if name == "from above" {
+            // Seen through the interface the lower cube looks nearer, so
+            // larger than in the plain view of the scene without the glass.
+            let mut plain_scene = scene.clone();
+            let glass = plain_scene
+                .objects()
+                .iter()
+                .position(|o| o.name == "interface")
+                .unwrap() as u32;
+            plain_scene
+                .set_object_transform(glass, Affine3A::from_translation(Vec3::new(0.0, 0.0, 50.0)))
+                .unwrap();
+            let plain_bvh = Bvh::build(&plain_scene);
+            let plain = (0..SIZE)
+                .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    let ray =
+                        camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, Vec2::splat(0.5)));
+                    plain_bvh
+                        .closest_hit(&ray)
+                        .is_some_and(|h| h.position.z < 0.0 && h.material == 1)
+                })
+                .count();
+            let through_lower = cpu
+                .iter()
+                .filter(|v| (v.x - 0.96 * LE.x).abs() < 1e-4)
+                .count();
+            eprintln!(
+                "{name}: the lower cube covers {through_lower} pixels through the interface, {plain} without it"
+            );
+            assert!(
+                through_lower > plain + plain / 10,
+                "{through_lower} vs {plain}"
+            );
+        }
+    }
+}

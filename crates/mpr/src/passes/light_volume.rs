@@ -151,8 +151,15 @@ impl VirtualLights {
                             let source = path.prefix[j].transform_point3(light);
                             let own = face_triangles(face);
                             let keep = |t: &[Vec3; 3]| own.contains(&triangle_key(t));
+                            // Turned to face the light's side (an interface's
+                            // turned-round face is wound that way already).
+                            let reversed = face.corners.chunks_exact(3).next().is_some_and(|t| {
+                                (t[1] - t[0]).cross(t[2] - t[0]).dot(face.plane.normal) > 0.0
+                            });
                             let built = (0..set.casters().len())
-                                .map(|caster| set.volume_where(scene, caster, source, &keep, true))
+                                .map(|caster| {
+                                    set.volume_where(scene, caster, source, &keep, reversed)
+                                })
                                 .collect::<lustre_geometry::Result<Vec<_>>>()
                                 .map_err(geometry_error)?;
                             volumes.push(built.into_iter().filter(|v| !v.is_empty()).collect());

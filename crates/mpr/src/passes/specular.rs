@@ -87,6 +87,13 @@ pub enum SpecularKind {
         /// Thickness t of the slab in m.
         thickness: f32,
     },
+    /// A single refracting interface (section 3, Heckbert & Hanrahan's
+    /// paraxial refraction): seen from the normal's side, what lies beyond
+    /// appears at `ratio` of its depth, `ratio = n_eye / n_beyond`.
+    Interface {
+        /// `n` on the normal's side over `n` beyond.
+        ratio: f32,
+    },
 }
 
 /// One planar specular face: a mirror, or a face of a glass slab.
@@ -105,11 +112,13 @@ pub struct SpecularFace {
     pub corners: Vec<Vec3>,
 }
 
-/// The specular faces of `scene`: planar surfaces of a mirror material, and
+/// The specular faces of `scene`: planar surfaces of a mirror material;
 /// planar faces of a dielectric whose mesh has a parallel face of the same
-/// material facing the other way behind them (a slab). A dielectric face
-/// without such a partner (a single interface) is not drawn as a specular
-/// face.
+/// material facing the other way behind them (a slab); and planar
+/// dielectric faces without such a partner, single interfaces, twice: as
+/// wound (the normal on the outside, ratio `1/η`) and turned round (seen
+/// from inside the medium, ratio `η`), each passing `1 − F₀` times the
+/// transmittance.
 pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
     let surfaces = scene.surfaces();
     let planar = |s: &lustre_geometry::Surface| match s.kind {
@@ -129,17 +138,19 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
     surfaces
         .iter()
         .enumerate()
-        .filter_map(|(id, surface)| {
-            let plane = planar(surface)?;
+        .flat_map(|(id, surface)| {
+            let Some(plane) = planar(surface) else {
+                return Vec::new();
+            };
             let material = &scene.materials()[surface.material as usize];
             match material.model {
-                MaterialModel::Mirror { reflectance } => Some(SpecularFace {
+                MaterialModel::Mirror { reflectance } => vec![SpecularFace {
                     surface: id as u32,
                     plane,
                     kind: SpecularKind::Mirror,
                     factor: Vec3::new(reflectance.x, reflectance.y, reflectance.z),
                     corners: corners(surface),
-                }),
+                }],
                 MaterialModel::Dielectric { ior, transmittance } => {
                     // The nearest parallel, opposite face of the same mesh and material behind this one.
                     let thickness = surfaces
@@ -149,21 +160,37 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                         .filter(|o| o.normal.dot(plane.normal) < -0.9999)
                         .map(|o| plane.offset + o.offset)
                         .filter(|&t| t > 0.0)
-                        .min_by(f32::total_cmp)?;
+                        .min_by(f32::total_cmp);
                     let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
-                    let pass = (1.0 - f0) * (1.0 - f0);
-                    Some(SpecularFace {
-                        surface: id as u32,
-                        plane,
-                        kind: SpecularKind::Slab {
-                            shift: thickness * (1.0 - 1.0 / ior),
-                            thickness,
-                        },
-                        factor: Vec3::new(transmittance.x, transmittance.y, transmittance.z) * pass,
-                        corners: corners(surface),
-                    })
+                    let tint = Vec3::new(transmittance.x, transmittance.y, transmittance.z);
+                    match thickness {
+                        Some(thickness) => vec![SpecularFace {
+                            surface: id as u32,
+                            plane,
+                            kind: SpecularKind::Slab {
+                                shift: thickness * (1.0 - 1.0 / ior),
+                                thickness,
+                            },
+                            factor: tint * (1.0 - f0) * (1.0 - f0),
+                            corners: corners(surface),
+                        }],
+                        None => {
+                            let face = |plane: Plane, ratio: f32| SpecularFace {
+                                surface: id as u32,
+                                plane,
+                                kind: SpecularKind::Interface { ratio },
+                                factor: tint * (1.0 - f0),
+                                corners: corners(surface),
+                            };
+                            let flipped = Plane {
+                                normal: -plane.normal,
+                                offset: -plane.offset,
+                            };
+                            vec![face(plane, 1.0 / ior), face(flipped, ior)]
+                        }
+                    }
                 }
-                _ => None,
+                _ => Vec::new(),
             }
         })
         .collect()
@@ -239,6 +266,9 @@ impl ViewTree {
                 SpecularKind::Mirror => view.reflected(&face.plane, clip),
                 SpecularKind::Slab { shift, thickness } => {
                     view.through_slab(&face.plane, shift, thickness, clip)
+                }
+                SpecularKind::Interface { ratio } => {
+                    view.through_interface(&face.plane, ratio, clip)
                 }
             });
             self.children.push(Vec::new());
