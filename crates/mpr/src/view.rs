@@ -398,6 +398,35 @@ mod tests {
         )
     }
 
+    /// The paraxial interface scaling keeps the plane, scales depths by the
+    /// ratio, and its virtual eye sees each scaled point along the line the
+    /// real eye sees it (Heckbert & Hanrahan).
+    #[test]
+    fn interface_scaling_keeps_the_plane_and_scales_depth() {
+        let plane = Plane::from_point_normal(Vec3::new(0.0, -0.5, 0.0), Vec3::Y);
+        let m = interface_scaling(&plane, 0.75);
+        let on = Vec3::new(0.3, -0.5, -0.2);
+        assert!((m.transform_point3(on) - on).length() < 1e-6);
+        let below = Vec3::new(0.3, -1.5, -0.2);
+        assert!((m.transform_point3(below) - Vec3::new(0.3, -1.25, -0.2)).length() < 1e-6);
+        let root = View::from_camera(&camera());
+        let through = root.through_interface(&plane, 0.75, ClipMethod::Hardware);
+        // Real eye 0.7 above the plane → virtual eye at 0.7 / 0.75.
+        assert!(
+            (through.eye.y - (-0.5 + 0.7 / 0.75)).abs() < 1e-5,
+            "{}",
+            through.eye
+        );
+        // The virtual eye's line to a point beyond and the real eye's line to
+        // its scaled image cross the plane at one point.
+        let cross = |from: Vec3, to: Vec3| from + (to - from) * ((from.y + 0.5) / (from.y - to.y));
+        let x1 = cross(through.eye, below);
+        let x2 = cross(root.eye, m.transform_point3(below));
+        assert!((x1 - x2).length() < 1e-5, "{x1} {x2}");
+        assert!(!through.is_mirrored());
+        assert_eq!(through.level, 1);
+    }
+
     /// Depth (z/w) and whether the point is inside the clip volume (0 ≤ z ≤ w, w > 0).
     fn depth(view: &View, p: Vec3) -> (f32, bool) {
         let c = view.view_projection() * p.extend(1.0);

@@ -7,10 +7,12 @@
 //!
 //! A chain `F₁ … F_k` of [`SpecularFace`]s takes a point light at `L₀ = L`
 //! to the virtual lights `L_j = T_j(L_{j−1})`, where `T_j` is `F_j`'s
-//! transform: the mirror reflection of its plane, or the slab's paraxial
-//! shift `t (1 − 1/η)` along its normal (the same maps the specular images
-//! use, [`View::reflected`](crate::View::reflected) and
-//! [`View::through_slab`](crate::View::through_slab)). Light from `L` that
+//! transform: the mirror reflection of its plane, the slab's paraxial
+//! shift `t (1 − 1/η)` along its normal, or a single interface's paraxial
+//! scaling about its plane (the same maps the specular images use,
+//! [`View::reflected`](crate::View::reflected),
+//! [`View::through_slab`](crate::View::through_slab) and
+//! [`View::through_interface`](crate::View::through_interface)). Light from `L` that
 //! passed `F₁ … F_k` reaches a point `P` on the outgoing side of `F_k` as
 //! if from `L_k`, with the intensity times the faces' factors, when
 //!
@@ -24,7 +26,7 @@
 //!   `L_j` moved by `T_k ∘ … ∘ T_{j+1}` (section 4.3: a shadow bent by
 //!   specular faces is a transformed copy, figure 6's `S₀₁₂` from `S₀₁`).
 //!
-//! Exact for mirrors; for slabs the paraxial approximation of the images.
+//! Exact for mirrors; for slabs and interfaces the paraxial approximation of the images.
 //! A chain continues from `F_j` to a face that its light can reach:
 //! `L_j` on the incoming side of the next face, and the next face's corners,
 //! projected from `L_j` onto `F_j`'s plane, overlapping `F_j`'s extent there
@@ -693,6 +695,41 @@ mod tests {
             // Records on the chain itself (mirror and slab hits) other than after a whole link.
             assert!(!drawn[0], "the first hit is the real light's");
         }
+    }
+
+    /// A photon through a single interface (surface 5, the plane y = 0
+    /// facing up, both of its faces) to the floor is on a chain; one
+    /// reflected off it is not.
+    #[test]
+    fn photon_records_through_an_interface() {
+        let up = mirror(Vec3::ZERO, Vec3::Y, 1.0);
+        let face = |normal: Vec3, ratio: f32| SpecularFace {
+            surface: 5,
+            plane: Plane::from_point_normal(Vec3::ZERO, normal),
+            kind: SpecularKind::Interface { ratio },
+            ..up.clone()
+        };
+        let faces = [face(Vec3::Y, 0.75), face(-Vec3::Y, 1.33)];
+        let hit = |surface: u32, bounce: u8, direction: Vec3| lustre_photon::HitRecord {
+            direction,
+            ..record(surface, bounce)
+        };
+        // From above: wᵢ points up at the interface; refracted, the floor
+        // hit looks up too; reflected, the ceiling hit looks down.
+        let refracted = [hit(5, 1, Vec3::Y), hit(9, 2, Vec3::Y)];
+        let reflected = [hit(5, 1, Vec3::Y), hit(8, 2, -Vec3::Y)];
+        assert_eq!(
+            drawn_by_virtual_lights(&refracted, &faces, 1),
+            [false, true]
+        );
+        assert_eq!(
+            drawn_by_virtual_lights(&reflected, &faces, 1),
+            [false, false]
+        );
+        assert_eq!(
+            drawn_by_virtual_lights(&refracted, &faces, 0),
+            [false, false]
+        );
     }
 
     /// A face the light cannot reach through the previous face is culled:

@@ -393,3 +393,165 @@ fn virtual_lights_follow_a_moved_object() {
         "{agree}/{compared}"
     );
 }
+
+/// An axis-aligned box with outward winding.
+fn cuboid(name: &str, min: glam::Vec3, max: glam::Vec3, material: u32) -> lustre_geometry::Mesh {
+    let p = |x: f32, y: f32, z: f32| {
+        glam::Vec3::new(
+            if x > 0.0 { max.x } else { min.x },
+            if y > 0.0 { max.y } else { min.y },
+            if z > 0.0 { max.z } else { min.z },
+        )
+    };
+    let corners = [
+        p(0., 0., 0.),
+        p(1., 0., 0.),
+        p(1., 1., 0.),
+        p(0., 1., 0.),
+        p(0., 0., 1.),
+        p(1., 0., 1.),
+        p(1., 1., 1.),
+        p(0., 1., 1.),
+    ];
+    let faces = [
+        [4, 5, 6, 7],
+        [1, 0, 3, 2],
+        [5, 1, 2, 6],
+        [0, 4, 7, 3],
+        [7, 6, 2, 3],
+        [0, 1, 5, 4],
+    ];
+    let indices: Vec<[u32; 3]> = faces
+        .iter()
+        .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
+        .collect();
+    lustre_geometry::Mesh::flat(name, &corners, &indices, material)
+}
+
+/// A pool: a diffuse floor, an open water surface (η = 1.33, a single
+/// interface facing up) half a metre above it, a box under the water and
+/// one between the point light and the water.
+fn pool() -> Scene {
+    use glam::Vec3;
+    use lustre_geometry::material::MaterialModel;
+    use lustre_geometry::{Material, Mesh, Object, Rgb};
+    let materials = vec![
+        Material::diffuse("floor", Rgb::new(0.7, 0.7, 0.6)),
+        Material::new(
+            "water",
+            MaterialModel::Dielectric {
+                ior: 1.33,
+                transmittance: Rgb::ONE,
+            },
+        ),
+        Material::diffuse("box", Rgb::new(0.6, 0.2, 0.2)),
+    ];
+    let square = |name: &str, y: f32, half: f32, material: u32| {
+        let c = [
+            Vec3::new(-half, y, -half),
+            Vec3::new(-half, y, half),
+            Vec3::new(half, y, half),
+            Vec3::new(half, y, -half),
+        ];
+        Mesh::flat(name, &c, &[[0, 1, 2], [0, 2, 3]], material)
+    };
+    let meshes = vec![
+        square("floor", 0.0, 2.0, 0),
+        square("water", 0.5, 1.0, 1),
+        cuboid(
+            "sunk",
+            Vec3::new(-0.55, 0.0, 0.15),
+            Vec3::new(-0.25, 0.3, 0.45),
+            2,
+        ),
+        cuboid(
+            "hanging",
+            Vec3::new(0.2, 1.1, -0.1),
+            Vec3::new(0.4, 1.3, 0.1),
+            2,
+        ),
+    ];
+    let objects = (0..meshes.len() as u32)
+        .map(|m| Object {
+            name: meshes[m as usize].name.clone(),
+            meshes: vec![m],
+            transform: glam::Affine3A::IDENTITY,
+        })
+        .collect();
+    let light = Light::Point(lustre_geometry::light::PointLight {
+        position: Vec3::new(0.2, 2.0, 0.1),
+        intensity: Rgb::splat(4.0),
+    });
+    let camera = Camera::look_at(
+        Vec3::new(0.9, 0.4, 0.9),
+        Vec3::new(-0.3, 0.0, -0.3),
+        Vec3::Y,
+        70.0,
+    );
+    Scene::new("pool", meshes, materials, objects, vec![light], camera).unwrap()
+}
+
+/// Light refracted by a single interface (the water surface, paraxially:
+/// the light seen from under water at η times its height) lights the pool
+/// floor as the unfolded paths do, with the shadow of the box above the
+/// water (bent by the surface: section 4.3's transformed volume) and of the
+/// sunk box (cast from the virtual light); the real light reaches nothing
+/// under the water.
+#[test]
+fn virtual_lights_through_a_single_interface_match_unfolded_light_paths() {
+    let Some(ctx) = gpu_or_skip("virtual_lights_through_a_single_interface") else {
+        return;
+    };
+    let scene = pool();
+    let bvh = Bvh::build(&scene);
+    let lights = scene.lights().to_vec();
+    let faces = specular_faces(&scene);
+    assert_eq!(faces.len(), 2);
+    let paths = specular_paths(&faces, glam::Vec3::new(0.2, 2.0, 0.1), 2);
+    assert_eq!(
+        paths.len(),
+        1,
+        "only the turned-round face lets the light under water"
+    );
+    let camera = scene.camera().with_aspect(1.0);
+    let real = direct_pixels_cpu_with_lights(
+        &scene,
+        &lights,
+        &bvh,
+        &camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    let virt = virtual_direct_pixels_cpu(
+        &scene,
+        &lights,
+        &faces,
+        1,
+        &bvh,
+        &camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    let shadowed = (0..virt.len())
+        .filter(|&i| real[i].surface == 0 && virt[i].visible == 0)
+        .count();
+    let (gpu, ids) = render(&ctx, &scene, &camera, &lights, 1);
+    let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
+    eprintln!(
+        "pool: {agree}/{compared} pixels agree, {lit} lit through the water, \
+         {shadowed} floor pixels in the refracted light's shadows or outside it"
+    );
+    assert!(compared > (SIZE * SIZE / 3) as usize, "{compared} compared");
+    assert!(
+        lit > compared / 3 && shadowed > 200,
+        "{lit} lit, {shadowed} shadowed"
+    );
+    assert!(
+        agree as f64 >= 0.995 * compared as f64,
+        "{agree}/{compared}"
+    );
+}

@@ -1,5 +1,7 @@
-//! Specular images of planar mirror faces (Diefenbach & Badler 1997,
-//! sections 3 and 7.1, 7.3): `mask_face` draws a face with the depth test
+//! Specular images of planar mirror faces, glass slabs and single
+//! refracting interfaces (Diefenbach & Badler 1997, sections 3 and 7.1,
+//! 7.3; the virtual cameras of Heckbert & Hanrahan's beam tracing, in
+//! [`crate::view`]): `mask_face` draws a face with the depth test
 //! into the stencil (level `k` → `k + 1`), the depth inside the mask is
 //! reset to far, the whole scene is drawn again from the virtual camera of
 //! the mirror transform only where the stencil holds `k + 1` (recursively,
