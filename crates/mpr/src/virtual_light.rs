@@ -139,6 +139,70 @@ pub fn incoming(face: &SpecularFace) -> HalfSpace {
     }
 }
 
+/// The side planes of the cone of rays from `apex` through `face`'s
+/// polygon (the convex hull of its corners), as half-spaces holding the
+/// cone; empty when `apex` lies in the face's plane. Geometry wholly outside
+/// one of them cannot block light that passes the face (section 8's
+/// culling, applied to the casters of virtual lights' shadows).
+pub fn cone_planes(apex: Vec3, face: &SpecularFace) -> Vec<HalfSpace> {
+    let n = face.plane.normal;
+    if face.plane.signed_distance(apex).abs() <= 1e-6 || face.corners.is_empty() {
+        return Vec::new();
+    }
+    let (u, v) = plane_basis(n);
+    let mut points: Vec<(f32, f32, Vec3)> = face
+        .corners
+        .iter()
+        .map(|&c| (c.dot(u), c.dot(v), c))
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    points.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-7 && (a.1 - b.1).abs() < 1e-7);
+    // Andrew's monotone chain: the hull counter-clockwise in (u, v).
+    let cross = |o: &(f32, f32, Vec3), a: &(f32, f32, Vec3), b: &(f32, f32, Vec3)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f32, f32, Vec3)> = Vec::new();
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &(f32, f32, Vec3)>> = if pass == 0 {
+            Box::new(points.iter())
+        } else {
+            Box::new(points.iter().rev())
+        };
+        for p in iter {
+            while hull.len() >= start + 2
+                && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(*p);
+        }
+        hull.pop();
+    }
+    if hull.len() < 3 {
+        return Vec::new();
+    }
+    let centre = hull.iter().map(|p| p.2).sum::<Vec3>() / hull.len() as f32;
+    (0..hull.len())
+        .filter_map(|i| {
+            let (a, b) = (hull[i].2, hull[(i + 1) % hull.len()].2);
+            let normal = (a - apex).cross(b - apex).normalize_or_zero();
+            if normal == Vec3::ZERO {
+                return None;
+            }
+            let normal = if normal.dot(centre - apex) >= 0.0 {
+                normal
+            } else {
+                -normal
+            };
+            Some(HalfSpace {
+                normal,
+                offset: normal.dot(apex),
+            })
+        })
+        .collect()
+}
+
 /// One chain of faces a light passes, with what it does to the light.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpecularPath {
@@ -184,6 +248,19 @@ impl SpecularPath {
             bounds.push(incoming(&faces[self.faces[j]]));
         }
         bounds
+    }
+
+    /// The cone of stretch `j`'s light for a light at `light`: from `A_j(L)`
+    /// through the face it goes to next (`F_{j+1}`), or, for the last
+    /// stretch, through `F_k` from `A_k(L)` ([`cone_planes`]).
+    pub fn stretch_cone(&self, faces: &[SpecularFace], light: Vec3, j: usize) -> Vec<HalfSpace> {
+        let apex = self.prefix[j].transform_point3(light);
+        let face = if j < self.len() {
+            self.faces[j]
+        } else {
+            self.faces[j - 1]
+        };
+        cone_planes(apex, &faces[face])
     }
 
     /// The stretches whose shadows are drawn under `shadows`: all `0..=k`,
@@ -730,6 +807,24 @@ mod tests {
             drawn_by_virtual_lights(&refracted, &faces, 0),
             [false, false]
         );
+    }
+
+    /// The cone through a 1 m square mirror from a point 1 m in front of
+    /// it: points through the square are inside every side plane, points
+    /// past its edge outside one.
+    #[test]
+    fn cones_hold_what_passes_the_face() {
+        let face = mirror(Vec3::ZERO, Vec3::Z, 0.5);
+        let apex = Vec3::new(0.0, 0.0, 1.0);
+        let planes = cone_planes(apex, &face);
+        assert_eq!(planes.len(), 4);
+        let inside = |p: Vec3| planes.iter().all(|h| h.depth(p) >= -1e-6);
+        assert!(inside(Vec3::new(0.0, 0.0, -1.0)));
+        assert!(inside(Vec3::new(0.9, -0.9, -1.0)));
+        assert!(!inside(Vec3::new(1.1, 0.0, -1.0)));
+        assert!(inside(Vec3::new(0.2, 0.2, 0.5)));
+        assert!(!inside(Vec3::new(0.4, 0.0, 0.5)));
+        assert!(cone_planes(Vec3::new(2.0, 0.0, 0.0), &face).is_empty());
     }
 
     /// A face the light cannot reach through the previous face is culled:

@@ -181,9 +181,16 @@ impl VirtualLights {
                         Some(&b) => b,
                         None => {
                             let bounds = path.stretch_bounds(faces, j);
+                            let cone = path.stretch_cone(faces, light, j);
                             let source = path.prefix[j].transform_point3(light);
-                            let keep =
-                                |t: &[Vec3; 3]| bounds.iter().all(|h| h.holds_triangle(t, epsilon));
+                            // Between the faces, and not wholly outside the
+                            // cone of the light that passes them.
+                            let keep = |t: &[Vec3; 3]| {
+                                bounds.iter().all(|h| h.holds_triangle(t, epsilon))
+                                    && !cone
+                                        .iter()
+                                        .any(|h| t.iter().all(|&p| h.depth(p) < -epsilon))
+                            };
                             let built = (0..set.casters().len())
                                 .map(|caster| set.volume_where(scene, caster, source, &keep, false))
                                 .collect::<lustre_geometry::Result<Vec<_>>>()
