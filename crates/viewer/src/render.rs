@@ -321,7 +321,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ShadowArg::Volumes)]
     pub shadows: ShadowArg,
     /// `--technique mpr` with shadow volumes: shadow recursion depth, the
-    /// longest chain of mirrors and glass slabs a light is followed through
+    /// longest chain of mirrors, glass slabs and single interfaces a light passes
     /// as a virtual light with its light volume and bent shadows (Diefenbach
     /// & Badler 1997, sections 4.2, 4.3 and 8.1); 0 adds no virtual light.
     /// Default 1, and 0 with `--shadows maps`, which has no virtual lights.
