@@ -296,6 +296,38 @@ fn render_refuses_bad_options_before_writing_anything() {
             vec!["render", "glosbox", "--aa", "0", "--out", out],
             "--aa 0",
         ),
+        (
+            vec!["render", "mirrors", "--shadow-depth", "1", "--out", out],
+            "virtual lights belong to --technique mpr",
+        ),
+        (
+            vec![
+                "render",
+                "mirrors",
+                "--technique",
+                "mpr",
+                "--shadows",
+                "maps",
+                "--shadow-depth",
+                "1",
+                "--out",
+                out,
+            ],
+            "virtual lights need --shadows volumes",
+        ),
+        (
+            vec![
+                "render",
+                "mirrors",
+                "--technique",
+                "mpr",
+                "--shadow-depth",
+                "9",
+                "--out",
+                out,
+            ],
+            "--shadow-depth 9: at most 8",
+        ),
     ];
     for (args, expected) in cases {
         let result = lustre(&args);
