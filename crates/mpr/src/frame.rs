@@ -667,7 +667,17 @@ impl FrameGraph {
             for &(face, child) in &tree.children[index] {
                 specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
                 self.draw_window(ctx, encoder, frame, light, views, tree, slots, child, limit)?;
-                specular.encode_restore(encoder, frame.scene, frame.targets, views, slot, face);
+                specular.encode_restore_child(
+                    ctx,
+                    encoder,
+                    frame.scene,
+                    frame.targets,
+                    views,
+                    slot,
+                    slots[child],
+                    face,
+                    tree.samples[child],
+                );
             }
             if limit {
                 specular.encode_limit(

@@ -5,6 +5,7 @@ pub mod depth;
 pub mod diffuse_texture;
 pub mod direct;
 pub mod emission;
+pub mod glossy_image;
 pub mod gouraud;
 pub mod redraw;
 pub mod shadow;

@@ -20,6 +20,10 @@
 use std::ops::Range;
 
 use glam::Vec3;
+
+use crate::passes::glossy_image::{
+    GlossyImagePass, GlossySample, GlossySettings, glossy_faces, shear_slopes,
+};
 use lustre_geometry::SurfaceKind;
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Plane, Scene};
@@ -87,6 +91,24 @@ pub enum SpecularKind {
         /// Thickness t of the slab in m.
         thickness: f32,
     },
+    /// A planar glossy face (section 3, "glossy marble"): `samples` mirror
+    /// views sheared about its normal, averaged ([`crate::passes::glossy_image`]).
+    Glossy(GlossyImage),
+}
+
+/// How a glossy face makes its image (section 3, `shear_view` and `accbuf`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlossyImage {
+    /// The lobe's roughness α (RMS slope): the shear samples' RMS length is 2α.
+    pub alpha: f32,
+    /// Sheared images `N`.
+    pub samples: u32,
+    /// Images are made only from views of level below this; deeper the face shows `R · L_lim`.
+    pub depth: u32,
+    /// `f_max` in m (infinite: no fog).
+    pub fog_distance: f32,
+    /// Whether the sheared views hide emitters.
+    pub hide_emitters: bool,
 }
 
 /// One planar specular face: a mirror, or a face of a glass slab.
@@ -182,6 +204,8 @@ pub struct ViewTree {
     pub children: Vec<Vec<(usize, usize)>>,
     /// Per view: faces it sees at the recursion limit.
     pub limit_faces: Vec<Vec<usize>>,
+    /// Per view: which sheared image of a glossy face it draws, if it is one.
+    pub samples: Vec<Option<GlossySample>>,
 }
 
 impl ViewTree {
@@ -191,6 +215,7 @@ impl ViewTree {
             views: vec![root],
             children: vec![Vec::new()],
             limit_faces: vec![Vec::new()],
+            samples: vec![None],
         }
     }
 
@@ -222,29 +247,53 @@ impl ViewTree {
             if face.plane.signed_distance(view.eye) <= 0.0 || !view.may_see(&face.corners) {
                 continue;
             }
-            if view.level >= max_depth {
+            let glossy_limit =
+                matches!(face.kind, SpecularKind::Glossy(g) if view.level >= g.depth);
+            if view.level >= max_depth || glossy_limit {
                 self.limit_faces[index].push(f);
                 continue;
             }
-            if self.views.len() >= MAX_VIEWS {
-                return Err(MprError::InvalidSetting {
-                    what: "specular recursion",
-                    message: format!(
-                        "more than {MAX_VIEWS} views: lower the recursion depth (now {max_depth})"
-                    ),
-                });
-            }
-            let child = self.views.len();
-            self.views.push(match face.kind {
-                SpecularKind::Mirror => view.reflected(&face.plane, clip),
+            let children: Vec<(View, Option<GlossySample>)> = match face.kind {
+                SpecularKind::Mirror => vec![(view.reflected(&face.plane, clip), None)],
                 SpecularKind::Slab { shift, thickness } => {
-                    view.through_slab(&face.plane, shift, thickness, clip)
+                    vec![(view.through_slab(&face.plane, shift, thickness, clip), None)]
                 }
-            });
-            self.children.push(Vec::new());
-            self.limit_faces.push(Vec::new());
-            self.children[index].push((f, child));
-            self.grow(child, faces, max_depth, clip)?;
+                SpecularKind::Glossy(glossy) => {
+                    let count = glossy.samples.max(1);
+                    shear_slopes(glossy.alpha, count)
+                        .into_iter()
+                        .enumerate()
+                        .map(|(i, slope)| {
+                            let mut sheared = view.sheared_reflection(&face.plane, slope, clip);
+                            sheared.shows_emitters = !glossy.hide_emitters;
+                            let sample = GlossySample {
+                                face: f,
+                                index: i as u32,
+                                count,
+                            };
+                            (sheared, Some(sample))
+                        })
+                        .collect()
+                }
+            };
+            for (child_view, sample) in children {
+                if self.views.len() >= MAX_VIEWS {
+                    return Err(MprError::InvalidSetting {
+                        what: "specular recursion",
+                        message: format!(
+                            "more than {MAX_VIEWS} views: lower the recursion depth (now \
+                             {max_depth}) or the glossy image samples"
+                        ),
+                    });
+                }
+                let child = self.views.len();
+                self.views.push(child_view);
+                self.children.push(Vec::new());
+                self.limit_faces.push(Vec::new());
+                self.samples.push(sample);
+                self.children[index].push((f, child));
+                self.grow(child, faces, max_depth, clip)?;
+            }
         }
         Ok(())
     }
@@ -279,8 +328,12 @@ pub struct SpecularPass {
     mask: wgpu::RenderPipeline,
     reset: wgpu::RenderPipeline,
     restore: wgpu::RenderPipeline,
+    /// The restore of a glossy image's sample: the image inside cleared to zero.
+    restore_zero: wgpu::RenderPipeline,
     limit: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
+    /// The glossy images' accumulation, when the pass has glossy faces.
+    glossy: Option<GlossyImagePass>,
 }
 
 impl SpecularPass {
@@ -291,6 +344,19 @@ impl SpecularPass {
         scene: &Scene,
         settings: SpecularSettings,
     ) -> Result<Self> {
+        Self::with_glossy(ctx, hdr_format, scene, settings, &GlossySettings::default())
+    }
+
+    /// [`SpecularPass::new`] with the glossy faces of `glossy` too (section
+    /// 3, "glossy marble"; none when `glossy.samples` is 0).
+    pub fn with_glossy(
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &Scene,
+        settings: SpecularSettings,
+        glossy: &GlossySettings,
+    ) -> Result<Self> {
+        glossy.validate()?;
         if settings.max_depth > 120 {
             return Err(MprError::InvalidSetting {
                 what: "specular recursion depth",
@@ -306,7 +372,13 @@ impl SpecularPass {
                 message: format!("{} is not a finite radiance", settings.limit_radiance),
             });
         }
-        let faces = specular_faces(scene);
+        let mut faces = specular_faces(scene);
+        faces.extend(glossy_faces(scene, glossy));
+        let glossy_pass = faces
+            .iter()
+            .any(|f| matches!(f.kind, SpecularKind::Glossy(_)))
+            .then(|| GlossyImagePass::new(ctx, hdr_format, &faces, glossy.fog_radiance))
+            .transpose()?;
         let mut records = vec![
             GpuFace {
                 reflectance: [0.0; 4],
@@ -415,48 +487,53 @@ impl SpecularPass {
             });
             // The face restored at level k: depth and id written back, k + 1 -> k,
             // the image drawn inside scaled by R (blend: dst * src).
-            let restore = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("specular-restore"),
-                layout: Some(&pipeline_layout),
-                vertex: vertex("vs_main", true),
-                primitive,
-                depth_stencil: depth(
-                    wgpu::CompareFunction::Always,
-                    true,
-                    stencil_equal(wgpu::StencilOperation::DecrementClamp),
-                ),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_restore"),
-                    compilation_options: Default::default(),
-                    targets: &[
-                        Some(wgpu::ColorTargetState {
-                            format: hdr_format,
-                            blend: Some(wgpu::BlendState {
-                                color: wgpu::BlendComponent {
-                                    src_factor: wgpu::BlendFactor::Zero,
-                                    dst_factor: wgpu::BlendFactor::Src,
-                                    operation: wgpu::BlendOperation::Add,
-                                },
-                                alpha: wgpu::BlendComponent {
-                                    src_factor: wgpu::BlendFactor::Zero,
-                                    dst_factor: wgpu::BlendFactor::One,
-                                    operation: wgpu::BlendOperation::Add,
-                                },
+            let restore_with = |label: &str, entry: &str| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    vertex: vertex("vs_main", true),
+                    primitive,
+                    depth_stencil: depth(
+                        wgpu::CompareFunction::Always,
+                        true,
+                        stencil_equal(wgpu::StencilOperation::DecrementClamp),
+                    ),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &[
+                            Some(wgpu::ColorTargetState {
+                                format: hdr_format,
+                                blend: Some(wgpu::BlendState {
+                                    color: wgpu::BlendComponent {
+                                        src_factor: wgpu::BlendFactor::Zero,
+                                        dst_factor: wgpu::BlendFactor::Src,
+                                        operation: wgpu::BlendOperation::Add,
+                                    },
+                                    alpha: wgpu::BlendComponent {
+                                        src_factor: wgpu::BlendFactor::Zero,
+                                        dst_factor: wgpu::BlendFactor::One,
+                                        operation: wgpu::BlendOperation::Add,
+                                    },
+                                }),
+                                write_mask: wgpu::ColorWrites::ALL,
                             }),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        }),
-                        Some(wgpu::ColorTargetState {
-                            format: SURFACE_ID_FORMAT,
-                            blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        }),
-                    ],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+                            Some(wgpu::ColorTargetState {
+                                format: SURFACE_ID_FORMAT,
+                                blend: None,
+                                write_mask: wgpu::ColorWrites::ALL,
+                            }),
+                        ],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+            let restore = restore_with("specular-restore", "fs_restore");
+            // A glossy sample's restore: the image inside multiplied by zero (it was accumulated).
+            let restore_zero = restore_with("specular-restore-zero", "fs_restore_zero");
             let limit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("specular-limit"),
                 layout: Some(&pipeline_layout),
@@ -503,8 +580,10 @@ impl SpecularPass {
                 mask,
                 reset,
                 restore,
+                restore_zero,
                 limit,
                 bind_group,
+                glossy: glossy_pass,
             }
         })
     }
@@ -590,6 +669,52 @@ impl SpecularPass {
         outer: ViewSlot,
         face: usize,
     ) {
+        self.encode_restore_as(encoder, scene, targets, views, outer, face, false);
+    }
+
+    /// Restores `face` in the view `outer` after the image of the view in
+    /// `child` was drawn in its mask: a mirror or slab as
+    /// [`SpecularPass::encode_restore`]; a glossy face's sample (section 3,
+    /// `accbuf(ACCUMULATE)`) fogged and accumulated, the face restored with
+    /// its image cleared and, after the last sample, the average times R
+    /// added on the face (`accbuf(RETURN)`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_restore_child(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        outer: ViewSlot,
+        child: ViewSlot,
+        face: usize,
+        sample: Option<GlossySample>,
+    ) {
+        let (Some(sample), Some(glossy)) = (sample, &self.glossy) else {
+            self.encode_restore(encoder, scene, targets, views, outer, face);
+            return;
+        };
+        glossy.encode_accumulate(ctx, encoder, scene, targets, views, outer, child, sample);
+        self.encode_restore_as(encoder, scene, targets, views, outer, face, true);
+        if sample.index + 1 == sample.count {
+            let indices = face_indices(scene, &self.faces[face]);
+            glossy.encode_resolve(ctx, encoder, scene, targets, views, outer, face, indices);
+        }
+    }
+
+    /// The restore of `face`, its image scaled by R or, with `clear`, by zero.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_restore_as(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        outer: ViewSlot,
+        face: usize,
+        clear: bool,
+    ) {
         let face = &self.faces[face];
         let colour = [
             Some(wgpu::RenderPassColorAttachment {
@@ -612,7 +737,11 @@ impl SpecularPass {
             }),
         ];
         let mut pass = Self::depth_stencil_pass(encoder, targets, &colour, "specular-restore");
-        pass.set_pipeline(&self.restore);
+        pass.set_pipeline(if clear {
+            &self.restore_zero
+        } else {
+            &self.restore
+        });
         views.bind(&mut pass, 0, outer);
         pass.set_stencil_reference(outer.stencil_reference + 1);
         pass.set_bind_group(1, &self.bind_group, &[]);

@@ -1,0 +1,384 @@
+//! Glossy images (Diefenbach & Badler 1997, section 3, "glossy marble") on
+//! the GPU: with no shear and one sample a glossy face's image is the mirror
+//! image of the same face (the specular path, to float precision); with `N`
+//! sheared samples the image of a small emitter in a glossy floor, seen
+//! straight down, is blurred as wide as the Gaussian slope lobe the shear
+//! samples were mapped to (CPU: the lobe integrated over the emitter per
+//! pixel, in closed form with erf).
+
+mod support;
+
+use glam::{Affine3A, Vec2, Vec3};
+use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
+use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Plane, Ray, Rgb, Scene};
+use lustre_mpr::frame::FrameInputs;
+use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, shear_slopes};
+use lustre_mpr::passes::specular::SpecularSettings;
+use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::readback::read_rgba_f32;
+use lustre_mpr::view::face_frame;
+use lustre_mpr::{FrameGraph, GpuContext, RenderTargets, SceneBuffers};
+use support::gpu_or_skip;
+
+const SIZE: u32 = 96;
+const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Mesh {
+    Mesh::flat(name, &corners, &[[0, 1, 2], [0, 2, 3]], material)
+}
+
+fn rough_mirror(alpha: f32, reflectance: f32) -> MaterialModel {
+    MaterialModel::RoughConductor {
+        distribution: MicrofacetDistribution::Beckmann,
+        alpha,
+        fresnel: ConductorFresnel::None,
+        specular: Rgb::splat(reflectance),
+    }
+}
+
+/// A 4 × 4 m floor at y = 0 facing up of `floor`, an emissive square of
+/// half-size `half` at height `height` facing down, and (with `walls`) two
+/// emissive walls of other colours; the camera `camera`.
+fn floor_scene(floor: MaterialModel, half: f32, height: f32, walls: bool, camera: Camera) -> Scene {
+    let mut materials = vec![
+        Material::new("floor", floor),
+        Material::diffuse("glow", Rgb::ZERO).with_emission(Rgb::new(1.0, 0.5, 0.25)),
+        Material::diffuse("blue", Rgb::ZERO).with_emission(Rgb::new(0.1, 0.2, 0.7)),
+        Material::diffuse("green", Rgb::ZERO).with_emission(Rgb::new(0.2, 0.6, 0.1)),
+    ];
+    materials.truncate(if walls { 4 } else { 2 });
+    let mut meshes = vec![
+        quad(
+            "floor",
+            [
+                Vec3::new(-2.0, 0.0, 2.0),
+                Vec3::new(2.0, 0.0, 2.0),
+                Vec3::new(2.0, 0.0, -2.0),
+                Vec3::new(-2.0, 0.0, -2.0),
+            ],
+            0,
+        ),
+        quad(
+            "emitter",
+            [
+                Vec3::new(-half, height, -half),
+                Vec3::new(half, height, -half),
+                Vec3::new(half, height, half),
+                Vec3::new(-half, height, half),
+            ],
+            1,
+        ),
+    ];
+    if walls {
+        meshes.push(quad(
+            "back",
+            [
+                Vec3::new(-2.0, 0.0, -2.0),
+                Vec3::new(2.0, 0.0, -2.0),
+                Vec3::new(2.0, 2.0, -2.0),
+                Vec3::new(-2.0, 2.0, -2.0),
+            ],
+            2,
+        ));
+        meshes.push(quad(
+            "left",
+            [
+                Vec3::new(-2.0, 0.0, 2.0),
+                Vec3::new(-2.0, 0.0, -2.0),
+                Vec3::new(-2.0, 2.0, -2.0),
+                Vec3::new(-2.0, 2.0, 2.0),
+            ],
+            3,
+        ));
+    }
+    let objects = (0..meshes.len() as u32)
+        .map(|m| Object {
+            name: meshes[m as usize].name.clone(),
+            meshes: vec![m],
+            transform: Affine3A::IDENTITY,
+        })
+        .collect();
+    Scene::new(
+        "glossy-floor",
+        meshes,
+        materials,
+        objects,
+        Vec::new(),
+        camera,
+    )
+    .unwrap()
+}
+
+/// The HDR image of `scene` drawn with the emission pass and specular images (depth 1), glossy ones under `glossy`.
+fn render(ctx: &GpuContext, scene: &Scene, glossy: &GlossySettings) -> Vec<Vec3> {
+    let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
+    let buffers = SceneBuffers::upload(ctx, scene).unwrap();
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("output"),
+        size: wgpu::Extent3d {
+            width: SIZE,
+            height: SIZE,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: OUTPUT_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let graph = FrameGraph::new(ctx, OUTPUT_FORMAT)
+        .unwrap()
+        .with_emission(ctx, targets.hdr_format(), scene)
+        .unwrap()
+        .with_glossy_images(
+            ctx,
+            targets.hdr_format(),
+            scene,
+            SpecularSettings {
+                max_depth: 1,
+                limit_radiance: Vec3::ZERO,
+                clip: None,
+            },
+            glossy,
+        )
+        .unwrap();
+    let camera = scene.camera().with_aspect(1.0);
+    graph
+        .render(
+            ctx,
+            &FrameInputs {
+                scene: &buffers,
+                camera: &camera,
+                tonemap: &Tonemap::default(),
+                targets: &targets,
+                output: &output.create_view(&Default::default()),
+                splats: None,
+                direct: None,
+                diffuse: None,
+            },
+        )
+        .unwrap();
+    read_rgba_f32(ctx, &targets.hdr.texture)
+        .unwrap()
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect()
+}
+
+#[test]
+fn zero_shear_and_one_sample_is_the_mirror_image() {
+    let Some(ctx) = gpu_or_skip("zero_shear_and_one_sample_is_the_mirror_image") else {
+        return;
+    };
+    let camera = Camera::look_at(
+        Vec3::new(0.4, 1.2, 1.8),
+        Vec3::new(-0.3, 0.0, -0.6),
+        Vec3::Y,
+        60.0,
+    );
+    let mirror = floor_scene(
+        MaterialModel::Mirror {
+            reflectance: Rgb::splat(0.6),
+        },
+        0.3,
+        1.0,
+        true,
+        camera,
+    );
+    let glossy = floor_scene(rough_mirror(0.2, 0.6), 0.3, 1.0, true, camera);
+    let settings = GlossySettings {
+        samples: 1,
+        depth: 1,
+        fog: Fog::Off,
+        fog_radiance: Vec3::ZERO,
+        hide_emitters: false,
+    };
+    let expected = render(&ctx, &mirror, &GlossySettings::default());
+    let image = render(&ctx, &glossy, &settings);
+    let reflected = expected
+        .iter()
+        .zip(&image)
+        .filter(|(e, _)| e.max_element() > 0.0 && e.max_element() < 0.9 * 0.7)
+        .count();
+    assert!(
+        reflected > 500,
+        "the floor must reflect the walls: {reflected} pixels"
+    );
+    for (i, (e, g)) in expected.iter().zip(&image).enumerate() {
+        // One product R · L in f32 (or f16) either way: equal to rounding.
+        assert!(
+            (*e - *g).abs().max_element() <= 1e-3 * e.max_element().max(1e-3),
+            "pixel {i}: mirror {e}, glossy {g}"
+        );
+    }
+}
+
+/// erf by Abramowitz & Stegun 7.1.26 (absolute error below 1.5e-7).
+fn erf(x: f64) -> f64 {
+    let t = 1.0 / (1.0 + 0.327_591_1 * x.abs());
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let y = 1.0 - poly * (-x * x).exp();
+    if x < 0.0 { -y } else { y }
+}
+
+/// Probability that `c + g` lies in `[-half, half]` for `g` normal with deviation `sigma`.
+fn box_probability(c: f64, half: f64, sigma: f64) -> f64 {
+    let s = sigma * std::f64::consts::SQRT_2;
+    0.5 * (erf((half - c) / s) - erf((-half - c) / s))
+}
+
+/// Per pixel, on the CPU: where the camera's ray meets the floor, the mirror
+/// slope there, and `model(slope at the emitter plane)`, the reflected
+/// radiance for that mean slope (0 where the ray misses the floor).
+fn cpu_image(scene: &Scene, model: impl Fn(Vec2) -> f64) -> Vec<f64> {
+    let camera = scene.camera().with_aspect(1.0);
+    let bvh = Bvh::build(scene);
+    (0..SIZE)
+        .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let ray: Ray =
+                camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, Vec2::splat(0.5)));
+            let Some(hit) = bvh.closest_hit(&ray) else {
+                return 0.0;
+            };
+            if hit.material != 0 {
+                return 0.0;
+            }
+            // Reflected direction: slope (x, z) over y; the unsheared ray reaches the
+            // emitter plane at hit + height · slope.
+            let r = Vec3::new(ray.direction.x, -ray.direction.y, ray.direction.z);
+            let slope = Vec2::new(r.x / r.y, r.z / r.y);
+            model(Vec2::new(hit.position.x, hit.position.z) + HEIGHT * slope)
+        })
+        .collect()
+}
+
+const HEIGHT: f32 = 1.0;
+const HALF: f32 = 0.05;
+const ALPHA: f32 = 0.05;
+const SAMPLES: u32 = 64;
+
+/// Radiance-weighted mean and variance of the pixel coordinates along `axis` (0: x, 1: y).
+fn moments(image: &[f64], axis: usize) -> (f64, f64, f64) {
+    let coord = |i: usize| {
+        let (x, y) = (i as u32 % SIZE, i as u32 / SIZE);
+        f64::from(if axis == 0 { x } else { y })
+    };
+    let mass: f64 = image.iter().sum();
+    let mean = image
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v * coord(i))
+        .sum::<f64>()
+        / mass;
+    let var = image
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v * (coord(i) - mean).powi(2))
+        .sum::<f64>()
+        / mass;
+    (mass, mean, var)
+}
+
+#[test]
+fn the_blur_of_a_small_emitter_is_as_wide_as_the_mapped_lobe() {
+    let Some(ctx) = gpu_or_skip("the_blur_of_a_small_emitter_is_as_wide_as_the_mapped_lobe") else {
+        return;
+    };
+    // Straight down from below the emitter: the floor maps to pixels nearly affinely.
+    let camera = Camera::look_at(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, Vec3::Z, 30.0);
+    let reflectance = 0.8;
+    let scene = floor_scene(
+        rough_mirror(ALPHA, reflectance),
+        HALF,
+        HEIGHT,
+        false,
+        camera,
+    );
+    let settings = GlossySettings {
+        samples: SAMPLES,
+        depth: 1,
+        fog: Fog::Off,
+        fog_radiance: Vec3::ZERO,
+        hide_emitters: false,
+    };
+    let gpu: Vec<f64> = render(&ctx, &scene, &settings)
+        .iter()
+        .map(|v| f64::from(v.x))
+        .collect();
+    let le = 1.0 * f64::from(reflectance);
+    let (half, height) = (f64::from(HALF), f64::from(HEIGHT));
+    // The lobe the shear was mapped to: slope shifts Δ = 2m, normal with
+    // variance 2α² per axis; at the emitter plane a shift of height · Δ.
+    let sigma = height * std::f64::consts::SQRT_2 * f64::from(ALPHA);
+    let lobe = cpu_image(&scene, |p| {
+        le * box_probability(f64::from(p.x), half, sigma)
+            * box_probability(f64::from(p.y), half, sigma)
+    });
+    // The same with the N discrete shears the GPU drew: what the GPU must match pixel for pixel.
+    // The shears lie in the face's frame (t, b); as world (x, z) slope shifts:
+    let (t, b) = face_frame(&Plane::from_point_normal(Vec3::ZERO, Vec3::Y));
+    let shears: Vec<Vec2> = shear_slopes(ALPHA, SAMPLES)
+        .iter()
+        .map(|d| {
+            let w = t * d.x + b * d.y;
+            Vec2::new(w.x, w.z)
+        })
+        .collect();
+    let discrete = cpu_image(&scene, |p| {
+        let inside = shears
+            .iter()
+            .filter(|d| {
+                let q = p + HEIGHT * **d;
+                q.x.abs() < HALF && q.y.abs() < HALF
+            })
+            .count();
+        le * inside as f64 / f64::from(SAMPLES)
+    });
+    let second: Vec2 = shears.iter().map(|d| *d * *d).sum::<Vec2>() / SAMPLES as f32;
+    eprintln!(
+        "shear second moments {second} against the lobe's {}",
+        2.0 * ALPHA * ALPHA
+    );
+    let lobe_moment = 2.0 * ALPHA * ALPHA;
+    assert!(((second / lobe_moment) - Vec2::ONE).abs().max_element() < 0.05);
+    for axis in 0..2 {
+        let (m_gpu, mean_gpu, var_gpu) = moments(&gpu, axis);
+        let (m_lobe, mean_lobe, var_lobe) = moments(&lobe, axis);
+        let (m_disc, _, var_disc) = moments(&discrete, axis);
+        let (w_gpu, w_lobe, w_disc) = (var_gpu.sqrt(), var_lobe.sqrt(), var_disc.sqrt());
+        eprintln!(
+            "axis {axis}: mass GPU {m_gpu:.3} discrete {m_disc:.3} lobe {m_lobe:.3}; \
+             width (px) GPU {w_gpu:.3} discrete {w_disc:.3} lobe {w_lobe:.3}; mean {mean_gpu:.2} / {mean_lobe:.2}"
+        );
+        // The GPU against its discrete model: the same point samples of the
+        // same footprints, so equal up to pixels whose centre lies on a
+        // footprint's edge (a few per sample among ~100 lit pixels each): 1 %.
+        assert!(
+            (w_gpu / w_disc - 1.0).abs() < 0.01,
+            "axis {axis}: {w_gpu} vs {w_disc}"
+        );
+        assert!(
+            (m_gpu / m_disc - 1.0).abs() < 0.01,
+            "axis {axis}: {m_gpu} vs {m_disc}"
+        );
+        // Against the lobe: the image's variance is the footprint's (exact)
+        // plus height² times the shears' second moment, which the 64 fixed
+        // stratified shears hold to 5 % of 2α² per axis (asserted above); the
+        // width, a square root, so to 2.5 %, plus a little for the pixel
+        // grid (the mass agrees to 0.1 %): 3 % on the width.
+        assert!(
+            (w_gpu / w_lobe - 1.0).abs() < 0.03,
+            "axis {axis}: {w_gpu} vs {w_lobe}"
+        );
+        assert!((mean_gpu - mean_lobe).abs() < 0.5, "axis {axis}");
+        assert!(
+            (m_gpu / m_lobe - 1.0).abs() < 0.03,
+            "axis {axis}: {m_gpu} vs {m_lobe}"
+        );
+    }
+}
