@@ -468,7 +468,7 @@ impl FrameGraph {
                 frame
                     .camera
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
-            let tree = self.view_tree(ctx, &camera)?;
+            let tree = self.view_tree_interleaved(ctx, &camera, s, samples)?;
             let slots = views.write(ctx, &tree.views)?;
             if let Some((inputs, pass)) = passes.splat {
                 pass.prepare(&ctx.queue, inputs.filtering);

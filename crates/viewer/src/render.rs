@@ -46,6 +46,7 @@ use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
+use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, imaged_surfaces};
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
@@ -290,6 +291,23 @@ pub struct RenderArgs {
     /// reflectance times the scene's mean radiance instead of a further image.
     #[arg(long, default_value_t = DEFAULT_SPEC_DEPTH)]
     pub spec_depth: u32,
+    /// `--technique mpr`: glossy images (Diefenbach & Badler 1997, section 3,
+    /// "glossy marble"): N mirror images per planar glossy face, sheared
+    /// about its normal by the lobe's roughness and averaged; the face's
+    /// splats are dropped (its Lambertian lobe stays in the diffuse textures,
+    /// so `--diffuse texture` is needed). 0 makes none.
+    #[arg(long, default_value_t = 0)]
+    pub glossy_images: u32,
+    /// With `--glossy-images`: faces make glossy images only in views of
+    /// recursion level below this (1: the faces the camera sees); deeper they
+    /// show their reflectance times the scene's mean radiance.
+    #[arg(long, default_value_t = 1)]
+    pub glossy_depth: u32,
+    /// With `--glossy-images`: the fog distance f_max in m, the images fading
+    /// linearly towards the scene's mean radiance with distance from the
+    /// face; default D/(2α) per material (D the scene's diagonal), `inf` for none.
+    #[arg(long)]
+    pub glossy_fog: Option<f32>,
     /// `--technique mpr`: shadows of the direct light by silhouette shadow
     /// volumes (Diefenbach & Badler 1997, section 4.1; with `--light-samples`
     /// K > 1 the K jittered lights share the volume of their area light's
@@ -428,6 +446,27 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.aa == 0 {
         bail!("--aa 0: at least one sample per pixel is needed");
     }
+    let glossy_images = GlossySettings {
+        samples: if args.technique == Technique::Mpr {
+            args.glossy_images
+        } else {
+            0
+        },
+        depth: args.glossy_depth,
+        fog: args.glossy_fog.map_or(Fog::Material, Fog::Distance),
+        fog_radiance: glam::Vec3::ZERO,
+        hide_emitters: true,
+    };
+    if args.glossy_images > 0 && args.technique != Technique::Mpr {
+        bail!("--glossy-images: only --technique mpr draws glossy images");
+    }
+    if glossy_images.samples > 0 && args.diffuse != DiffuseArg::Texture {
+        bail!(
+            "--glossy-images needs --diffuse texture: the imaged faces' Lambertian lobes come \
+             from the diffuse textures, their splats are dropped"
+        );
+    }
+    glossy_images.validate()?;
     let density = args.technique.estimator(args.radius, args.k);
     match density {
         Some(Estimator::PhotonMaps { k: 0 }) => {
@@ -549,9 +588,23 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .as_ref()
         .map(DiffuseAtlas::textured)
         .unwrap_or_default();
+    let glossy_images = GlossySettings {
+        fog_radiance: mean_radiance(&scene),
+        ..glossy_images
+    };
+    let imaged = imaged_surfaces(&scene, &glossy_images);
     let splats = splatting
         .as_ref()
-        .map(|s| SplatBuffers::new_excluding(&ctx, &scene, &s.estimator, glossy, &exclude))
+        .map(|s| {
+            SplatBuffers::new_excluding_imaged(
+                &ctx,
+                &scene,
+                &s.estimator,
+                glossy,
+                &exclude,
+                &imaged,
+            )
+        })
         .transpose()
         .with_context(|| format!("scene `{}`", scene.name))?;
     let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -593,7 +646,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None
     };
     if args.technique == Technique::Mpr {
-        graph = graph.with_specular(
+        graph = graph.with_glossy_images(
             &ctx,
             targets.hdr_format(),
             &scene,
@@ -602,6 +655,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 limit_radiance: mean_radiance(&scene),
                 clip: None,
             },
+            &glossy_images,
         )?;
     }
     if args.aa > 1 {
@@ -735,6 +789,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "light_samples": args.technique.direct_light().then_some(args.light_samples),
         "spec_depth": (args.technique == Technique::Mpr).then_some(args.spec_depth),
+        "glossy_images": (glossy_images.samples > 0).then(|| json!({
+            "samples": glossy_images.samples,
+            "depth": glossy_images.depth,
+            "fog": format!("{:?}", glossy_images.fog),
+            "imaged_surfaces": imaged.iter().filter(|&&i| i).count(),
+        })),
         "passes": mpr_passes,
         "shadows": args.technique.direct_light().then_some(if shadow_volumes { "volumes" } else { "maps" }),
         "direct_lights": direct.as_ref().map(DirectLights::len),

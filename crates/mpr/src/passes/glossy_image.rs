@@ -344,7 +344,7 @@ pub fn imaged_surfaces(scene: &Scene, settings: &GlossySettings) -> Vec<bool> {
     imaged
 }
 
-/// One sheared image of a glossy image: sample `index` of `count`.
+/// One sheared image of a glossy image: sample `index` of the `count` this frame draws.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct GlossySample {
     /// The index of the face in the specular pass's faces.
@@ -398,15 +398,15 @@ impl GlossyImagePass {
         let mut records: Vec<GpuGlossyFace> = faces
             .iter()
             .map(|face| {
-                let (f_max, samples) = match face.kind {
-                    SpecularKind::Glossy(g) => (g.fog_distance, g.samples.max(1)),
-                    _ => (f32::INFINITY, 1),
+                let f_max = match face.kind {
+                    SpecularKind::Glossy(g) => g.fog_distance,
+                    _ => f32::INFINITY,
                 };
                 let inverse = if f_max.is_finite() { 1.0 / f_max } else { 0.0 };
                 GpuGlossyFace {
                     plane: face.plane.to_vec4().to_array(),
                     fog: fog_radiance.extend(inverse).to_array(),
-                    weight: (face.factor / samples as f32).extend(0.0).to_array(),
+                    weight: face.factor.extend(0.0).to_array(),
                 }
             })
             .collect();
@@ -510,19 +510,28 @@ impl GlossyImagePass {
             let equal = wgpu::CompareFunction::Equal;
             let always = wgpu::CompareFunction::Always;
             let fog = pipeline("glossy-fog", "vs_main", "fs_fog", equal, Some(fog_blend));
+            // The sample's image times 1/N (the blend constant), replacing (sample 0) or added.
+            let weighted = |dst_factor| wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::Constant,
+                    dst_factor,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent::REPLACE,
+            };
             let transfer_first = pipeline(
                 "glossy-transfer-first",
                 "vs_full",
                 "fs_transfer",
                 always,
-                None,
+                Some(weighted(wgpu::BlendFactor::Zero)),
             );
             let transfer_add = pipeline(
                 "glossy-transfer-add",
                 "vs_full",
                 "fs_transfer",
                 always,
-                Some(ADDITIVE),
+                Some(weighted(wgpu::BlendFactor::One)),
             );
             let resolve = pipeline(
                 "glossy-resolve",
@@ -619,15 +628,16 @@ impl GlossyImagePass {
         sample: GlossySample,
     ) {
         let face = sample.face as u32;
+        let accumulation = self.accumulation_view(ctx, targets, outer.stencil_reference as usize);
         if self.fogged.get(sample.face).copied().unwrap_or(false) {
             let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "glossy-fog");
             pass.set_pipeline(&self.fog);
             views.bind(&mut pass, 0, child);
-            pass.set_bind_group(1, &self.bind_group(ctx, &targets.hdr.view), &[]);
+            // fs_fog reads no image; any texture but the HDR target it draws into.
+            pass.set_bind_group(1, &self.bind_group(ctx, &accumulation), &[]);
             pass.set_vertex_buffer(0, scene.vertices.slice(..));
             pass.draw(0..scene.vertex_count, face..face + 1);
         }
-        let accumulation = self.accumulation_view(ctx, targets, outer.stencil_reference as usize);
         let bind_group = self.bind_group(ctx, &targets.hdr.view);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("glossy-transfer"),
@@ -656,11 +666,18 @@ impl GlossyImagePass {
         });
         views.bind(&mut pass, 0, child);
         pass.set_bind_group(1, &bind_group, &[]);
+        let weight = 1.0 / f64::from(sample.count.max(1));
+        pass.set_blend_constant(wgpu::Color {
+            r: weight,
+            g: weight,
+            b: weight,
+            a: weight,
+        });
         pass.draw(0..3, 0..1);
     }
 
     /// After the last sample, with the face restored in the view `outer`
-    /// (level `k`, its image cleared): the accumulated images times `R / N`
+    /// (level `k`, its image cleared): the accumulated average times `R`
     /// added on the face's pixels.
     pub fn encode_resolve(
         &self,
@@ -701,6 +718,23 @@ impl crate::FrameGraph {
             ctx, hdr_format, scene, settings, glossy,
         )?);
         Ok(self)
+    }
+
+    /// [`crate::FrameGraph::view_tree`] for frame `s` of `n` accumulated
+    /// ones: the glossy images' shears interleaved over the frames
+    /// ([`crate::passes::specular::ViewTree::build_interleaved`]).
+    pub fn view_tree_interleaved(
+        &self,
+        ctx: &GpuContext,
+        camera: &lustre_geometry::Camera,
+        s: u32,
+        n: u32,
+    ) -> Result<crate::passes::specular::ViewTree> {
+        let root = crate::View::from_camera(camera);
+        match &self.specular {
+            Some(specular) => specular.view_tree_interleaved(root, ctx.clip_method(), Some((s, n))),
+            None => Ok(crate::passes::specular::ViewTree::single(root)),
+        }
     }
 }
 

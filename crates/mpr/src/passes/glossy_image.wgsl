@@ -5,11 +5,11 @@
 //   fs_fog      the image blended towards the fog radiance with the distance
 //               of each visible point from the face (hardware fog with its
 //               minimum at the face and its maximum at f_max),
-//   fs_transfer the masked HDR pixels copied (sample 0) or added into the
-//               accumulation target of level k;
+//   fs_transfer the masked HDR pixels times 1/N (the blend constant) copied
+//               (sample 0) or added into the accumulation target of level k;
 // after the last sample, with the face restored at level k:
-//   fs_resolve  the face's pixels of the accumulation target times R / N
-//               added into the HDR target.
+//   fs_resolve  the face's pixels of the accumulation target times R added
+//               into the HDR target.
 //
 // Notation
 // | symbol | meaning                                                       | unit       |
@@ -27,7 +27,7 @@ struct GlossyFace {
     plane: vec4f,
     // rgb: L_fog; a: 1 / f_max (0: no fog).
     fog: vec4f,
-    // rgb: R / N.
+    // rgb: R.
     weight: vec4f,
 }
 

@@ -228,8 +228,22 @@ impl ViewTree {
         max_depth: u32,
         clip: ClipMethod,
     ) -> Result<Self> {
+        Self::build_interleaved(root, faces, max_depth, clip, None)
+    }
+
+    /// [`ViewTree::build`] for frame `s` of `n` accumulated ones: each glossy
+    /// image takes only its shears `s, s + n, s + 2n, …` (all of them when it
+    /// has fewer than `n`), so the `n` frames' accumulation buffer averages
+    /// every shear once (section 3's `accbuf` shared with section 7's).
+    pub fn build_interleaved(
+        root: View,
+        faces: &[SpecularFace],
+        max_depth: u32,
+        clip: ClipMethod,
+        frame: Option<(u32, u32)>,
+    ) -> Result<Self> {
         let mut tree = Self::single(root);
-        tree.grow(0, faces, max_depth, clip)?;
+        tree.grow(0, faces, max_depth, clip, frame)?;
         Ok(tree)
     }
 
@@ -239,6 +253,7 @@ impl ViewTree {
         faces: &[SpecularFace],
         max_depth: u32,
         clip: ClipMethod,
+        frame: Option<(u32, u32)>,
     ) -> Result<()> {
         let view = self.views[index];
         for (f, face) in faces.iter().enumerate() {
@@ -259,8 +274,17 @@ impl ViewTree {
                     vec![(view.through_slab(&face.plane, shift, thickness, clip), None)]
                 }
                 SpecularKind::Glossy(glossy) => {
-                    let count = glossy.samples.max(1);
-                    shear_slopes(glossy.alpha, count)
+                    let all = shear_slopes(glossy.alpha, glossy.samples.max(1));
+                    let chosen: Vec<glam::Vec2> = match frame {
+                        Some((s, n)) if n > 1 && all.len() >= n as usize => all
+                            .into_iter()
+                            .skip((s % n) as usize)
+                            .step_by(n as usize)
+                            .collect(),
+                        _ => all,
+                    };
+                    let count = chosen.len() as u32;
+                    chosen
                         .into_iter()
                         .enumerate()
                         .map(|(i, slope)| {
@@ -292,7 +316,7 @@ impl ViewTree {
                 self.limit_faces.push(Vec::new());
                 self.samples.push(sample);
                 self.children[index].push((f, child));
-                self.grow(child, faces, max_depth, clip)?;
+                self.grow(child, faces, max_depth, clip, frame)?;
             }
         }
         Ok(())
@@ -600,11 +624,22 @@ impl SpecularPass {
 
     /// The views of a frame seen from `root` ([`ViewTree::build`]) with `clip` the device's method unless the settings name one.
     pub fn view_tree(&self, root: View, device_clip: ClipMethod) -> Result<ViewTree> {
-        ViewTree::build(
+        self.view_tree_interleaved(root, device_clip, None)
+    }
+
+    /// [`SpecularPass::view_tree`] for frame `s` of `n` accumulated ones ([`ViewTree::build_interleaved`]).
+    pub fn view_tree_interleaved(
+        &self,
+        root: View,
+        device_clip: ClipMethod,
+        frame: Option<(u32, u32)>,
+    ) -> Result<ViewTree> {
+        ViewTree::build_interleaved(
             root,
             &self.faces,
             self.settings.max_depth,
             self.settings.clip.unwrap_or(device_clip),
+            frame,
         )
     }
 
