@@ -289,6 +289,27 @@ pub const CASES: &[Case] = &[
         args: small!("--technique", "mpr", "--photons", "200000"),
         bounds: bounds(0.00170, 0.0557, 0.2006, (0.9746, 1.0146)),
     },
+    // measured: relMSE 0.00447, FLIP mean 0.0651, p99 0.3128, mean ratio 0.9974 (7.7 s)
+    Case {
+        name: "glosbox-mpr",
+        scene: "glosbox",
+        args: small!("--technique", "mpr", "--photons", "200000"),
+        bounds: bounds(0.00542, 0.0751, 0.3628, (0.9774, 1.0174)),
+    },
+    // measured: relMSE 0.00162, FLIP mean 0.0508, p99 0.2020, mean ratio 1.0052 (4.5 s)
+    Case {
+        name: "glosbox-mpr-glossy-images",
+        scene: "glosbox",
+        args: small!(
+            "--technique",
+            "mpr",
+            "--photons",
+            "200000",
+            "--glossy-images",
+            "16"
+        ),
+        bounds: bounds(0.00229, 0.0608, 0.2520, (0.9852, 1.0252)),
+    },
     // measured: relMSE 0.01259, FLIP mean 0.1009, p99 0.4583, mean ratio 0.9468 (13.2 s)
     Case {
         name: "mirrors-mpr",

@@ -40,6 +40,18 @@ fn rough_mirror(alpha: f32, reflectance: f32) -> MaterialModel {
 /// half-size `half` at height `height` facing down, and (with `walls`) two
 /// emissive walls of other colours; the camera `camera`.
 fn floor_scene(floor: MaterialModel, half: f32, height: f32, walls: bool, camera: Camera) -> Scene {
+    floor_scene_with_back(floor, None, half, height, walls, camera)
+}
+
+/// [`floor_scene`] whose back wall (with `walls`) reflects as `back` instead of emitting.
+fn floor_scene_with_back(
+    floor: MaterialModel,
+    back: Option<MaterialModel>,
+    half: f32,
+    height: f32,
+    walls: bool,
+    camera: Camera,
+) -> Scene {
     let mut materials = vec![
         Material::new("floor", floor),
         Material::diffuse("glow", Rgb::ZERO).with_emission(Rgb::new(1.0, 0.5, 0.25)),
@@ -47,6 +59,9 @@ fn floor_scene(floor: MaterialModel, half: f32, height: f32, walls: bool, camera
         Material::diffuse("green", Rgb::ZERO).with_emission(Rgb::new(0.2, 0.6, 0.1)),
     ];
     materials.truncate(if walls { 4 } else { 2 });
+    if let (true, Some(back)) = (walls, back) {
+        materials[2] = Material::new("back", back);
+    }
     let mut meshes = vec![
         quad(
             "floor",
@@ -111,6 +126,16 @@ fn floor_scene(floor: MaterialModel, half: f32, height: f32, walls: bool, camera
 
 /// The HDR image of `scene` drawn with the emission pass and specular images (depth 1), glossy ones under `glossy`.
 fn render(ctx: &GpuContext, scene: &Scene, glossy: &GlossySettings) -> Vec<Vec3> {
+    render_to_depth(ctx, scene, glossy, 1)
+}
+
+/// [`render`] with specular images to recursion depth `depth`.
+fn render_to_depth(
+    ctx: &GpuContext,
+    scene: &Scene,
+    glossy: &GlossySettings,
+    depth: u32,
+) -> Vec<Vec3> {
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -136,7 +161,7 @@ fn render(ctx: &GpuContext, scene: &Scene, glossy: &GlossySettings) -> Vec<Vec3>
             targets.hdr_format(),
             scene,
             SpecularSettings {
-                max_depth: 1,
+                max_depth: depth,
                 limit_radiance: Vec3::ZERO,
                 clip: None,
             },
@@ -212,6 +237,60 @@ fn zero_shear_and_one_sample_is_the_mirror_image() {
             "pixel {i}: mirror {e}, glossy {g}"
         );
     }
+}
+
+#[test]
+fn nested_glossy_images_of_two_samples_each_are_the_nested_mirror_images() {
+    let Some(ctx) = gpu_or_skip("nested_glossy_images_are_the_nested_mirror_images") else {
+        return;
+    };
+    // The floor reflects the back wall, which reflects the floor: two levels,
+    // each glossy image averaging two (vanishingly sheared) samples, so the
+    // inner image's accumulation must not overwrite the outer one's.
+    let camera = Camera::look_at(
+        Vec3::new(0.4, 1.2, 1.8),
+        Vec3::new(-0.3, 0.0, -0.6),
+        Vec3::Y,
+        60.0,
+    );
+    let mirror = |r: f32| MaterialModel::Mirror {
+        reflectance: Rgb::splat(r),
+    };
+    let expected_scene =
+        floor_scene_with_back(mirror(0.6), Some(mirror(0.7)), 0.3, 1.0, true, camera);
+    let glossy_scene = floor_scene_with_back(
+        rough_mirror(1e-6, 0.6),
+        Some(rough_mirror(1e-6, 0.7)),
+        0.3,
+        1.0,
+        true,
+        camera,
+    );
+    let settings = GlossySettings {
+        samples: 2,
+        depth: 2,
+        fog: Fog::Off,
+        fog_radiance: Vec3::ZERO,
+        hide_emitters: false,
+    };
+    let expected = render_to_depth(&ctx, &expected_scene, &GlossySettings::default(), 2);
+    let image = render_to_depth(&ctx, &glossy_scene, &settings, 2);
+    // Pixels showing the wall inside the floor: R_floor R_wall Le of the emitter or green wall.
+    let twice = expected
+        .iter()
+        .filter(|e| e.max_element() > 0.0 && e.max_element() < 0.6 * 0.7 * 0.61)
+        .count();
+    assert!(
+        twice > 50,
+        "the test must show images in images: {twice} pixels"
+    );
+    let wrong = expected
+        .iter()
+        .zip(&image)
+        .filter(|(e, g)| (**e - **g).abs().max_element() > 1e-3 * e.max_element().max(1e-3))
+        .count();
+    // Shears of 1e-6 move no pixel centre across an edge but a handful.
+    assert!(wrong <= 10, "{wrong} pixels differ");
 }
 
 #[test]

@@ -19,7 +19,9 @@
 //! - `mpr` (Diefenbach & Badler 1997): `splat-direct`'s light with the
 //!   planar mirrors' specular images: each mirror face masked in the stencil
 //!   and the scene drawn again from its virtual camera, recursively to
-//!   `--spec-depth` (sections 3, 7.1, 7.3).
+//!   `--spec-depth` (sections 3, 7.1, 7.3); with `--glossy-images N` the
+//!   planar glossy faces too, each from N mirror views sheared about its
+//!   normal and averaged (section 3, "glossy marble"), their splats dropped.
 //!
 //! Every technique's frame is antialiased by `--aa N` jittered accumulation
 //! (Diefenbach & Badler 1997, section 7).
