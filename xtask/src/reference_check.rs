@@ -289,16 +289,16 @@ pub const CASES: &[Case] = &[
         args: small!("--technique", "mpr", "--photons", "200000"),
         bounds: bounds(0.00170, 0.0557, 0.2006, (0.9746, 1.0146)),
     },
-    // measured: relMSE 0.00447, FLIP mean 0.0651, p99 0.3128, mean ratio 0.9974 (7.7 s)
+    // measured: relMSE 0.00130, FLIP mean 0.0456, p99 0.1446, mean ratio 0.9986 (9.1 s)
     Case {
         name: "glosbox-mpr",
         scene: "glosbox",
         args: small!("--technique", "mpr", "--photons", "200000"),
-        bounds: bounds(0.00542, 0.0751, 0.3628, (0.9774, 1.0174)),
+        bounds: bounds(0.00193, 0.0556, 0.1946, (0.9786, 1.0186)),
     },
-    // measured: relMSE 0.00162, FLIP mean 0.0508, p99 0.2020, mean ratio 1.0052 (4.5 s)
+    // measured: relMSE 0.00447, FLIP mean 0.0651, p99 0.3128, mean ratio 0.9974 (4.7 s)
     Case {
-        name: "glosbox-mpr-glossy-images",
+        name: "glosbox-mpr-splatted-glossy",
         scene: "glosbox",
         args: small!(
             "--technique",
@@ -306,9 +306,9 @@ pub const CASES: &[Case] = &[
             "--photons",
             "200000",
             "--glossy-images",
-            "16"
+            "0"
         ),
-        bounds: bounds(0.00229, 0.0608, 0.2520, (0.9852, 1.0252)),
+        bounds: bounds(0.00542, 0.0751, 0.3628, (0.9774, 1.0174)),
     },
     // measured: relMSE 0.01259, FLIP mean 0.1009, p99 0.4583, mean ratio 0.9468 (13.2 s)
     Case {

@@ -245,8 +245,9 @@ fn nested_glossy_images_of_two_samples_each_are_the_nested_mirror_images() {
         return;
     };
     // The floor reflects the back wall, which reflects the floor: two levels,
-    // each glossy image averaging two (vanishingly sheared) samples, so the
-    // inner image's accumulation must not overwrite the outer one's.
+    // the floor's image averaging two (vanishingly sheared) samples, each
+    // with the wall's one-sample image inside, whose accumulation must not
+    // overwrite the outer one's.
     let camera = Camera::look_at(
         Vec3::new(0.4, 1.2, 1.8),
         Vec3::new(-0.3, 0.0, -0.6),

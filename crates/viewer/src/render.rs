@@ -297,13 +297,16 @@ pub struct RenderArgs {
     /// "glossy marble"): N mirror images per planar glossy face, sheared
     /// about its normal by the lobe's roughness and averaged; the face's
     /// splats are dropped (its Lambertian lobe stays in the diffuse textures,
-    /// so `--diffuse texture` is needed). 0 makes none.
-    #[arg(long, default_value_t = 0)]
-    pub glossy_images: u32,
+    /// so `--diffuse texture` is needed). 0 makes none. Default 16 with
+    /// `--diffuse texture` (glosbox 256², relMSE 0.0041 without, 0.0017 with),
+    /// 0 otherwise.
+    #[arg(long)]
+    pub glossy_images: Option<u32>,
     /// With `--glossy-images`: faces make glossy images only in views of
-    /// recursion level below this (1: the faces the camera sees); deeper they
-    /// show their reflectance times the scene's mean radiance.
-    #[arg(long, default_value_t = 1)]
+    /// recursion level below this (1: the faces the camera sees; 2: also
+    /// inside them, one shear per outer sample); deeper they show their
+    /// reflectance times the scene's mean radiance.
+    #[arg(long, default_value_t = DEFAULT_GLOSSY_DEPTH)]
     pub glossy_depth: u32,
     /// With `--glossy-images`: the fog distance f_max in m, the images fading
     /// linearly towards the scene's mean radiance with distance from the
@@ -387,6 +390,15 @@ pub const DEFAULT_SUPPORT_C: f32 = 1.25;
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 16;
 /// Default `--spec-depth`: two levels of specular images (the paper's figure 18(a)).
 pub const DEFAULT_SPEC_DEPTH: u32 = 2;
+/// Default `--glossy-images` with `--diffuse texture`: 16 sheared images per
+/// glossy face (glosbox 256², otherwise default settings, relMSE against the
+/// path-traced reference: 0.00409 without glossy images; at depth 2 0.00173
+/// with 16, 0.00165 with 32 for twice the frame time).
+pub const DEFAULT_GLOSSY_IMAGES: u32 = 16;
+/// Default `--glossy-depth`: glossy images also inside glossy images, one
+/// shear per outer sample (glosbox: relMSE 0.00207 at depth 1, 0.00173 at 2,
+/// 0.00173 at 3).
+pub const DEFAULT_GLOSSY_DEPTH: u32 = 2;
 
 /// The default `--aa`, chosen by error against the Mitsuba reference and
 /// time on lavapipe: with 16 light samples on `cornell` at 256×256 relMSE
@@ -449,17 +461,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         bail!("--aa 0: at least one sample per pixel is needed");
     }
     let glossy_images = GlossySettings {
-        samples: if args.technique == Technique::Mpr {
-            args.glossy_images
-        } else {
-            0
+        samples: match (args.technique, args.glossy_images) {
+            (Technique::Mpr, Some(n)) => n,
+            (Technique::Mpr, None) if args.diffuse == DiffuseArg::Texture => DEFAULT_GLOSSY_IMAGES,
+            _ => 0,
         },
         depth: args.glossy_depth,
         fog: args.glossy_fog.map_or(Fog::Material, Fog::Distance),
         fog_radiance: glam::Vec3::ZERO,
         hide_emitters: true,
     };
-    if args.glossy_images > 0 && args.technique != Technique::Mpr {
+    if args.glossy_images.is_some_and(|n| n > 0) && args.technique != Technique::Mpr {
         bail!("--glossy-images: only --technique mpr draws glossy images");
     }
     if glossy_images.samples > 0 && args.diffuse != DiffuseArg::Texture {

@@ -58,6 +58,16 @@
 //! recursion limit, or deeper than [`GlossySettings::depth`], the face shows
 //! `R · L_lim` as a mirror does.
 //!
+//! # Images in images
+//!
+//! A glossy face seen inside another glossy image (`GlossySettings::depth`
+//! above 1) makes one sheared image per sample of the outer image, not `N`:
+//! the outer image's `N` samples become `N` paths through both lobes, the
+//! inner shear of path `p` its `nested_shear_index(p, N)`-th, and the
+//! accumulation over the outer samples averages the product lobe (`N`
+//! views per face instead of `N²`). A mirror or slab inside a sample
+//! passes the path on.
+//!
 //! CPU twins: [`shear_slopes`] and [`fog_factor`]; `tests/glossy_image.rs`
 //! holds the GPU's zero-shear image to the mirror path and the blur of a
 //! bright emitter to the integral of the sheared lobe.
@@ -104,7 +114,8 @@ pub struct GlossySettings {
     /// Sheared images `N` per glossy image; 0 makes none.
     pub samples: u32,
     /// Glossy images are made from views of recursion level below this (1:
-    /// from the camera only); deeper, a glossy face shows `R · L_lim`.
+    /// from the camera only; 2, the default: also inside those, one shear per
+    /// outer sample); deeper, a glossy face shows `R · L_lim`.
     pub depth: u32,
     /// The fog of each image.
     pub fog: Fog,
@@ -120,7 +131,7 @@ impl Default for GlossySettings {
     fn default() -> Self {
         Self {
             samples: 0,
-            depth: 1,
+            depth: 2,
             fog: Fog::Material,
             fog_radiance: Vec3::ZERO,
             hide_emitters: true,
@@ -779,6 +790,16 @@ mod tests {
             })
             .is_none()
         );
+    }
+
+    #[test]
+    fn nested_shears_permute_the_outer_ones() {
+        use crate::passes::specular::nested_shear_index;
+        for n in [1u32, 2, 3, 4, 16, 64, 100] {
+            let mut seen: Vec<u32> = (0..n).map(|p| nested_shear_index(p, n)).collect();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..n).collect::<Vec<_>>(), "n = {n}");
+        }
     }
 
     #[test]

@@ -243,7 +243,7 @@ impl ViewTree {
         frame: Option<(u32, u32)>,
     ) -> Result<Self> {
         let mut tree = Self::single(root);
-        tree.grow(0, faces, max_depth, clip, frame)?;
+        tree.grow(0, faces, max_depth, clip, frame, None)?;
         Ok(tree)
     }
 
@@ -254,6 +254,7 @@ impl ViewTree {
         max_depth: u32,
         clip: ClipMethod,
         frame: Option<(u32, u32)>,
+        path: Option<u32>,
     ) -> Result<()> {
         let view = self.views[index];
         for (f, face) in faces.iter().enumerate() {
@@ -268,26 +269,37 @@ impl ViewTree {
                 self.limit_faces[index].push(f);
                 continue;
             }
-            let children: Vec<(View, Option<GlossySample>)> = match face.kind {
-                SpecularKind::Mirror => vec![(view.reflected(&face.plane, clip), None)],
-                SpecularKind::Slab { shift, thickness } => {
-                    vec![(view.through_slab(&face.plane, shift, thickness, clip), None)]
-                }
+            // (view, its glossy sample, the path index its subtree inherits)
+            let children: Vec<(View, Option<GlossySample>, Option<u32>)> = match face.kind {
+                SpecularKind::Mirror => vec![(view.reflected(&face.plane, clip), None, path)],
+                SpecularKind::Slab { shift, thickness } => vec![(
+                    view.through_slab(&face.plane, shift, thickness, clip),
+                    None,
+                    path,
+                )],
                 SpecularKind::Glossy(glossy) => {
-                    let all = shear_slopes(glossy.alpha, glossy.samples.max(1));
-                    let chosen: Vec<glam::Vec2> = match frame {
-                        Some((s, n)) if n > 1 && all.len() >= n as usize => all
-                            .into_iter()
+                    let n_all = glossy.samples.max(1);
+                    let all = shear_slopes(glossy.alpha, n_all);
+                    let chosen: Vec<(u32, glam::Vec2)> = match (path, frame) {
+                        // Inside another glossy image: one shear per sample of
+                        // the outer image, so its N samples are N paths through
+                        // both lobes (module docs of `glossy_image`).
+                        (Some(p), _) => {
+                            let i = nested_shear_index(p, n_all);
+                            vec![(p, all[i as usize])]
+                        }
+                        (None, Some((s, n))) if n > 1 && n_all >= n => (0..n_all)
                             .skip((s % n) as usize)
                             .step_by(n as usize)
+                            .map(|i| (i, all[i as usize]))
                             .collect(),
-                        _ => all,
+                        _ => (0..n_all).zip(all).collect(),
                     };
                     let count = chosen.len() as u32;
                     chosen
                         .into_iter()
                         .enumerate()
-                        .map(|(i, slope)| {
+                        .map(|(i, (global, slope))| {
                             let mut sheared = view.sheared_reflection(&face.plane, slope, clip);
                             sheared.shows_emitters = !glossy.hide_emitters;
                             let sample = GlossySample {
@@ -295,12 +307,12 @@ impl ViewTree {
                                 index: i as u32,
                                 count,
                             };
-                            (sheared, Some(sample))
+                            (sheared, Some(sample), Some(global))
                         })
                         .collect()
                 }
             };
-            for (child_view, sample) in children {
+            for (child_view, sample, child_path) in children {
                 if self.views.len() >= MAX_VIEWS {
                     return Err(MprError::InvalidSetting {
                         what: "specular recursion",
@@ -316,7 +328,7 @@ impl ViewTree {
                 self.limit_faces.push(Vec::new());
                 self.samples.push(sample);
                 self.children[index].push((f, child));
-                self.grow(child, faces, max_depth, clip, frame)?;
+                self.grow(child, faces, max_depth, clip, frame, child_path)?;
             }
         }
         Ok(())
@@ -326,6 +338,25 @@ impl ViewTree {
     pub fn scene_passes(&self) -> usize {
         self.views.len()
     }
+}
+
+/// The shear (of `n`) a glossy image nested in sample `path` of an outer
+/// one takes: `path · k mod n`, `k` the first integer from `0.618 n` up
+/// that is coprime with `n`, so the inner shears are a permutation of the
+/// outer ones that pairs neither large with large nor like angles.
+pub fn nested_shear_index(path: u32, n: u32) -> u32 {
+    let n = n.max(1);
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut k = ((0.618 * n as f32) as u32).max(1);
+    while gcd(k, n) != 1 {
+        k += 1;
+    }
+    ((u64::from(path % n) * u64::from(k)) % u64::from(n)) as u32
 }
 
 /// The range of `face`'s triangles in [`SceneBuffers::surface_indices`].
