@@ -12,7 +12,9 @@ use glam::{Affine3A, Vec2, Vec3};
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Plane, Ray, Rgb, Scene};
 use lustre_mpr::frame::FrameInputs;
-use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, fog_factor, shear_slopes};
+use lustre_mpr::passes::glossy_image::{
+    Fog, GlossySettings, ShearModel, fog_factor, microfacet_shears, shear_slopes,
+};
 use lustre_mpr::passes::specular::SpecularSettings;
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::readback::read_rgba_f32;
@@ -218,6 +220,7 @@ fn zero_shear_and_one_sample_is_the_mirror_image() {
         fog: Fog::Off,
         fog_radiance: Vec3::ZERO,
         hide_emitters: false,
+        shear: ShearModel::Isotropic,
     };
     let expected = render(&ctx, &mirror, &GlossySettings::default());
     let image = render(&ctx, &glossy, &settings);
@@ -273,6 +276,7 @@ fn nested_glossy_images_of_two_samples_each_are_the_nested_mirror_images() {
         fog: Fog::Off,
         fog_radiance: Vec3::ZERO,
         hide_emitters: false,
+        shear: ShearModel::Isotropic,
     };
     let expected = render_to_depth(&ctx, &expected_scene, &GlossySettings::default(), 2);
     let image = render_to_depth(&ctx, &glossy_scene, &settings, 2);
@@ -292,6 +296,89 @@ fn nested_glossy_images_of_two_samples_each_are_the_nested_mirror_images() {
         .count();
     // Shears of 1e-6 move no pixel centre across an edge but a handful.
     assert!(wrong <= 10, "{wrong} pixels differ");
+}
+
+#[test]
+fn microfacet_shears_draw_their_weighted_images() {
+    let Some(ctx) = gpu_or_skip("microfacet_shears_draw_their_weighted_images") else {
+        return;
+    };
+    // The emitter's blur seen at about 45° incidence at the centroid: the microfacet shears
+    // (stretched in the plane of incidence, weighted) against the CPU sum of
+    // the same shears' footprints times their weights.
+    // Aimed a little in front of the mirror point of the emitter's centre (z = 1/6), where the weighted blur lies.
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 0.5, 0.5),
+        Vec3::new(0.0, 0.0, 0.3),
+        Vec3::Y,
+        40.0,
+    );
+    let reflectance = 0.8;
+    let scene = floor_scene(
+        rough_mirror(ALPHA, reflectance),
+        HALF,
+        HEIGHT,
+        false,
+        camera,
+    );
+    let settings = GlossySettings {
+        samples: SAMPLES,
+        depth: 1,
+        fog: Fog::Off,
+        fog_radiance: Vec3::ZERO,
+        hide_emitters: false,
+        shear: ShearModel::Microfacet,
+    };
+    let gpu: Vec<f64> = render(&ctx, &scene, &settings)
+        .iter()
+        .map(|v| f64::from(v.x))
+        .collect();
+    // The shears of the face's centroid (the floor's centre, as the pass takes it).
+    let plane = Plane::from_point_normal(Vec3::ZERO, Vec3::Y);
+    let (t, b) = face_frame(&plane);
+    let shears: Vec<(Vec2, f32)> =
+        microfacet_shears(ALPHA, SAMPLES, camera.position, &plane, Vec3::ZERO)
+            .into_iter()
+            .map(|(d, w)| {
+                let v = t * d.x + b * d.y;
+                (Vec2::new(v.x, v.z), w)
+            })
+            .collect();
+    let weights: f32 = shears.iter().map(|(_, w)| w).sum();
+    assert!(
+        weights > 0.5 * SAMPLES as f32,
+        "the lobe must reflect: {weights}"
+    );
+    let le = f64::from(reflectance);
+    let discrete = cpu_image(&scene, |p| {
+        let sum: f32 = shears
+            .iter()
+            .filter(|(d, _)| {
+                let q = p + HEIGHT * *d;
+                q.x.abs() < HALF && q.y.abs() < HALF
+            })
+            .map(|(_, w)| w)
+            .sum();
+        le * f64::from(sum) / f64::from(SAMPLES)
+    });
+    for axis in 0..2 {
+        let (m_gpu, mean_gpu, var_gpu) = moments(&gpu, axis);
+        let (m_disc, mean_disc, var_disc) = moments(&discrete, axis);
+        eprintln!(
+            "axis {axis}: mass {m_gpu:.3} / {m_disc:.3}, mean {mean_gpu:.2} / {mean_disc:.2}, \
+             width {:.3} / {:.3}",
+            var_gpu.sqrt(),
+            var_disc.sqrt()
+        );
+        assert!(m_disc > 1.0, "the emitter must be seen");
+        // As in the blur test: the same point samples, so 1 %.
+        assert!((m_gpu / m_disc - 1.0).abs() < 0.01, "axis {axis}");
+        assert!(
+            (var_gpu.sqrt() / var_disc.sqrt() - 1.0).abs() < 0.01,
+            "axis {axis}"
+        );
+        assert!((mean_gpu - mean_disc).abs() < 0.5, "axis {axis}");
+    }
 }
 
 #[test]
@@ -322,6 +409,7 @@ fn fog_fades_the_image_towards_the_fog_radiance_with_distance_from_the_face() {
         fog: Fog::Distance(f_max),
         fog_radiance: fog,
         hide_emitters: false,
+        shear: ShearModel::Isotropic,
     };
     let unfogged = render(&ctx, &mirror, &GlossySettings::default());
     let image = render(&ctx, &glossy, &settings);
@@ -451,6 +539,7 @@ fn the_blur_of_a_small_emitter_is_as_wide_as_the_mapped_lobe() {
         fog: Fog::Off,
         fog_radiance: Vec3::ZERO,
         hide_emitters: false,
+        shear: ShearModel::Isotropic,
     };
     let gpu: Vec<f64> = render(&ctx, &scene, &settings)
         .iter()

@@ -48,7 +48,7 @@ use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
-use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, imaged_surfaces};
+use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel, imaged_surfaces};
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
@@ -190,6 +190,15 @@ pub enum DiffuseArg {
     Texture,
 }
 
+/// How glossy images draw their shears (Diefenbach & Badler 1997, section 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum GlossyShearArg {
+    /// Isotropic, twice the facet slope, equal weights (the paper's constant shear).
+    Isotropic,
+    /// The microfacet reflection at the face's centroid, weighted.
+    Microfacet,
+}
+
 /// Glossy lobe model on the GPU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum GlossyArg {
@@ -313,6 +322,11 @@ pub struct RenderArgs {
     /// face; default D/(2α) per material (D the scene's diagonal), `inf` for none.
     #[arg(long)]
     pub glossy_fog: Option<f32>,
+    /// With `--glossy-images`: the shears the paper's way (isotropic, twice
+    /// the facet slope, equal weights) or the microfacet reflection at each
+    /// face's centroid with the estimator's weights (exact at any incidence there).
+    #[arg(long, value_enum, default_value_t = GlossyShearArg::Isotropic)]
+    pub glossy_shear: GlossyShearArg,
     /// `--technique mpr`: shadows of the direct light by silhouette shadow
     /// volumes (Diefenbach & Badler 1997, section 4.1; with `--light-samples`
     /// K > 1 the K jittered lights share the volume of their area light's
@@ -470,6 +484,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         fog: args.glossy_fog.map_or(Fog::Material, Fog::Distance),
         fog_radiance: glam::Vec3::ZERO,
         hide_emitters: true,
+        shear: match args.glossy_shear {
+            GlossyShearArg::Isotropic => ShearModel::Isotropic,
+            GlossyShearArg::Microfacet => ShearModel::Microfacet,
+        },
     };
     if args.glossy_images.is_some_and(|n| n > 0) && args.technique != Technique::Mpr {
         bail!("--glossy-images: only --technique mpr draws glossy images");
@@ -807,6 +825,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "samples": glossy_images.samples,
             "depth": glossy_images.depth,
             "fog": format!("{:?}", glossy_images.fog),
+            "shear": format!("{:?}", glossy_images.shear),
             "imaged_surfaces": imaged.iter().filter(|&&i| i).count(),
         })),
         "passes": mpr_passes,

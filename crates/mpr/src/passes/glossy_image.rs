@@ -31,6 +31,15 @@
 //! Phong's cosine power matches near the peak); GGX's `α` is used as if it
 //! were Beckmann's.
 //!
+//! The constant shear is exact only near normal incidence. [`ShearModel::Microfacet`]
+//! (not the paper's; `--glossy-shear microfacet`) instead reflects the
+//! view's ray to the face's centroid about each sampled facet normal and
+//! weights the sample by the microfacet estimator ([`microfacet_shears`]):
+//! exact at the centroid at any incidence, still one shear for the whole
+//! face. On glosbox (floor seen at 71–79°) it measured no better: relMSE
+//! 0.00171 against the isotropic 0.00173 at 256², so the paper's shear
+//! stays the default.
+//!
 //! # Fog
 //!
 //! The paper fogs the image with hardware fog, "the minimum fog set at the
@@ -125,6 +134,20 @@ pub struct GlossySettings {
     /// highlight of point lights; see the module docs). False makes an
     /// image of everything, the emitters included.
     pub hide_emitters: bool,
+    /// How the shears are drawn from the lobe.
+    pub shear: ShearModel,
+}
+
+/// How a glossy image's shears are drawn from its lobe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ShearModel {
+    /// The paper's: isotropic `Δ = 2m`, equal weights ([`shear_slopes`]).
+    #[default]
+    Isotropic,
+    /// The microfacet reflection at the face's centroid seen from the
+    /// view's eye, each sample weighted by the microfacet estimator
+    /// ([`microfacet_shears`]): exact at the centroid at any incidence.
+    Microfacet,
 }
 
 impl Default for GlossySettings {
@@ -135,6 +158,7 @@ impl Default for GlossySettings {
             fog: Fog::Material,
             fog_radiance: Vec3::ZERO,
             hide_emitters: true,
+            shear: ShearModel::Isotropic,
         }
     }
 }
@@ -278,6 +302,70 @@ pub fn shear_slopes(alpha: f32, samples: u32) -> Vec<Vec2> {
         .collect()
 }
 
+/// Smith's masking `G₁` of the Beckmann distribution for a direction `cos θ`
+/// from the normal (Walter et al. 2007's rational fit, within 0.35 %).
+fn beckmann_g1(cos_theta: f32, alpha: f32) -> f32 {
+    let cos = cos_theta.clamp(1e-6, 1.0);
+    let tan = (1.0 - cos * cos).max(0.0).sqrt() / cos;
+    let a = 1.0 / (alpha * tan).max(1e-12);
+    if a >= 1.6 {
+        1.0
+    } else {
+        (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    }
+}
+
+/// The `N` (shear, weight) pairs of a Beckmann lobe of roughness `alpha` at
+/// the face point `centroid` of `plane` seen from `eye`: facet slopes `m`
+/// from the stratified samples of [`shear_slopes`] (`m = Δ/2`, the slope
+/// distribution `P₂₂`, i.e. half vectors drawn ∝ `D(h) cos θ_h`), the eye ray
+/// reflected about each facet, the shear its slope minus the mirror
+/// direction's, and the weight of the half-vector estimator
+/// `G(i, o) |o·h| / (|i·n| (h·n))` (Walter et al. 2007, F taken out into the
+/// face's factor); weight 0 where the facet is turned away from the eye or
+/// reflects below the face. Near normal incidence and for small α this is
+/// the isotropic `Δ ≈ 2m` with weights ≈ 1; at incidence θ the shear in the
+/// plane of incidence grows by about `1/cos²θ`.
+pub fn microfacet_shears(
+    alpha: f32,
+    samples: u32,
+    eye: Vec3,
+    plane: &lustre_geometry::Plane,
+    centroid: Vec3,
+) -> Vec<(Vec2, f32)> {
+    let n = plane.normal.normalize();
+    let (t, b) = crate::view::face_frame(plane);
+    let to_eye = (eye - centroid).normalize();
+    let i = -to_eye;
+    let reflect = |h: Vec3| i - 2.0 * i.dot(h) * h;
+    let slope = |v: Vec3| Vec2::new(v.dot(t), v.dot(b)) / v.dot(n);
+    let mirror = slope(reflect(n));
+    let cos_i = to_eye.dot(n);
+    if !(cos_i > 0.0) {
+        return vec![(Vec2::ZERO, 0.0); samples as usize];
+    }
+    let count = samples.max(1);
+    let slopes = if count == 1 {
+        vec![Vec2::ZERO]
+    } else {
+        shear_slopes(alpha, count)
+    };
+    slopes
+        .into_iter()
+        .map(|s| {
+            let m = 0.5 * s;
+            let h = (n + t * m.x + b * m.y).normalize();
+            let o = reflect(h);
+            let (cos_o, cos_h, o_h) = (o.dot(n), h.dot(n), o.dot(h));
+            if !(cos_o > 1e-4) || to_eye.dot(h) <= 0.0 {
+                return (Vec2::ZERO, 0.0);
+            }
+            let g = beckmann_g1(cos_i, alpha) * beckmann_g1(cos_o, alpha);
+            (slope(o) - mirror, g * o_h.abs() / (cos_i * cos_h))
+        })
+        .collect()
+}
+
 /// The fog factor `f = clamp(1 − z / f_max, 0, 1)` of a point `z` m from the face (1: no fog).
 pub fn fog_factor(z: f32, f_max: f32) -> f32 {
     if !f_max.is_finite() {
@@ -337,6 +425,7 @@ pub fn glossy_faces(scene: &Scene, settings: &GlossySettings) -> Vec<SpecularFac
                     depth: settings.depth,
                     fog_distance: fog_distance(scene, lobe.alpha, settings.fog),
                     hide_emitters: settings.hide_emitters,
+                    shear: settings.shear,
                 }),
                 factor: lobe.factor,
                 corners,
@@ -356,14 +445,16 @@ pub fn imaged_surfaces(scene: &Scene, settings: &GlossySettings) -> Vec<bool> {
 }
 
 /// One sheared image of a glossy image: sample `index` of the `count` this frame draws.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GlossySample {
     /// The index of the face in the specular pass's faces.
     pub face: usize,
     /// Which sample.
     pub index: u32,
-    /// Of how many.
+    /// Of how many drawn.
     pub count: u32,
+    /// Its weight in the average (`1/count` for the paper's equal weights).
+    pub weight: f32,
 }
 
 /// The per-face record of `glossy_image.wgsl`.
@@ -677,7 +768,7 @@ impl GlossyImagePass {
         });
         views.bind(&mut pass, 0, child);
         pass.set_bind_group(1, &bind_group, &[]);
-        let weight = 1.0 / f64::from(sample.count.max(1));
+        let weight = f64::from(sample.weight);
         pass.set_blend_constant(wgpu::Color {
             r: weight,
             g: weight,
@@ -790,6 +881,38 @@ mod tests {
             })
             .is_none()
         );
+    }
+
+    #[test]
+    fn microfacet_shears_are_the_isotropic_ones_at_normal_incidence_and_stretch_at_grazing() {
+        let plane = lustre_geometry::Plane::from_point_normal(Vec3::ZERO, Vec3::Y);
+        let alpha = 0.02;
+        let iso = shear_slopes(alpha, 64);
+        let normal = microfacet_shears(alpha, 64, Vec3::new(0.0, 2.0, 0.0), &plane, Vec3::ZERO);
+        for ((s, w), d) in normal.iter().zip(&iso) {
+            // Δ = 2m to first order: the error is O(m²) relative.
+            assert!((*s - *d).length() < 0.02 * d.length() + 1e-6, "{s} vs {d}");
+            assert!((w - 1.0).abs() < 0.01, "{w}");
+        }
+        // At 70° incidence the in-plane spread grows by about 1/cos²70° ≈ 8.5.
+        let theta = 70f32.to_radians();
+        let eye = 2.0 * Vec3::new(0.0, theta.cos(), theta.sin());
+        let (t, b) = crate::view::face_frame(&plane);
+        let grazing = microfacet_shears(alpha, 64, eye, &plane, Vec3::ZERO);
+        let along = |v: Vec2| (t * v.x + b * v.y).z;
+        let across = |v: Vec2| (t * v.x + b * v.y).x;
+        let rms = |f: &dyn Fn(Vec2) -> f32, set: &[Vec2]| {
+            (set.iter().map(|v| f(*v).powi(2)).sum::<f32>() / set.len() as f32).sqrt()
+        };
+        let g: Vec<Vec2> = grazing.iter().map(|(s, _)| *s).collect();
+        let stretch = rms(&along, &g) / rms(&along, &iso);
+        let side = rms(&across, &g) / rms(&across, &iso);
+        let expected = 1.0 / theta.cos().powi(2);
+        assert!(
+            (stretch / expected - 1.0).abs() < 0.1,
+            "{stretch} vs {expected}"
+        );
+        assert!((side - 1.0).abs() < 0.1, "{side}");
     }
 
     #[test]

@@ -22,7 +22,8 @@ use std::ops::Range;
 use glam::Vec3;
 
 use crate::passes::glossy_image::{
-    GlossyImagePass, GlossySample, GlossySettings, glossy_faces, shear_slopes,
+    GlossyImagePass, GlossySample, GlossySettings, ShearModel, glossy_faces, microfacet_shears,
+    shear_slopes,
 };
 use lustre_geometry::SurfaceKind;
 use lustre_geometry::material::MaterialModel;
@@ -109,6 +110,8 @@ pub struct GlossyImage {
     pub fog_distance: f32,
     /// Whether the sheared views hide emitters.
     pub hide_emitters: bool,
+    /// How the shears are drawn from the lobe.
+    pub shear: ShearModel,
 }
 
 /// One planar specular face: a mirror, or a face of a glass slab.
@@ -279,8 +282,20 @@ impl ViewTree {
                 )],
                 SpecularKind::Glossy(glossy) => {
                     let n_all = glossy.samples.max(1);
-                    let all = shear_slopes(glossy.alpha, n_all);
-                    let chosen: Vec<(u32, glam::Vec2)> = match (path, frame) {
+                    // (shear, weight) per sample: the paper's isotropic 2m, or
+                    // the microfacet reflection at the face's centroid.
+                    let all: Vec<(glam::Vec2, f32)> = match glossy.shear {
+                        ShearModel::Isotropic => shear_slopes(glossy.alpha, n_all)
+                            .into_iter()
+                            .map(|s| (s, 1.0))
+                            .collect(),
+                        ShearModel::Microfacet => {
+                            let centroid = face.corners.iter().copied().sum::<Vec3>()
+                                / face.corners.len().max(1) as f32;
+                            microfacet_shears(glossy.alpha, n_all, view.eye, &face.plane, centroid)
+                        }
+                    };
+                    let chosen: Vec<(u32, (glam::Vec2, f32))> = match (path, frame) {
                         // Inside another glossy image: one shear per sample of
                         // the outer image, so its N samples are N paths through
                         // both lobes (module docs of `glossy_image`).
@@ -295,17 +310,23 @@ impl ViewTree {
                             .collect(),
                         _ => (0..n_all).zip(all).collect(),
                     };
-                    let count = chosen.len() as u32;
-                    chosen
+                    // Each drawn sample weighs w / (samples this frame); a sample
+                    // whose facet reflects below the face (w = 0) is not drawn.
+                    let per = 1.0 / chosen.len().max(1) as f32;
+                    let drawn: Vec<(u32, (glam::Vec2, f32))> =
+                        chosen.into_iter().filter(|(_, (_, w))| *w > 0.0).collect();
+                    let count = drawn.len() as u32;
+                    drawn
                         .into_iter()
                         .enumerate()
-                        .map(|(i, (global, slope))| {
+                        .map(|(i, (global, (slope, weight)))| {
                             let mut sheared = view.sheared_reflection(&face.plane, slope, clip);
                             sheared.shows_emitters = !glossy.hide_emitters;
                             let sample = GlossySample {
                                 face: f,
                                 index: i as u32,
                                 count,
+                                weight: weight * per,
                             };
                             (sheared, Some(sample), Some(global))
                         })
