@@ -307,8 +307,8 @@ pub struct RenderArgs {
     /// about its normal by the lobe's roughness and averaged; the face's
     /// splats are dropped (its Lambertian lobe stays in the diffuse textures,
     /// so `--diffuse texture` is needed). 0 makes none. Default 16 with
-    /// `--diffuse texture` (glosbox 256², relMSE 0.0041 without, 0.0017 with),
-    /// 0 otherwise.
+    /// `--diffuse texture` and `--spec-depth` above 0 (glosbox 256², relMSE
+    /// 0.0041 without, 0.0017 with), 0 otherwise.
     #[arg(long)]
     pub glossy_images: Option<u32>,
     /// With `--glossy-images`: faces make glossy images only in views of
@@ -477,7 +477,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let glossy_images = GlossySettings {
         samples: match (args.technique, args.glossy_images) {
             (Technique::Mpr, Some(n)) => n,
-            (Technique::Mpr, None) if args.diffuse == DiffuseArg::Texture => DEFAULT_GLOSSY_IMAGES,
+            (Technique::Mpr, None)
+                if args.diffuse == DiffuseArg::Texture && args.spec_depth > 0 =>
+            {
+                DEFAULT_GLOSSY_IMAGES
+            }
             _ => 0,
         },
         depth: args.glossy_depth,
@@ -496,6 +500,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         bail!(
             "--glossy-images needs --diffuse texture: the imaged faces' Lambertian lobes come \
              from the diffuse textures, their splats are dropped"
+        );
+    }
+    if glossy_images.samples > 0 && args.spec_depth == 0 {
+        bail!(
+            "--glossy-images needs --spec-depth 1 or more: glossy images are specular images \
+             (at depth 0 the faces would show only their reflectance times the mean radiance)"
         );
     }
     glossy_images.validate()?;

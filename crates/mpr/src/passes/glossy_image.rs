@@ -43,7 +43,7 @@
 //! # Fog
 //!
 //! The paper fogs the image with hardware fog, "the minimum fog set at the
-//! [specular] plane distance and the maximum at the desired distance
+//! (specular) plane distance and the maximum at the desired distance
 //! depending on the material property": a linear blend of the image towards
 //! the fog colour, `f L + (1 − f) L_fog` with `f = clamp(1 − z / f_max, 0,
 //! 1)`, `z` the distance of the visible point from the face (the paper's
