@@ -159,6 +159,37 @@ impl View {
         .with_clip_plane(keep, method)
     }
 
+    /// The view through a frosted glass slab (section 3, figure 3): the view
+    /// of [`View::through_slab`] with the same shear about the near face as
+    /// [`View::sheared_reflection`] pushed first (`V · T · W`), so every ray
+    /// through the face leaves with its slope moved by `Δ`; the eye the
+    /// passes shade for is `W⁻¹ T⁻¹ e`. Emitters stay visible.
+    pub fn sheared_through_slab(
+        &self,
+        plane: &Plane,
+        shift: f32,
+        thickness: f32,
+        slope: Vec2,
+        method: ClipMethod,
+    ) -> Self {
+        let translation = Mat4::from_translation(plane.normal * shift);
+        let epsilon = 1e-4 * plane.signed_distance(self.eye).abs();
+        let keep = -plane.to_vec4() - Vec4::W * (thickness + epsilon);
+        let shear = face_shear(plane, slope);
+        Self {
+            view: self.view * translation * shear,
+            projection: self.projection,
+            eye: shear
+                .inverse()
+                .transform_point3(self.eye - plane.normal * shift),
+            clip_plane: None,
+            stencil_reference: self.stencil_reference + 1,
+            level: self.level + 1,
+            shows_emitters: true,
+        }
+        .with_clip_plane(keep, method)
+    }
+
     /// Clips away world points with `plane · (p, 1) < 0` by `method`.
     pub fn with_clip_plane(mut self, plane: Vec4, method: ClipMethod) -> Self {
         match method {

@@ -327,6 +327,12 @@ pub struct RenderArgs {
     /// face's centroid with the estimator's weights (exact at any incidence there).
     #[arg(long, value_enum, default_value_t = GlossyShearArg::Isotropic)]
     pub glossy_shear: GlossyShearArg,
+    /// With `--glossy-images`: frosted glass (Diefenbach & Badler 1997,
+    /// section 3, figure 3): every glass slab's images sheared as if one of
+    /// its faces were rough with this Beckmann α (there is no rough
+    /// dielectric material yet); 0 keeps the glass clear.
+    #[arg(long, default_value_t = 0.0)]
+    pub frosted_glass: f32,
     /// `--technique mpr`: shadows of the direct light by silhouette shadow
     /// volumes (Diefenbach & Badler 1997, section 4.1; with `--light-samples`
     /// K > 1 the K jittered lights share the volume of their area light's
@@ -492,6 +498,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             GlossyShearArg::Isotropic => ShearModel::Isotropic,
             GlossyShearArg::Microfacet => ShearModel::Microfacet,
         },
+        frosted_alpha: args.frosted_glass,
     };
     if args.glossy_images.is_some_and(|n| n > 0) && args.technique != Technique::Mpr {
         bail!("--glossy-images: only --technique mpr draws glossy images");
@@ -836,6 +843,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "depth": glossy_images.depth,
             "fog": format!("{:?}", glossy_images.fog),
             "shear": format!("{:?}", glossy_images.shear),
+            "frosted_glass": glossy_images.frosted_alpha,
             "imaged_surfaces": imaged.iter().filter(|&&i| i).count(),
         })),
         "passes": mpr_passes,

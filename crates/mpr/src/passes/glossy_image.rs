@@ -136,6 +136,10 @@ pub struct GlossySettings {
     pub hide_emitters: bool,
     /// How the shears are drawn from the lobe.
     pub shear: ShearModel,
+    /// Frosted glass (section 3, figure 3): the Beckmann roughness α of one
+    /// face of every glass slab, 0 for clear glass. There is no rough
+    /// dielectric material; this makes every slab of the scene frosted.
+    pub frosted_alpha: f32,
 }
 
 /// How a glossy image's shears are drawn from its lobe.
@@ -159,6 +163,7 @@ impl Default for GlossySettings {
             fog_radiance: Vec3::ZERO,
             hide_emitters: true,
             shear: ShearModel::Isotropic,
+            frosted_alpha: 0.0,
         }
     }
 }
@@ -182,6 +187,12 @@ impl GlossySettings {
             && !(d > 0.0)
         {
             return bad(format!("fog distance {d} m is not positive"));
+        }
+        if !(self.frosted_alpha >= 0.0 && self.frosted_alpha.is_finite()) {
+            return bad(format!(
+                "frosted glass roughness {} is not ≥ 0",
+                self.frosted_alpha
+            ));
         }
         if !self.fog_radiance.is_finite() || self.fog_radiance.min_element() < 0.0 {
             return bad(format!(
@@ -426,10 +437,53 @@ pub fn glossy_faces(scene: &Scene, settings: &GlossySettings) -> Vec<SpecularFac
                     fog_distance: fog_distance(scene, lobe.alpha, settings.fog),
                     hide_emitters: settings.hide_emitters,
                     shear: settings.shear,
+                    through_slab: None,
                 }),
                 factor: lobe.factor,
                 corners,
             })
+        })
+        .collect()
+}
+
+/// `faces` with every glass slab frosted under `settings` (section 3,
+/// "frosted glass", figure 3): with `frosted_alpha` α > 0 and samples, a
+/// slab face becomes a glossy image of sheared slab views. A rough entry
+/// face tilts the ray inside by `(1 − 1/η) m` for a facet slope `m` and the
+/// smooth exit face multiplies the angle by `η` (small angles, normal
+/// incidence): the ray leaves with its slope moved by `(η − 1) m`, so the
+/// shears are [`shear_slopes`] of `α (η − 1)/2`, `η = 1/(1 − shift/t)`
+/// from the slab's paraxial shift. Emitters stay visible behind the glass
+/// (the direct pass adds no light through it); the fog is the paper's,
+/// from the near face to `f_max`.
+pub fn frosted(
+    faces: Vec<SpecularFace>,
+    scene: &Scene,
+    settings: &GlossySettings,
+) -> Vec<SpecularFace> {
+    if settings.samples == 0 || !(settings.frosted_alpha > 0.0) {
+        return faces;
+    }
+    faces
+        .into_iter()
+        .map(|face| match face.kind {
+            SpecularKind::Slab { shift, thickness } if thickness > 0.0 && shift < thickness => {
+                let eta = 1.0 / (1.0 - shift / thickness);
+                let alpha = settings.frosted_alpha * (eta - 1.0) / 2.0;
+                SpecularFace {
+                    kind: SpecularKind::Glossy(GlossyImage {
+                        alpha,
+                        samples: settings.samples,
+                        depth: settings.depth,
+                        fog_distance: fog_distance(scene, alpha, settings.fog),
+                        hide_emitters: false,
+                        shear: ShearModel::Isotropic,
+                        through_slab: Some((shift, thickness)),
+                    }),
+                    ..face
+                }
+            }
+            _ => face,
         })
         .collect()
 }

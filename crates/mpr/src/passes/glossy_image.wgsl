@@ -61,7 +61,8 @@ fn vs_main(
 @fragment
 fn fs_fog(in: VertexOutput) -> @location(0) vec4f {
     let face = faces[in.face];
-    let z = max(dot(face.plane, vec4f(in.world, 1.0)), 0.0);
+    // Reflected points lie in front of the face, points seen through a slab behind it.
+    let z = abs(dot(face.plane, vec4f(in.world, 1.0)));
     let f = clamp(1.0 - z * face.fog.w, 0.0, 1.0);
     return vec4f(face.fog.xyz * (1.0 - f), f);
 }

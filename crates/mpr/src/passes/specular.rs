@@ -22,8 +22,8 @@ use std::ops::Range;
 use glam::Vec3;
 
 use crate::passes::glossy_image::{
-    GlossyImagePass, GlossySample, GlossySettings, ShearModel, glossy_faces, microfacet_shears,
-    shear_slopes,
+    GlossyImagePass, GlossySample, GlossySettings, ShearModel, frosted, glossy_faces,
+    microfacet_shears, shear_slopes,
 };
 use lustre_geometry::SurfaceKind;
 use lustre_geometry::material::MaterialModel;
@@ -112,6 +112,10 @@ pub struct GlossyImage {
     pub hide_emitters: bool,
     /// How the shears are drawn from the lobe.
     pub shear: ShearModel,
+    /// `None` for a glossy reflection; `Some((shift, thickness))` for a
+    /// frosted glass slab ([`SpecularKind::Slab`]'s), whose images are
+    /// sheared slab views (section 3's frosted glass).
+    pub through_slab: Option<(f32, f32)>,
 }
 
 /// One planar specular face: a mirror, or a face of a glass slab.
@@ -320,7 +324,16 @@ impl ViewTree {
                         .into_iter()
                         .enumerate()
                         .map(|(i, (global, (slope, weight)))| {
-                            let mut sheared = view.sheared_reflection(&face.plane, slope, clip);
+                            let mut sheared = match glossy.through_slab {
+                                None => view.sheared_reflection(&face.plane, slope, clip),
+                                Some((shift, thickness)) => view.sheared_through_slab(
+                                    &face.plane,
+                                    shift,
+                                    thickness,
+                                    slope,
+                                    clip,
+                                ),
+                            };
                             sheared.shows_emitters = !glossy.hide_emitters;
                             let sample = GlossySample {
                                 face: f,
@@ -448,7 +461,7 @@ impl SpecularPass {
                 message: format!("{} is not a finite radiance", settings.limit_radiance),
             });
         }
-        let mut faces = specular_faces(scene);
+        let mut faces = frosted(specular_faces(scene), scene, glossy);
         faces.extend(glossy_faces(scene, glossy));
         let glossy_pass = faces
             .iter()
