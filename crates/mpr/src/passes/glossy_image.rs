@@ -77,6 +77,14 @@
 //! views per face instead of `N²`). A mirror or slab inside a sample
 //! passes the path on.
 //!
+//! # Frosted glass
+//!
+//! Section 3's frosted glass is the same accumulation over slab views
+//! sheared about the near face ([`crate::View::sheared_through_slab`],
+//! [`frosted`]): a rough entry face of roughness α moves the outgoing slope
+//! by `(η − 1) m`. Without a rough dielectric material, the roughness is
+//! [`GlossySettings::frosted_alpha`] for every slab.
+//!
 //! CPU twins: [`shear_slopes`] and [`fog_factor`]; `tests/glossy_image.rs`
 //! holds the GPU's zero-shear image to the mirror path and the blur of a
 //! bright emitter to the integral of the sheared lobe.
