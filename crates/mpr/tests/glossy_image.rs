@@ -13,7 +13,7 @@ mod support;
 use glam::{Affine3A, Vec2, Vec3};
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Plane, Ray, Rgb, Scene};
-use lustre_mpr::frame::FrameInputs;
+use lustre_mpr::frame::{AccumulatedSplats, FrameInputs};
 use lustre_mpr::passes::glossy_image::{
     Fog, GlossySettings, ShearModel, fog_factor, microfacet_shears, shear_slopes,
 };
@@ -140,6 +140,17 @@ fn render_to_depth(
     glossy: &GlossySettings,
     depth: u32,
 ) -> Vec<Vec3> {
+    render_accumulated(ctx, scene, glossy, depth, 1)
+}
+
+/// [`render_to_depth`] through `FrameGraph::render_accumulated` with `aa` jittered frames.
+fn render_accumulated(
+    ctx: &GpuContext,
+    scene: &Scene,
+    glossy: &GlossySettings,
+    depth: u32,
+    aa: u32,
+) -> Vec<Vec3> {
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -171,10 +182,12 @@ fn render_to_depth(
             },
             glossy,
         )
+        .unwrap()
+        .with_accumulation(ctx, targets.hdr_format())
         .unwrap();
     let camera = scene.camera().with_aspect(1.0);
     graph
-        .render(
+        .render_accumulated(
             ctx,
             &FrameInputs {
                 scene: &buffers,
@@ -186,6 +199,9 @@ fn render_to_depth(
                 direct: None,
                 diffuse: None,
             },
+            aa,
+            AccumulatedSplats::Once,
+            &mut |_| Ok(()),
         )
         .unwrap();
     read_rgba_f32(ctx, &targets.hdr.texture)
@@ -300,6 +316,46 @@ fn nested_glossy_images_of_two_samples_each_are_the_nested_mirror_images() {
         .count();
     // Shears of 1e-6 move no pixel centre across an edge but a handful.
     assert!(wrong <= 10, "{wrong} pixels differ");
+}
+
+#[test]
+fn accumulated_frames_share_the_shears_out() {
+    let Some(ctx) = gpu_or_skip("accumulated_frames_share_the_shears_out") else {
+        return;
+    };
+    // 16 shears over 4 jittered frames (4 each, interleaved) against the 16
+    // in one frame: the same blur, the frames' sub-pixel jitter aside.
+    let camera = Camera::look_at(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, Vec3::Z, 30.0);
+    let scene = floor_scene(rough_mirror(ALPHA, 0.8), HALF, HEIGHT, false, camera);
+    let settings = GlossySettings {
+        samples: 16,
+        depth: 1,
+        fog: Fog::Off,
+        fog_radiance: Vec3::ZERO,
+        hide_emitters: false,
+        shear: ShearModel::Isotropic,
+        frosted_alpha: 0.0,
+    };
+    let to_f64 = |image: Vec<Vec3>| image.iter().map(|v| f64::from(v.x)).collect::<Vec<_>>();
+    let one = to_f64(render_to_depth(&ctx, &scene, &settings, 1));
+    let four = to_f64(render_accumulated(&ctx, &scene, &settings, 1, 4));
+    for axis in 0..2 {
+        let (m1, mean1, var1) = moments(&one, axis);
+        let (m4, mean4, var4) = moments(&four, axis);
+        eprintln!(
+            "axis {axis}: mass {m1:.3} / {m4:.3}, mean {mean1:.2} / {mean4:.2}, width {:.3} / {:.3}",
+            var1.sqrt(),
+            var4.sqrt()
+        );
+        // Each of the 16 footprints (~12 px wide) is point sampled through
+        // another sub-pixel offset: ±1 px per footprint edge, averaged: 2 %.
+        assert!((m4 / m1 - 1.0).abs() < 0.02, "axis {axis}");
+        assert!(
+            (var4.sqrt() / var1.sqrt() - 1.0).abs() < 0.02,
+            "axis {axis}"
+        );
+        assert!((mean4 - mean1).abs() < 0.5, "axis {axis}");
+    }
 }
 
 #[test]
