@@ -6,6 +6,7 @@ pub mod diffuse_texture;
 pub mod direct;
 pub mod emission;
 pub mod glossy_image;
+pub mod glossy_lobe;
 pub mod gouraud;
 pub mod redraw;
 pub mod shadow;
