@@ -546,6 +546,55 @@ mod tests {
     }
 
     #[test]
+    fn a_sheared_slab_views_ray_through_the_face_centre_keeps_the_slab_shift_and_moves_its_slope() {
+        // A slab's near face at z = 0 facing +z, 5 cm thick, η = 1.5.
+        let face = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let (thickness, shift) = (0.05, 0.05 * (1.0 - 1.0 / 1.5));
+        let camera = Camera::look_at(
+            Vec3::new(0.2, 0.1, 1.5),
+            Vec3::new(0.05, -0.02, 0.0),
+            Vec3::Y,
+            40.0,
+        )
+        .with_aspect(1.0);
+        let root = View::from_camera(&camera);
+        let centre = Vec3::new(0.05, -0.02, 0.0);
+        let (t, b) = face_frame(&face);
+        let slope = |d: Vec3| Vec2::new(d.dot(t), d.dot(b)) / d.dot(face.normal);
+        let incident = slope(centre - camera.position);
+        // The oblique near plane changes only the depth row, not which world
+        // points a pixel sees; the camera's projection gives known depths.
+        for method in [ClipMethod::Hardware] {
+            let clear = root.through_slab(&face, shift, thickness, method);
+            for shear in [Vec2::new(0.08, 0.0), Vec2::new(-0.03, 0.05)] {
+                let view = root.sheared_through_slab(&face, shift, thickness, shear, method);
+                assert!(view.shows_emitters);
+                // Two world points on the pixel through the face centre, behind the slab.
+                let c = root.view_projection() * centre.extend(1.0);
+                let ndc = c.truncate() / c.w;
+                let world = |v: &View, depth: f32| {
+                    let q = v.view_projection().inverse() * Vec4::new(ndc.x, ndc.y, depth, 1.0);
+                    q.truncate() / q.w
+                };
+                let depth = 0.3 * ndc.z;
+                let (p, q) = (world(&view, depth), world(&view, 0.5 * depth));
+                assert!(p.z < -thickness && q.z < p.z, "{p} {q}");
+                // The line's slope is the incident one moved by the shear
+                // (the paraxial slab keeps directions, the shear moves them).
+                let expected = incident + shear;
+                assert!(
+                    (slope(q - p) - expected).length() < 1e-3,
+                    "{} vs {expected}",
+                    slope(q - p)
+                );
+                // Without shear the same pixel's line keeps the incident slope.
+                let (p0, q0) = (world(&clear, depth), world(&clear, 0.5 * depth));
+                assert!((slope(q0 - p0) - incident).length() < 1e-3);
+            }
+        }
+    }
+
+    #[test]
     fn may_see_culls_by_frustum_side_and_clip_plane_only() {
         let root = View::from_camera(&camera().with_aspect(1.0));
         // A quad in front of the camera, one behind it, one far to the right.
