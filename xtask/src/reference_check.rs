@@ -289,6 +289,27 @@ pub const CASES: &[Case] = &[
         args: small!("--technique", "mpr", "--photons", "200000"),
         bounds: bounds(0.00170, 0.0557, 0.2006, (0.9746, 1.0146)),
     },
+    // measured: relMSE 0.00130, FLIP mean 0.0456, p99 0.1446, mean ratio 0.9986 (9.1 s)
+    Case {
+        name: "glosbox-mpr",
+        scene: "glosbox",
+        args: small!("--technique", "mpr", "--photons", "200000"),
+        bounds: bounds(0.00193, 0.0556, 0.1946, (0.9786, 1.0186)),
+    },
+    // measured: relMSE 0.00447, FLIP mean 0.0651, p99 0.3128, mean ratio 0.9974 (4.7 s)
+    Case {
+        name: "glosbox-mpr-splatted-glossy",
+        scene: "glosbox",
+        args: small!(
+            "--technique",
+            "mpr",
+            "--photons",
+            "200000",
+            "--glossy-images",
+            "0"
+        ),
+        bounds: bounds(0.00542, 0.0751, 0.3628, (0.9774, 1.0174)),
+    },
     // measured: relMSE 0.01197, FLIP mean 0.0970, p99 0.4584, mean ratio 0.9505 (20.8 s)
     Case {
         name: "mirrors-mpr",

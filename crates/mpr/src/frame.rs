@@ -491,7 +491,7 @@ impl FrameGraph {
                 frame
                     .camera
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
-            let tree = self.view_tree(ctx, &camera)?;
+            let tree = self.view_tree_interleaved(ctx, &camera, s, samples)?;
             let slots = views.write(ctx, &tree.views)?;
             if let Some((inputs, pass)) = passes.splat {
                 pass.prepare(&ctx.queue, inputs.filtering);
@@ -690,7 +690,17 @@ impl FrameGraph {
             for &(face, child) in &tree.children[index] {
                 specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
                 self.draw_window(ctx, encoder, frame, light, views, tree, slots, child, limit)?;
-                specular.encode_restore(encoder, frame.scene, frame.targets, views, slot, face);
+                specular.encode_restore_child(
+                    ctx,
+                    encoder,
+                    frame.scene,
+                    frame.targets,
+                    views,
+                    slot,
+                    slots[child],
+                    face,
+                    tree.samples[child],
+                );
             }
             if limit {
                 specular.encode_limit(

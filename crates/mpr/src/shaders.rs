@@ -118,6 +118,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             "passes/gouraud.wgsl",
             with_view(crate::passes::gouraud::GOURAUD_WGSL),
         ),
+        (
+            "passes/glossy_image.wgsl",
+            with_view(crate::passes::glossy_image::GLOSSY_IMAGE_WGSL),
+        ),
     ]
 }
 

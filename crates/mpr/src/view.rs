@@ -6,7 +6,7 @@
 //! ([`ViewBuffer`]), so a single submission can hold the primary camera and
 //! every virtual camera of the specular recursion.
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use lustre_geometry::Camera;
 use lustre_geometry::Plane;
 
@@ -42,6 +42,10 @@ pub struct View {
     pub stencil_reference: u32,
     /// Depth of specular recursion: 0 for the camera itself (section 7.1).
     pub level: u32,
+    /// Whether the emission pass shows emitters in this view: false in the
+    /// sheared views of a glossy image, whose emitters' highlight the direct
+    /// pass adds ([`crate::passes::glossy_image`]).
+    pub shows_emitters: bool,
 }
 
 impl View {
@@ -54,6 +58,7 @@ impl View {
             clip_plane: None,
             stencil_reference: 0,
             level: 0,
+            shows_emitters: true,
         }
     }
 
@@ -88,6 +93,7 @@ impl View {
             clip_plane: None,
             stencil_reference: self.stencil_reference + 1,
             level: self.level + 1,
+            shows_emitters: true,
         }
         .with_clip_plane(keep, method)
     }
@@ -116,6 +122,70 @@ impl View {
             clip_plane: None,
             stencil_reference: self.stencil_reference + 1,
             level: self.level + 1,
+            shows_emitters: true,
+        }
+        .with_clip_plane(keep, method)
+    }
+
+    /// The reflected view of `plane` ([`View::reflected`]) sheared about the
+    /// face's normal (section 3, `shear_view`): the world transform
+    /// `W = F · S(−Δ) · F⁻¹` (`S` the (x, y) shear in the face's frame `F`,
+    /// `z` along the normal, [`face_frame`]) pushed after the mirror
+    /// transform, `p ↦ p − z(p) Δ_w` with `z(p)` the signed distance from the
+    /// plane and `Δ_w = Δ.x t + Δ.y b`. Points on the face stay put, so the
+    /// image stays registered to the face, and every ray leaving the face
+    /// with slope `r_t / r_z` (tangential over normal component) leaves with
+    /// slope `r_t / r_z + Δ` instead; the sheared view is the mirror view
+    /// from the eye `W⁻¹ e' = e' − d_e Δ_w` (`e'` the reflected eye, `d_e`
+    /// the eye's distance from the face), whose rays through the face are
+    /// straight lines, so every pass shades for that eye. Emitters are hidden
+    /// ([`View::shows_emitters`]).
+    pub fn sheared_reflection(&self, plane: &Plane, slope: Vec2, method: ClipMethod) -> Self {
+        let distance = plane.signed_distance(self.eye);
+        let side = if distance >= 0.0 { 1.0 } else { -1.0 };
+        let keep = plane.to_vec4() * side - Vec4::W * (1e-4 * distance.abs());
+        let shear = face_shear(plane, slope);
+        Self {
+            view: self.view * plane.reflection_matrix() * shear,
+            projection: self.projection,
+            eye: shear
+                .inverse()
+                .transform_point3(plane.reflect_point(self.eye)),
+            clip_plane: None,
+            stencil_reference: self.stencil_reference + 1,
+            level: self.level + 1,
+            shows_emitters: false,
+        }
+        .with_clip_plane(keep, method)
+    }
+
+    /// The view through a frosted glass slab (section 3, figure 3): the view
+    /// of [`View::through_slab`] with the same shear about the near face as
+    /// [`View::sheared_reflection`] pushed first (`V · T · W`), so every ray
+    /// through the face leaves with its slope moved by `Δ`; the eye the
+    /// passes shade for is `W⁻¹ T⁻¹ e`. Emitters stay visible.
+    pub fn sheared_through_slab(
+        &self,
+        plane: &Plane,
+        shift: f32,
+        thickness: f32,
+        slope: Vec2,
+        method: ClipMethod,
+    ) -> Self {
+        let translation = Mat4::from_translation(plane.normal * shift);
+        let epsilon = 1e-4 * plane.signed_distance(self.eye).abs();
+        let keep = -plane.to_vec4() - Vec4::W * (thickness + epsilon);
+        let shear = face_shear(plane, slope);
+        Self {
+            view: self.view * translation * shear,
+            projection: self.projection,
+            eye: shear
+                .inverse()
+                .transform_point3(self.eye - plane.normal * shift),
+            clip_plane: None,
+            stencil_reference: self.stencil_reference + 1,
+            level: self.level + 1,
+            shows_emitters: true,
         }
         .with_clip_plane(keep, method)
     }
@@ -142,6 +212,7 @@ impl View {
             clip_plane: None,
             stencil_reference: self.stencil_reference + 1,
             level: self.level + 1,
+            shows_emitters: self.shows_emitters,
         }
         .with_clip_plane(keep, method)
     }
@@ -167,7 +238,12 @@ impl View {
             eye: self.eye.extend(1.0).to_array(),
             // (0, 0, 0, 1) keeps every point.
             clip_plane: self.clip_plane.unwrap_or(Vec4::W).to_array(),
-            level: [self.level, self.stencil_reference, 0, 0],
+            level: [
+                self.level,
+                self.stencil_reference,
+                u32::from(!self.shows_emitters),
+                0,
+            ],
         }
     }
 
@@ -212,6 +288,30 @@ pub fn interface_scaling(plane: &Plane, ratio: f32) -> Mat4 {
         linear.y_axis.extend(0.0),
         linear.z_axis.extend(0.0),
         translation.extend(1.0),
+    )
+}
+
+/// An orthonormal tangent frame `(t, b)` of `plane` with `t × b = n` (the
+/// face's `x` and `y` axes for [`View::sheared_reflection`]).
+pub fn face_frame(plane: &Plane) -> (Vec3, Vec3) {
+    let n = plane.normal.normalize();
+    let t = n.any_orthonormal_vector();
+    (t, n.cross(t))
+}
+
+/// The world transform `p ↦ p − z(p) Δ_w` of [`View::sheared_reflection`]:
+/// `F · S(−Δ) · F⁻¹` written out as `I − Δ_w (n, −offset)ᵀ` (section 3:
+/// "premultiplied by the global inverse transform of the specular face
+/// normal and postmultiplied by the global transform of the normal").
+pub fn face_shear(plane: &Plane, slope: Vec2) -> Mat4 {
+    let (t, b) = face_frame(plane);
+    let u = -(t * slope.x + b * slope.y).extend(0.0);
+    let v = plane.to_vec4();
+    Mat4::from_cols(
+        Vec4::X + u * v.x,
+        Vec4::Y + u * v.y,
+        Vec4::Z + u * v.z,
+        Vec4::W + u * v.w,
     )
 }
 
@@ -261,7 +361,8 @@ pub struct ViewUniforms {
     pub eye: [f32; 4],
     /// World clip plane; (0, 0, 0, 1) when none.
     pub clip_plane: [f32; 4],
-    /// `x` recursion level, `y` stencil reference, `zw` zero.
+    /// `x` recursion level, `y` stencil reference, `z` 1 where emitters are
+    /// hidden ([`View::shows_emitters`]), `w` zero.
     pub level: [u32; 4],
 }
 
@@ -463,6 +564,106 @@ mod tests {
         let hw = root.reflected(&mirror, ClipMethod::Hardware);
         assert!(hw.keeps(Vec3::new(0.0, 0.0, 0.0)));
         assert!(!hw.keeps(Vec3::new(-1.5, 0.0, 0.0)));
+    }
+
+    #[test]
+    fn a_sheared_views_ray_through_the_face_centre_leaves_with_its_slope_shifted_by_the_shear() {
+        // A floor at y = -1 facing +y, seen from above at an angle.
+        let floor = Plane::from_point_normal(Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
+        let camera = Camera::look_at(
+            Vec3::new(0.3, 0.5, 2.0),
+            Vec3::new(0.1, -1.0, 0.2),
+            Vec3::Y,
+            50.0,
+        )
+        .with_aspect(1.0);
+        let root = View::from_camera(&camera);
+        let centre = Vec3::new(0.1, -1.0, 0.2);
+        // The mirror direction at the centre, and its slope in the face's frame.
+        let r = floor.reflect_vector(centre - camera.position).normalize();
+        let (t, b) = face_frame(&floor);
+        let slope = |d: Vec3| Vec2::new(d.dot(t), d.dot(b)) / d.dot(floor.normal);
+        for method in [ClipMethod::Hardware, ClipMethod::ObliqueNearPlane] {
+            for shear in [Vec2::ZERO, Vec2::new(0.1, 0.0), Vec2::new(-0.04, 0.07)] {
+                let view = root.sheared_reflection(&floor, shear, method);
+                // The face centre stays where the camera sees it (the image is registered).
+                let vp = view.view_projection();
+                let c = vp * centre.extend(1.0);
+                let seen = root.view_projection() * centre.extend(1.0);
+                assert!(
+                    (c.truncate() / c.w - seen.truncate() / seen.w)
+                        .truncate()
+                        .length()
+                        < 1e-5
+                );
+                // Another world point on the same pixel, farther along the view's ray.
+                let ndc = c.truncate() / c.w;
+                let q = vp.inverse() * Vec4::new(ndc.x, ndc.y, 0.5 * ndc.z, 1.0);
+                let q = q.truncate() / q.w;
+                let d = q - centre;
+                assert!(floor.signed_distance(q) > 0.0, "{method:?} {shear}: {q}");
+                let expected = slope(r) + shear;
+                assert!(
+                    (slope(d) - expected).length() < 1e-4,
+                    "{method:?} shear {shear}: slope {} expected {expected}",
+                    slope(d)
+                );
+                // The eye the passes shade for lies on that ray, behind the face.
+                let back = view.eye - centre;
+                assert!((slope(back) - expected).length() < 1e-4, "{}", slope(back));
+                assert!(floor.signed_distance(view.eye) < 0.0);
+                assert!(!view.shows_emitters);
+            }
+        }
+    }
+
+    #[test]
+    fn a_sheared_slab_views_ray_through_the_face_centre_keeps_the_slab_shift_and_moves_its_slope() {
+        // A slab's near face at z = 0 facing +z, 5 cm thick, η = 1.5.
+        let face = Plane::from_point_normal(Vec3::ZERO, Vec3::Z);
+        let (thickness, shift) = (0.05, 0.05 * (1.0 - 1.0 / 1.5));
+        let camera = Camera::look_at(
+            Vec3::new(0.2, 0.1, 1.5),
+            Vec3::new(0.05, -0.02, 0.0),
+            Vec3::Y,
+            40.0,
+        )
+        .with_aspect(1.0);
+        let root = View::from_camera(&camera);
+        let centre = Vec3::new(0.05, -0.02, 0.0);
+        let (t, b) = face_frame(&face);
+        let slope = |d: Vec3| Vec2::new(d.dot(t), d.dot(b)) / d.dot(face.normal);
+        let incident = slope(centre - camera.position);
+        // The oblique near plane changes only the depth row, not which world
+        // points a pixel sees; the camera's projection gives known depths.
+        for method in [ClipMethod::Hardware] {
+            let clear = root.through_slab(&face, shift, thickness, method);
+            for shear in [Vec2::new(0.08, 0.0), Vec2::new(-0.03, 0.05)] {
+                let view = root.sheared_through_slab(&face, shift, thickness, shear, method);
+                assert!(view.shows_emitters);
+                // Two world points on the pixel through the face centre, behind the slab.
+                let c = root.view_projection() * centre.extend(1.0);
+                let ndc = c.truncate() / c.w;
+                let world = |v: &View, depth: f32| {
+                    let q = v.view_projection().inverse() * Vec4::new(ndc.x, ndc.y, depth, 1.0);
+                    q.truncate() / q.w
+                };
+                let depth = 0.3 * ndc.z;
+                let (p, q) = (world(&view, depth), world(&view, 0.5 * depth));
+                assert!(p.z < -thickness && q.z < p.z, "{p} {q}");
+                // The line's slope is the incident one moved by the shear
+                // (the paraxial slab keeps directions, the shear moves them).
+                let expected = incident + shear;
+                assert!(
+                    (slope(q - p) - expected).length() < 1e-3,
+                    "{} vs {expected}",
+                    slope(q - p)
+                );
+                // Without shear the same pixel's line keeps the incident slope.
+                let (p0, q0) = (world(&clear, depth), world(&clear, 0.5 * depth));
+                assert!((slope(q0 - p0) - incident).length() < 1e-3);
+            }
+        }
     }
 
     #[test]

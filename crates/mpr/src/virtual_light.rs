@@ -77,8 +77,8 @@ pub const MAX_SHADOW_DEPTH: u32 = 8;
 /// The map a face applies to what is seen, and lit, through it: the mirror
 /// reflection of its plane, or the slab's shift toward its outgoing side.
 pub fn face_transform(face: &SpecularFace) -> Affine3A {
-    match face.kind {
-        SpecularKind::Mirror => {
+    match plain_kind(face) {
+        SpecularKind::Mirror | SpecularKind::Glossy(_) => {
             let n = face.plane.normal;
             let linear =
                 glam::Mat3::IDENTITY - 2.0 * glam::Mat3::from_cols(n * n.x, n * n.y, n * n.z);
@@ -88,6 +88,18 @@ pub fn face_transform(face: &SpecularFace) -> Affine3A {
         SpecularKind::Interface { ratio } => {
             Affine3A::from_mat4(crate::view::interface_scaling(&face.plane, ratio))
         }
+    }
+}
+
+/// What a face does to light as a sharp face: a glossy face's mean
+/// reflection is its mirror's, a frosted slab's its clear slab's.
+fn plain_kind(face: &SpecularFace) -> SpecularKind {
+    match face.kind {
+        SpecularKind::Glossy(g) => match g.through_slab {
+            None => SpecularKind::Mirror,
+            Some((shift, thickness)) => SpecularKind::Slab { shift, thickness },
+        },
+        kind => kind,
     }
 }
 
@@ -126,8 +138,8 @@ pub fn outgoing(face: &SpecularFace) -> HalfSpace {
 /// Where light must come from to pass `face`: in front of a mirror, beyond
 /// the far face of a slab.
 pub fn incoming(face: &SpecularFace) -> HalfSpace {
-    match face.kind {
-        SpecularKind::Mirror => outgoing(face),
+    match plain_kind(face) {
+        SpecularKind::Mirror | SpecularKind::Glossy(_) => outgoing(face),
         SpecularKind::Slab { thickness, .. } => HalfSpace {
             normal: -face.plane.normal,
             offset: -face.plane.offset + thickness,
@@ -344,7 +356,9 @@ fn grow(
     }
     let source = path.transform().transform_point3(light);
     for (f, face) in faces.iter().enumerate() {
-        if incoming(face).depth(source) <= 0.0 {
+        // Glossy and frosted faces spread the light they pass: no virtual
+        // light (their photons stay in the splats).
+        if matches!(face.kind, SpecularKind::Glossy(_)) || incoming(face).depth(source) <= 0.0 {
             continue;
         }
         if let Some(&last) = path.faces.last()
@@ -460,8 +474,8 @@ pub fn path_visible(
         if !in_face(face, x) || !free(x, point) {
             return false;
         }
-        point = match face.kind {
-            SpecularKind::Mirror | SpecularKind::Interface { .. } => x,
+        point = match plain_kind(face) {
+            SpecularKind::Mirror | SpecularKind::Interface { .. } | SpecularKind::Glossy(_) => x,
             SpecularKind::Slab { thickness, .. } => {
                 let previous = path.prefix[j - 1].transform_point3(light);
                 let dir = point - source;

@@ -139,9 +139,7 @@ fn agreement(
     let total = |i: usize| -> [f32; 3] {
         std::array::from_fn(|k| real[i].radiance[k] + virt[i].radiance[k])
     };
-    let max = (0..real.len())
-        .flat_map(|i| total(i))
-        .fold(0.0f32, f32::max);
+    let max = (0..real.len()).flat_map(&total).fold(0.0f32, f32::max);
     let s = SIZE as i32;
     let (mut agree, mut compared, mut lit_virtually) = (0, 0, 0);
     for y in 2..s - 2 {

@@ -328,6 +328,53 @@ fn render_refuses_bad_options_before_writing_anything() {
             ],
             "--shadow-depth 9: at most 8",
         ),
+        (
+            vec!["render", "glosbox", "--glossy-images", "4", "--out", out],
+            "only --technique mpr",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "mpr",
+                "--diffuse",
+                "splat",
+                "--glossy-images",
+                "4",
+                "--out",
+                out,
+            ],
+            "needs --diffuse texture",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "mpr",
+                "--spec-depth",
+                "0",
+                "--glossy-images",
+                "4",
+                "--out",
+                out,
+            ],
+            "needs --spec-depth",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "mpr",
+                "--glossy-images",
+                "1000",
+                "--out",
+                out,
+            ],
+            "samples exceed",
+        ),
     ];
     for (args, expected) in cases {
         let result = lustre(&args);

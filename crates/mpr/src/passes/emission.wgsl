@@ -40,6 +40,10 @@ fn vs_main(
 
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    // level.z: the sheared views of a glossy image hide emitters (the direct pass adds their highlight).
+    if view.level.z != 0u {
+        discard;
+    }
     let le = emission[in.material].xyz;
     if all(le == vec3f(0.0)) || dot(view.eye.xyz - in.world, in.normal) <= 0.0 {
         discard;

@@ -5,6 +5,8 @@ pub mod depth;
 pub mod diffuse_texture;
 pub mod direct;
 pub mod emission;
+pub mod glossy_image;
+pub mod glossy_lobe;
 pub mod gouraud;
 pub mod light_volume;
 pub mod redraw;

@@ -22,6 +22,11 @@
 use std::ops::Range;
 
 use glam::Vec3;
+
+use crate::passes::glossy_image::{
+    GlossyImagePass, GlossySample, GlossySettings, ShearModel, frosted, glossy_faces,
+    microfacet_shears, shear_slopes,
+};
 use lustre_geometry::SurfaceKind;
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Plane, Scene};
@@ -96,6 +101,30 @@ pub enum SpecularKind {
         /// `n` on the normal's side over `n` beyond.
         ratio: f32,
     },
+    /// A planar glossy face (section 3, "glossy marble"): `samples` mirror
+    /// views sheared about its normal, averaged ([`crate::passes::glossy_image`]).
+    Glossy(GlossyImage),
+}
+
+/// How a glossy face makes its image (section 3, `shear_view` and `accbuf`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlossyImage {
+    /// The lobe's roughness α (RMS slope): the shear samples' RMS length is 2α.
+    pub alpha: f32,
+    /// Sheared images `N`.
+    pub samples: u32,
+    /// Images are made only from views of level below this; deeper the face shows `R · L_lim`.
+    pub depth: u32,
+    /// `f_max` in m (infinite: no fog).
+    pub fog_distance: f32,
+    /// Whether the sheared views hide emitters.
+    pub hide_emitters: bool,
+    /// How the shears are drawn from the lobe.
+    pub shear: ShearModel,
+    /// `None` for a glossy reflection; `Some((shift, thickness))` for a
+    /// frosted glass slab ([`SpecularKind::Slab`]'s), whose images are
+    /// sheared slab views (section 3's frosted glass).
+    pub through_slab: Option<(f32, f32)>,
 }
 
 /// One planar specular face: a mirror, or a face of a glass slab.
@@ -211,6 +240,8 @@ pub struct ViewTree {
     pub children: Vec<Vec<(usize, usize)>>,
     /// Per view: faces it sees at the recursion limit.
     pub limit_faces: Vec<Vec<usize>>,
+    /// Per view: which sheared image of a glossy face it draws, if it is one.
+    pub samples: Vec<Option<GlossySample>>,
 }
 
 impl ViewTree {
@@ -220,6 +251,7 @@ impl ViewTree {
             views: vec![root],
             children: vec![Vec::new()],
             limit_faces: vec![Vec::new()],
+            samples: vec![None],
         }
     }
 
@@ -232,8 +264,22 @@ impl ViewTree {
         max_depth: u32,
         clip: ClipMethod,
     ) -> Result<Self> {
+        Self::build_interleaved(root, faces, max_depth, clip, None)
+    }
+
+    /// [`ViewTree::build`] for frame `s` of `n` accumulated ones: each glossy
+    /// image takes only its shears `s, s + n, s + 2n, …` (all of them when it
+    /// has fewer than `n`), so the `n` frames' accumulation buffer averages
+    /// every shear once (section 3's `accbuf` shared with section 7's).
+    pub fn build_interleaved(
+        root: View,
+        faces: &[SpecularFace],
+        max_depth: u32,
+        clip: ClipMethod,
+        frame: Option<(u32, u32)>,
+    ) -> Result<Self> {
         let mut tree = Self::single(root);
-        tree.grow(0, faces, max_depth, clip)?;
+        tree.grow(0, faces, max_depth, clip, frame, None)?;
         Ok(tree)
     }
 
@@ -243,6 +289,8 @@ impl ViewTree {
         faces: &[SpecularFace],
         max_depth: u32,
         clip: ClipMethod,
+        frame: Option<(u32, u32)>,
+        path: Option<u32>,
     ) -> Result<()> {
         let view = self.views[index];
         for (f, face) in faces.iter().enumerate() {
@@ -251,32 +299,103 @@ impl ViewTree {
             if face.plane.signed_distance(view.eye) <= 0.0 || !view.may_see(&face.corners) {
                 continue;
             }
-            if view.level >= max_depth {
+            let glossy_limit =
+                matches!(face.kind, SpecularKind::Glossy(g) if view.level >= g.depth);
+            if view.level >= max_depth || glossy_limit {
                 self.limit_faces[index].push(f);
                 continue;
             }
-            if self.views.len() >= MAX_VIEWS {
-                return Err(MprError::InvalidSetting {
-                    what: "specular recursion",
-                    message: format!(
-                        "more than {MAX_VIEWS} views: lower the recursion depth (now {max_depth})"
-                    ),
-                });
-            }
-            let child = self.views.len();
-            self.views.push(match face.kind {
-                SpecularKind::Mirror => view.reflected(&face.plane, clip),
-                SpecularKind::Slab { shift, thickness } => {
-                    view.through_slab(&face.plane, shift, thickness, clip)
+            // (view, its glossy sample, the path index its subtree inherits)
+            let children: Vec<(View, Option<GlossySample>, Option<u32>)> = match face.kind {
+                SpecularKind::Mirror => vec![(view.reflected(&face.plane, clip), None, path)],
+                SpecularKind::Slab { shift, thickness } => vec![(
+                    view.through_slab(&face.plane, shift, thickness, clip),
+                    None,
+                    path,
+                )],
+                SpecularKind::Glossy(glossy) => {
+                    let n_all = glossy.samples.max(1);
+                    // (shear, weight) per sample: the paper's isotropic 2m, or
+                    // the microfacet reflection at the face's centroid.
+                    let all: Vec<(glam::Vec2, f32)> = match glossy.shear {
+                        ShearModel::Isotropic => shear_slopes(glossy.alpha, n_all)
+                            .into_iter()
+                            .map(|s| (s, 1.0))
+                            .collect(),
+                        ShearModel::Microfacet => {
+                            let centroid = face.corners.iter().copied().sum::<Vec3>()
+                                / face.corners.len().max(1) as f32;
+                            microfacet_shears(glossy.alpha, n_all, view.eye, &face.plane, centroid)
+                        }
+                    };
+                    let chosen: Vec<(u32, (glam::Vec2, f32))> = match (path, frame) {
+                        // Inside another glossy image: one shear per sample of
+                        // the outer image, so its N samples are N paths through
+                        // both lobes (module docs of `glossy_image`).
+                        (Some(p), _) => {
+                            let i = nested_shear_index(p, n_all);
+                            vec![(p, all[i as usize])]
+                        }
+                        (None, Some((s, n))) if n > 1 && n_all >= n => (0..n_all)
+                            .skip((s % n) as usize)
+                            .step_by(n as usize)
+                            .map(|i| (i, all[i as usize]))
+                            .collect(),
+                        _ => (0..n_all).zip(all).collect(),
+                    };
+                    // Each drawn sample weighs w / (samples this frame); a sample
+                    // whose facet reflects below the face (w = 0) is not drawn.
+                    let per = 1.0 / chosen.len().max(1) as f32;
+                    let drawn: Vec<(u32, (glam::Vec2, f32))> =
+                        chosen.into_iter().filter(|(_, (_, w))| *w > 0.0).collect();
+                    let count = drawn.len() as u32;
+                    drawn
+                        .into_iter()
+                        .enumerate()
+                        .map(|(i, (global, (slope, weight)))| {
+                            let mut sheared = match glossy.through_slab {
+                                None => view.sheared_reflection(&face.plane, slope, clip),
+                                Some((shift, thickness)) => view.sheared_through_slab(
+                                    &face.plane,
+                                    shift,
+                                    thickness,
+                                    slope,
+                                    clip,
+                                ),
+                            };
+                            sheared.shows_emitters = !glossy.hide_emitters;
+                            let sample = GlossySample {
+                                face: f,
+                                index: i as u32,
+                                count,
+                                weight: weight * per,
+                            };
+                            (sheared, Some(sample), Some(global))
+                        })
+                        .collect()
                 }
                 SpecularKind::Interface { ratio } => {
-                    view.through_interface(&face.plane, ratio, clip)
+                    vec![(view.through_interface(&face.plane, ratio, clip), None, path)]
                 }
-            });
-            self.children.push(Vec::new());
-            self.limit_faces.push(Vec::new());
-            self.children[index].push((f, child));
-            self.grow(child, faces, max_depth, clip)?;
+            };
+            for (child_view, sample, child_path) in children {
+                if self.views.len() >= MAX_VIEWS {
+                    return Err(MprError::InvalidSetting {
+                        what: "specular recursion",
+                        message: format!(
+                            "more than {MAX_VIEWS} views: lower the recursion depth (now \
+                             {max_depth}) or the glossy image samples"
+                        ),
+                    });
+                }
+                let child = self.views.len();
+                self.views.push(child_view);
+                self.children.push(Vec::new());
+                self.limit_faces.push(Vec::new());
+                self.samples.push(sample);
+                self.children[index].push((f, child));
+                self.grow(child, faces, max_depth, clip, frame, child_path)?;
+            }
         }
         Ok(())
     }
@@ -285,6 +404,25 @@ impl ViewTree {
     pub fn scene_passes(&self) -> usize {
         self.views.len()
     }
+}
+
+/// The shear (of `n`) a glossy image nested in sample `path` of an outer
+/// one takes: `path · k mod n`, `k` the first integer from `0.618 n` up
+/// that is coprime with `n`, so the inner shears are a permutation of the
+/// outer ones that pairs neither large with large nor like angles.
+pub fn nested_shear_index(path: u32, n: u32) -> u32 {
+    let n = n.max(1);
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut k = ((0.618 * n as f32) as u32).max(1);
+    while gcd(k, n) != 1 {
+        k += 1;
+    }
+    ((u64::from(path % n) * u64::from(k)) % u64::from(n)) as u32
 }
 
 /// The range of `face`'s triangles in [`SceneBuffers::surface_indices`].
@@ -311,8 +449,12 @@ pub struct SpecularPass {
     mask: wgpu::RenderPipeline,
     reset: wgpu::RenderPipeline,
     restore: wgpu::RenderPipeline,
+    /// The restore of a glossy image's sample: the image inside cleared to zero.
+    restore_zero: wgpu::RenderPipeline,
     limit: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
+    /// The glossy images' accumulation, when the pass has glossy faces.
+    glossy: Option<GlossyImagePass>,
 }
 
 impl SpecularPass {
@@ -323,6 +465,19 @@ impl SpecularPass {
         scene: &Scene,
         settings: SpecularSettings,
     ) -> Result<Self> {
+        Self::with_glossy(ctx, hdr_format, scene, settings, &GlossySettings::default())
+    }
+
+    /// [`SpecularPass::new`] with the glossy faces of `glossy` too (section
+    /// 3, "glossy marble"; none when `glossy.samples` is 0).
+    pub fn with_glossy(
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &Scene,
+        settings: SpecularSettings,
+        glossy: &GlossySettings,
+    ) -> Result<Self> {
+        glossy.validate()?;
         if settings.max_depth > 120 {
             return Err(MprError::InvalidSetting {
                 what: "specular recursion depth",
@@ -338,7 +493,13 @@ impl SpecularPass {
                 message: format!("{} is not a finite radiance", settings.limit_radiance),
             });
         }
-        let faces = specular_faces(scene);
+        let mut faces = frosted(specular_faces(scene), scene, glossy);
+        faces.extend(glossy_faces(scene, glossy));
+        let glossy_pass = faces
+            .iter()
+            .any(|f| matches!(f.kind, SpecularKind::Glossy(_)))
+            .then(|| GlossyImagePass::new(ctx, hdr_format, &faces, glossy.fog_radiance))
+            .transpose()?;
         let mut records = vec![
             GpuFace {
                 reflectance: [0.0; 4],
@@ -447,48 +608,53 @@ impl SpecularPass {
             });
             // The face restored at level k: depth and id written back, k + 1 -> k,
             // the image drawn inside scaled by R (blend: dst * src).
-            let restore = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("specular-restore"),
-                layout: Some(&pipeline_layout),
-                vertex: vertex("vs_main", true),
-                primitive,
-                depth_stencil: depth(
-                    wgpu::CompareFunction::Always,
-                    true,
-                    stencil_equal(wgpu::StencilOperation::DecrementClamp),
-                ),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_restore"),
-                    compilation_options: Default::default(),
-                    targets: &[
-                        Some(wgpu::ColorTargetState {
-                            format: hdr_format,
-                            blend: Some(wgpu::BlendState {
-                                color: wgpu::BlendComponent {
-                                    src_factor: wgpu::BlendFactor::Zero,
-                                    dst_factor: wgpu::BlendFactor::Src,
-                                    operation: wgpu::BlendOperation::Add,
-                                },
-                                alpha: wgpu::BlendComponent {
-                                    src_factor: wgpu::BlendFactor::Zero,
-                                    dst_factor: wgpu::BlendFactor::One,
-                                    operation: wgpu::BlendOperation::Add,
-                                },
+            let restore_with = |label: &str, entry: &str| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    vertex: vertex("vs_main", true),
+                    primitive,
+                    depth_stencil: depth(
+                        wgpu::CompareFunction::Always,
+                        true,
+                        stencil_equal(wgpu::StencilOperation::DecrementClamp),
+                    ),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &[
+                            Some(wgpu::ColorTargetState {
+                                format: hdr_format,
+                                blend: Some(wgpu::BlendState {
+                                    color: wgpu::BlendComponent {
+                                        src_factor: wgpu::BlendFactor::Zero,
+                                        dst_factor: wgpu::BlendFactor::Src,
+                                        operation: wgpu::BlendOperation::Add,
+                                    },
+                                    alpha: wgpu::BlendComponent {
+                                        src_factor: wgpu::BlendFactor::Zero,
+                                        dst_factor: wgpu::BlendFactor::One,
+                                        operation: wgpu::BlendOperation::Add,
+                                    },
+                                }),
+                                write_mask: wgpu::ColorWrites::ALL,
                             }),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        }),
-                        Some(wgpu::ColorTargetState {
-                            format: SURFACE_ID_FORMAT,
-                            blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        }),
-                    ],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+                            Some(wgpu::ColorTargetState {
+                                format: SURFACE_ID_FORMAT,
+                                blend: None,
+                                write_mask: wgpu::ColorWrites::ALL,
+                            }),
+                        ],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+            let restore = restore_with("specular-restore", "fs_restore");
+            // A glossy sample's restore: the image inside multiplied by zero (it was accumulated).
+            let restore_zero = restore_with("specular-restore-zero", "fs_restore_zero");
             let limit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("specular-limit"),
                 layout: Some(&pipeline_layout),
@@ -535,8 +701,10 @@ impl SpecularPass {
                 mask,
                 reset,
                 restore,
+                restore_zero,
                 limit,
                 bind_group,
+                glossy: glossy_pass,
             }
         })
     }
@@ -553,11 +721,22 @@ impl SpecularPass {
 
     /// The views of a frame seen from `root` ([`ViewTree::build`]) with `clip` the device's method unless the settings name one.
     pub fn view_tree(&self, root: View, device_clip: ClipMethod) -> Result<ViewTree> {
-        ViewTree::build(
+        self.view_tree_interleaved(root, device_clip, None)
+    }
+
+    /// [`SpecularPass::view_tree`] for frame `s` of `n` accumulated ones ([`ViewTree::build_interleaved`]).
+    pub fn view_tree_interleaved(
+        &self,
+        root: View,
+        device_clip: ClipMethod,
+        frame: Option<(u32, u32)>,
+    ) -> Result<ViewTree> {
+        ViewTree::build_interleaved(
             root,
             &self.faces,
             self.settings.max_depth,
             self.settings.clip.unwrap_or(device_clip),
+            frame,
         )
     }
 
@@ -622,6 +801,52 @@ impl SpecularPass {
         outer: ViewSlot,
         face: usize,
     ) {
+        self.encode_restore_as(encoder, scene, targets, views, outer, face, false);
+    }
+
+    /// Restores `face` in the view `outer` after the image of the view in
+    /// `child` was drawn in its mask: a mirror or slab as
+    /// [`SpecularPass::encode_restore`]; a glossy face's sample (section 3,
+    /// `accbuf(ACCUMULATE)`) fogged and accumulated, the face restored with
+    /// its image cleared and, after the last sample, the average times R
+    /// added on the face (`accbuf(RETURN)`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_restore_child(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        outer: ViewSlot,
+        child: ViewSlot,
+        face: usize,
+        sample: Option<GlossySample>,
+    ) {
+        let (Some(sample), Some(glossy)) = (sample, &self.glossy) else {
+            self.encode_restore(encoder, scene, targets, views, outer, face);
+            return;
+        };
+        glossy.encode_accumulate(ctx, encoder, scene, targets, views, outer, child, sample);
+        self.encode_restore_as(encoder, scene, targets, views, outer, face, true);
+        if sample.index + 1 == sample.count {
+            let indices = face_indices(scene, &self.faces[face]);
+            glossy.encode_resolve(ctx, encoder, scene, targets, views, outer, face, indices);
+        }
+    }
+
+    /// The restore of `face`, its image scaled by R or, with `clear`, by zero.
+    #[allow(clippy::too_many_arguments)]
+    fn encode_restore_as(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        outer: ViewSlot,
+        face: usize,
+        clear: bool,
+    ) {
         let face = &self.faces[face];
         let colour = [
             Some(wgpu::RenderPassColorAttachment {
@@ -644,7 +869,11 @@ impl SpecularPass {
             }),
         ];
         let mut pass = Self::depth_stencil_pass(encoder, targets, &colour, "specular-restore");
-        pass.set_pipeline(&self.restore);
+        pass.set_pipeline(if clear {
+            &self.restore_zero
+        } else {
+            &self.restore
+        });
         views.bind(&mut pass, 0, outer);
         pass.set_stencil_reference(outer.stencil_reference + 1);
         pass.set_bind_group(1, &self.bind_group, &[]);

@@ -64,6 +64,15 @@ fn fs_restore(in: VertexOutput) -> Restored {
     return out;
 }
 
+// A glossy image's sample restored: its image, accumulated elsewhere, cleared (multiplied by zero).
+@fragment
+fn fs_restore_zero(in: VertexOutput) -> Restored {
+    var out: Restored;
+    out.reflectance = vec4f(0.0, 0.0, 0.0, 1.0);
+    out.surface = in.surface;
+    return out;
+}
+
 @fragment
 fn fs_limit(in: VertexOutput) -> @location(0) vec4f {
     return vec4f(faces[in.surface].reflectance.xyz * specular.limit_radiance.xyz, 0.0);

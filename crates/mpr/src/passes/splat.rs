@@ -249,6 +249,53 @@ impl SplatBuffers {
         )
     }
 
+    /// [`SplatBuffers::new_excluding`] without any splat on the surfaces
+    /// where `imaged` is true: the glossy faces whose glossy lobe a glossy
+    /// image carries (Diefenbach & Badler 1997, section 3;
+    /// [`crate::passes::glossy_image`]). Their Lambertian lobe must be in
+    /// `textured`: an imaged surface with a Lambertian lobe outside it is an error.
+    pub fn new_excluding_imaged(
+        ctx: &GpuContext,
+        scene: &Scene,
+        estimator: &SplatEstimator,
+        glossy: GlossyModel,
+        textured: &[bool],
+        imaged: &[bool],
+    ) -> Result<Self> {
+        let is = |flags: &[bool], s: u32| flags.get(s as usize).copied().unwrap_or(false);
+        for (id, surface) in scene.surfaces().iter().enumerate() {
+            let id = id as u32;
+            let lambert = scene
+                .materials()
+                .get(surface.material as usize)
+                .is_some_and(|m| m.model.diffuse_reflectance().max_element() > 0.0);
+            if is(imaged, id) && lambert && !is(textured, id) {
+                return Err(MprError::InvalidSetting {
+                    what: "splats",
+                    message: format!(
+                        "surface {id} of `{}` makes a glossy image but its Lambertian lobe is \
+                         not in the diffuse textures",
+                        scene.name
+                    ),
+                });
+            }
+        }
+        let splats: Vec<Splat> = estimator
+            .splats()
+            .into_iter()
+            .filter(|s| !is(imaged, s.surface))
+            .collect();
+        Self::upload(
+            ctx,
+            scene,
+            &splats,
+            glossy,
+            1 << 27,
+            textured,
+            Some(estimator),
+        )
+    }
+
     /// Uploads `splats` (any order; they are grouped by surface here) in buffers of at most 128 MiB, with truncated kernels at polygon edges (no kernel-mass grids).
     pub fn from_splats(
         ctx: &GpuContext,

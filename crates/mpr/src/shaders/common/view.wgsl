@@ -7,7 +7,8 @@
 // | VP         | world to clip, reverse Z (a virtual camera's: view * R)  | -    |
 // | eye        | eye the view shades for (virtual behind specular faces)  | m    |
 // | clip_plane | world plane (n, w); points with n·p + w < 0 are removed  | m    |
-// | level      | x: recursion level, y: stencil reference                 | -    |
+// | level      | x: recursion level, y: stencil reference, z: 1 where the | -    |
+// |            | view hides emitters (a glossy image's sheared view)      |      |
 //
 // A pass's `VertexOutput` may carry a commented field declaring the
 // clip_distances builtin and its vertex stage a commented line setting it from
