@@ -317,7 +317,7 @@ pub const CASES: &[Case] = &[
         args: small!("--technique", "mpr", "--photons", "200000"),
         bounds: bounds(0.01366, 0.1070, 0.5084, (0.9305, 0.9705)),
     },
-    // measured: relMSE 0.02238, FLIP mean 0.1334, p99 0.4192, mean ratio 0.9333 (41.2 s)
+    // measured: relMSE 0.02237, FLIP mean 0.1338, p99 0.4192, mean ratio 0.9340 (34.1 s)
     Case {
         name: "bathroom-mpr",
         scene: "bathroom",
