@@ -127,6 +127,34 @@ fn render_with(
     )
 }
 
+/// The CPU twins: the real lights' direct light with BVH shadow rays, and
+/// the virtual lights' of chains up to `depth` along unfolded paths.
+fn cpu_twin(
+    scene: &Scene,
+    lights: &[Light],
+    faces: &[lustre_mpr::passes::specular::SpecularFace],
+    depth: u32,
+    bvh: &Bvh,
+    camera: &Camera,
+) -> (Vec<DirectPixel>, Vec<DirectPixel>) {
+    let real =
+        direct_pixels_cpu_with_lights(scene, lights, bvh, camera, SIZE, SIZE, GlossyModel::Exact)
+            .unwrap();
+    let virt = virtual_direct_pixels_cpu(
+        scene,
+        lights,
+        faces,
+        depth,
+        bvh,
+        camera,
+        SIZE,
+        SIZE,
+        GlossyModel::Exact,
+    )
+    .unwrap();
+    (real, virt)
+}
+
 /// `(agree, compared, pixels where the virtual lights add ≥ 5 %)` of `gpu`
 /// against `real + virtual` over pixels whose 5×5 neighbourhood shows one
 /// surface and one set of reaching lights on the CPU, and the same surface on the GPU.
@@ -203,28 +231,7 @@ fn virtual_lights_through_glass_match_unfolded_light_paths() {
         70.0,
     )
     .with_aspect(1.0);
-    let real = direct_pixels_cpu_with_lights(
-        &scene,
-        &lights,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
-    let virt = virtual_direct_pixels_cpu(
-        &scene,
-        &lights,
-        &faces,
-        1,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
+    let (real, virt) = cpu_twin(&scene, &lights, &faces, 1, &bvh, &camera);
     let (gpu, ids) = render(&ctx, &scene, &camera, &lights, 1);
     let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
     eprintln!(
@@ -270,28 +277,7 @@ fn virtual_lights_match_unfolded_light_paths() {
                 depth,
             );
             assert_eq!(paths.len(), 2 * depth as usize);
-            let real = direct_pixels_cpu_with_lights(
-                &scene,
-                &lights,
-                &bvh,
-                &camera,
-                SIZE,
-                SIZE,
-                GlossyModel::Exact,
-            )
-            .unwrap();
-            let virt = virtual_direct_pixels_cpu(
-                &scene,
-                &lights,
-                &faces,
-                depth,
-                &bvh,
-                &camera,
-                SIZE,
-                SIZE,
-                GlossyModel::Exact,
-            )
-            .unwrap();
+            let (real, virt) = cpu_twin(&scene, &lights, &faces, depth, &bvh, &camera);
             let (gpu, ids) = render(&ctx, &scene, &camera, &lights, depth);
             let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
             eprintln!(
@@ -360,28 +346,7 @@ fn virtual_lights_follow_a_moved_object() {
     let camera = scene.camera().with_aspect(1.0);
     let bvh = Bvh::build(&scene);
     let faces = specular_faces(&scene);
-    let real = direct_pixels_cpu_with_lights(
-        &scene,
-        &lights,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
-    let virt = virtual_direct_pixels_cpu(
-        &scene,
-        &lights,
-        &faces,
-        1,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
+    let (real, virt) = cpu_twin(&scene, &lights, &faces, 1, &bvh, &camera);
     let (gpu, ids) = render_with(&ctx, &graph, &scene, &camera, &lights);
     let (agree, compared, lit) = agreement(&gpu, &ids, &real, &virt);
     eprintln!("moved: {agree}/{compared} pixels agree, {lit} lit by virtual lights");
@@ -512,28 +477,7 @@ fn virtual_lights_through_a_single_interface_match_unfolded_light_paths() {
         "only the turned-round face lets the light under water"
     );
     let camera = scene.camera().with_aspect(1.0);
-    let real = direct_pixels_cpu_with_lights(
-        &scene,
-        &lights,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
-    let virt = virtual_direct_pixels_cpu(
-        &scene,
-        &lights,
-        &faces,
-        1,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
+    let (real, virt) = cpu_twin(&scene, &lights, &faces, 1, &bvh, &camera);
     let shadowed = (0..virt.len())
         .filter(|&i| real[i].surface == 0 && virt[i].visible == 0)
         .count();

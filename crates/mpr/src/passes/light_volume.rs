@@ -4,8 +4,8 @@
 //! of specular faces ([`crate::virtual_light`]) adds its light, per view,
 //! where the stencil says it arrives.
 //!
-//! Per view, real light and chain `F₁ … F_k`, one render pass over the HDR
-//! target: the view's area is set to `SHAD_ZERO + k`; each face's light
+//! Per view, real light and chain `F₁ … F_k`, in the real light's render
+//! pass over the HDR target ([`crate::passes::shadowed_direct`]): the view's area is set to `SHAD_ZERO + k`; each face's light
 //! volume (the face's triangles, reversed, extruded from the virtual light
 //! `L_j` that shines through it, moved by the faces after it) is counted
 //! with the opposite sign, so only their intersection, where the light
@@ -308,14 +308,17 @@ impl VirtualLights {
         Ok(())
     }
 
-    /// Records, for the view of `slot`, the virtual lights of real light
-    /// `light` (sections 4.2, 4.3, 7.1): per chain one render pass with the
-    /// light volumes, the shadow volumes, the light under the stencil and
-    /// the restore. Run after [`VirtualLights::prepare`] in the same submission.
+    /// Records into `render` (over the HDR target and the depth-stencil,
+    /// [`ShadowVolumePass::begin_pass`]), for the view of `slot`, the
+    /// virtual lights of real light `light`, whose chains are those of
+    /// central position `chain` (sections 4.2, 4.3, 7.1): per chain the area
+    /// raised, the light volumes, the shadow volumes, the light under the
+    /// stencil and the restore. Run after [`VirtualLights::prepare`] in the
+    /// same submission.
     #[allow(clippy::too_many_arguments)]
-    pub fn encode_view(
+    pub fn record_view(
         &self,
-        encoder: &mut wgpu::CommandEncoder,
+        render: &mut wgpu::RenderPass<'_>,
         pass: &ShadowVolumePass,
         direct_pass: &DirectPass,
         frame: &FrameInputs<'_>,
@@ -337,21 +340,15 @@ impl VirtualLights {
         };
         let chains = &self.chains[chain];
         for (p, (path, draws)) in chains.paths.iter().zip(&chains.draws).enumerate() {
-            let mut render = ShadowVolumePass::begin_pass(
-                encoder,
-                frame.targets,
-                &frame.targets.hdr.view,
-                "virtual-light",
-            );
             pass.record_begin_at(
-                &mut render,
+                render,
                 slot.stencil_reference,
                 SHAD_ZERO + path.len() as u32,
             )?;
             for (d, draw) in draws.iter().enumerate() {
                 let mirrors = path.suffix(draw.j).matrix3.determinant() < 0.0;
                 pass.record_volumes_as(
-                    &mut render,
+                    render,
                     views,
                     slot,
                     &state.blocks,
@@ -361,14 +358,14 @@ impl VirtualLights {
                 )?;
             }
             direct_pass.record_light_under_stencil(
-                &mut render,
+                render,
                 frame.scene,
                 direct,
                 first + p,
                 views,
                 slot,
             )?;
-            pass.record_end(&mut render, slot.stencil_reference)?;
+            pass.record_end(render, slot.stencil_reference)?;
         }
         Ok(())
     }

@@ -3,9 +3,10 @@
 //! view's area is set to `SHAD_ZERO`, the light's volumes are counted into
 //! the stencil with the depth-fail rule, the light is added without its
 //! shadow map where the count left the stencil at `SHAD_ZERO`, and the area
-//! is given back to the view (section 7.3), all in one render pass over the
-//! HDR target. As a [`LightPass`] it runs at every level of the specular
-//! recursion.
+//! is given back to the view (section 7.3); every light of a view, and
+//! its virtual lights ([`crate::passes::light_volume`]), in one render pass
+//! over the HDR target. As a [`LightPass`] it runs at every level of the
+//! specular recursion.
 //!
 //! The volumes ([`ShadowVolumeSet`]) are built for the lights' positions
 //! when [`ShadowVolumes`] is made and rebuilt, and re-uploaded, only for the
@@ -242,10 +243,11 @@ impl ShadowVolumes {
     }
 
     /// Records, for the view of `slot`, every light of `direct` under its
-    /// volumes (sections 4.1, 7.2, 7.3): per light one render pass over the
-    /// HDR target with begin, the volume count, the light without its shadow
-    /// map where the stencil is `SHAD_ZERO`, and the restore of the view's
-    /// reference. Run after [`ShadowVolumes::prepare`] in the same submission.
+    /// volumes (sections 4.1, 7.2, 7.3), in one render pass over the HDR
+    /// target: per light the begin, the volume count, the light without its
+    /// shadow map where the stencil is `SHAD_ZERO`, the restore of the view's
+    /// reference, then its virtual lights. Run after [`ShadowVolumes::prepare`]
+    /// in the same submission.
     #[allow(clippy::too_many_arguments)]
     pub fn encode_view(
         &self,
@@ -269,23 +271,24 @@ impl ShadowVolumes {
                 ),
             });
         }
+        // One render pass for every light of the view: the stencil steps of
+        // each light follow one another in it.
+        let mut render = ShadowVolumePass::begin_pass(
+            encoder,
+            frame.targets,
+            &frame.targets.hdr.view,
+            "shadowed-direct",
+        );
         for (i, &volume) in self.volume_of.iter().enumerate() {
             let buffers = &self.buffers[volume];
-            let mut render = ShadowVolumePass::begin_pass(
-                encoder,
-                frame.targets,
-                &frame.targets.hdr.view,
-                "shadowed-direct",
-            );
             self.pass
                 .record_begin(&mut render, slot.stencil_reference)?;
             self.pass
                 .record_volumes(&mut render, views, slot, &lights, i, buffers)?;
             pass.record_light_under_stencil(&mut render, frame.scene, direct, i, views, slot)?;
             self.pass.record_end(&mut render, slot.stencil_reference)?;
-            drop(render);
             if let Some(v) = &self.virtual_lights {
-                v.encode_view(encoder, &self.pass, pass, frame, views, slot, i, volume)?;
+                v.record_view(&mut render, &self.pass, pass, frame, views, slot, i, volume)?;
             }
         }
         Ok(())
