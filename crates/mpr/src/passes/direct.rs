@@ -637,6 +637,41 @@ impl DirectPass {
         Ok(())
     }
 
+    /// [`DirectPass::record_light_under_stencil`] over only the triangles of
+    /// `ranges` of [`SceneBuffers::surface_indices`] (the surfaces a light
+    /// may reach; the rest would add nothing under the stencil).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_light_ranges_under_stencil(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        scene: &SceneBuffers,
+        lights: &DirectLights,
+        light_index: usize,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+        ranges: &[std::ops::Range<u32>],
+    ) -> Result<()> {
+        let Some(light) = lights.slots.get(light_index) else {
+            return Err(MprError::InvalidSetting {
+                what: "direct light",
+                message: format!("light #{light_index} of {}", lights.slots.len()),
+            });
+        };
+        if ranges.is_empty() {
+            return Ok(());
+        }
+        pass.set_pipeline(&self.lit_under_stencil);
+        views.bind(pass, 0, slot);
+        pass.set_stencil_reference(SHAD_ZERO);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.set_bind_group(1, &light.bind_group, &[]);
+        for range in ranges {
+            pass.draw_indexed(range.clone(), 0, 0..1);
+        }
+        Ok(())
+    }
+
     /// [`DirectPass::record_light_under_stencil`] in a render pass of its own
     /// over `targets` (HDR loaded, depth and stencil read only): run between
     /// the shadow-volume count of light `light_index` and its restore.

@@ -38,7 +38,8 @@ use crate::passes::shadow_volume::{
 use crate::passes::specular::SpecularFace;
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::virtual_light::{
-    MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, shadow_generations, specular_paths,
+    MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, cone_planes, outgoing,
+    shadow_generations, specular_paths,
 };
 use crate::{GpuContext, MprError, Result};
 
@@ -78,6 +79,9 @@ struct FrameState {
     direct: Option<DirectLights>,
     /// Per real light and chain: the first block of its draws.
     first_block: Vec<Vec<usize>>,
+    /// Per real light and chain: the ranges of `SceneBuffers::surface_indices`
+    /// of the surfaces its light may reach (merged where adjacent).
+    receivers: Vec<Vec<Vec<std::ops::Range<u32>>>>,
 }
 
 /// The virtual lights of a scene's specular faces for the real point
@@ -90,6 +94,8 @@ pub struct VirtualLights {
     chains: Vec<Chains>,
     buffers: Vec<ShadowVolumeBuffers>,
     bytes: usize,
+    /// Per surface: the world box of its triangles, and its index range.
+    surfaces: Vec<([Vec3; 2], std::ops::Range<u32>)>,
     frame: Mutex<FrameState>,
 }
 
@@ -215,17 +221,31 @@ impl VirtualLights {
             .iter()
             .map(|v| ShadowVolumeBuffers::upload(ctx, v))
             .collect::<Result<Vec<_>>>()?;
+        let triangles = scene.world_triangles();
+        let mut boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; scene.surfaces().len()];
+        for t in &triangles {
+            if let Some(b) = boxes.get_mut(t.surface as usize) {
+                for p in t.positions {
+                    b[0] = b[0].min(p);
+                    b[1] = b[1].max(p);
+                }
+            }
+        }
+        let (_, ranges) = crate::scene_buffers::surface_index_ranges(&triangles, boxes.len());
+        let surfaces = boxes.into_iter().zip(ranges).collect();
         Ok(Self {
             settings,
             faces: faces.to_vec(),
             chains,
             buffers,
             bytes,
+            surfaces,
             frame: Mutex::new(FrameState {
                 blocks: VolumeLights::new(ctx, pass, 1),
                 first: Vec::new(),
                 direct: None,
                 first_block: Vec::new(),
+                receivers: Vec::new(),
             }),
         })
     }
@@ -277,12 +297,16 @@ impl VirtualLights {
         let mut blocks: Vec<VolumeLight> = Vec::new();
         let mut first = Vec::with_capacity(chain_of.len());
         let mut first_block = Vec::with_capacity(chain_of.len());
+        let mut receivers = Vec::with_capacity(chain_of.len());
         for (light, &c) in direct.lights().zip(chain_of) {
             first.push(lights.len());
             let chains = &self.chains[c];
             let mut starts = Vec::with_capacity(chains.paths.len());
+            let mut reached = Vec::with_capacity(chains.paths.len());
             for (path, draws) in chains.paths.iter().zip(&chains.draws) {
-                lights.push(light.through(path.transform(), path.factor));
+                let virtual_light = light.through(path.transform(), path.factor);
+                reached.push(self.receivers(path, virtual_light.position()));
+                lights.push(virtual_light);
                 starts.push(blocks.len());
                 for draw in draws {
                     let source = path.prefix[draw.j].transform_point3(light.position());
@@ -290,6 +314,7 @@ impl VirtualLights {
                 }
             }
             first_block.push(starts);
+            receivers.push(reached);
         }
         frame.blocks.write_blocks(ctx, pass, &blocks)?;
         let reusable = frame
@@ -305,7 +330,47 @@ impl VirtualLights {
         }
         frame.first = first;
         frame.first_block = first_block;
+        frame.receivers = receivers;
         Ok(())
+    }
+
+    /// The index ranges of the surfaces the virtual light at `source` may
+    /// light through `path`: not wholly behind its last face nor wholly
+    /// outside the cone from `source` through it (its light volume, section
+    /// 4.2), tested on each surface's box (section 8's culling).
+    fn receivers(&self, path: &SpecularPath, source: Vec3) -> Vec<std::ops::Range<u32>> {
+        let Some(&last) = path.faces.last() else {
+            return Vec::new();
+        };
+        let face = &self.faces[last];
+        let mut planes = cone_planes(source, face);
+        planes.push(outgoing(face));
+        let mut out: Vec<std::ops::Range<u32>> = Vec::new();
+        for ([lo, hi], range) in &self.surfaces {
+            if range.is_empty() || !lo.is_finite() {
+                continue;
+            }
+            let corners = (0..8).map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            });
+            let outside = planes.iter().any(|h| {
+                corners
+                    .clone()
+                    .all(|c| h.depth(c) < -1e-4 * (hi - lo).length().max(1e-3))
+            });
+            if outside {
+                continue;
+            }
+            match out.last_mut() {
+                Some(r) if r.end == range.start => r.end = range.end,
+                _ => out.push(range.clone()),
+            }
+        }
+        out
     }
 
     /// Records into `render` (over the HDR target and the depth-stencil,
@@ -357,13 +422,14 @@ impl VirtualLights {
                     slot.mirrored ^ mirrors ^ draw.light_volume,
                 )?;
             }
-            direct_pass.record_light_under_stencil(
+            direct_pass.record_light_ranges_under_stencil(
                 render,
                 frame.scene,
                 direct,
                 first + p,
                 views,
                 slot,
+                &state.receivers[light][p],
             )?;
             pass.record_end(render, slot.stencil_reference)?;
         }
