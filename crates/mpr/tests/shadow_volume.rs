@@ -17,14 +17,11 @@ use glam::{Vec2, Vec3};
 use lustre_geometry::light::jittered_point_lights;
 use lustre_geometry::shadow_volume::{ShadowVolumeSet, light_position, shadow_count};
 use lustre_geometry::{Bvh, Camera, Light, Ray, Scene, builtin};
-use lustre_mpr::frame::FrameInputs;
-use lustre_mpr::material::{GlossyModel, scene_materials};
+use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::depth::DepthPass;
-use lustre_mpr::passes::direct::{DirectLights, DirectPixel, direct_pixels_cpu_with_lights};
-use lustre_mpr::passes::shadow::ShadowSettings;
+use lustre_mpr::passes::direct::{DirectPixel, direct_pixels_cpu_with_lights};
 use lustre_mpr::passes::shadow_volume::{ShadowVolumeBuffers, ShadowVolumePass, VolumeLights};
-use lustre_mpr::passes::tonemap::Tonemap;
-use lustre_mpr::readback::{read_rgba_f32, read_rgba8, read_u32};
+use lustre_mpr::readback::read_rgba8;
 use lustre_mpr::{FrameGraph, GpuContext, NO_SURFACE, RenderTargets, SceneBuffers, ViewBuffer};
 use support::gpu_or_skip;
 
@@ -291,56 +288,7 @@ fn render_graph(
     camera: &Camera,
     lights: &[Light],
 ) -> (Vec<[f32; 4]>, Vec<u32>) {
-    let volumes = graph.shadow_volumes.is_some();
-    let format = OUTPUT_FORMAT;
-    let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
-    let buffers = SceneBuffers::upload(ctx, scene).unwrap();
-    let direct_pass = graph.direct.as_ref().unwrap();
-    let direct = DirectLights::with_settings(
-        ctx,
-        direct_pass,
-        lights,
-        &scene_materials(scene, GlossyModel::Exact).unwrap(),
-        ShadowSettings::default(),
-    )
-    .unwrap();
-    if !volumes {
-        graph.update_shadows(ctx, &buffers, &direct).unwrap();
-    }
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("shadowed-output"),
-        size: wgpu::Extent3d {
-            width: SIZE,
-            height: SIZE,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let view = output.create_view(&wgpu::TextureViewDescriptor::default());
-    graph
-        .render(
-            ctx,
-            &FrameInputs {
-                scene: &buffers,
-                camera,
-                tonemap: &Tonemap::default(),
-                targets: &targets,
-                output: &view,
-                splats: None,
-                direct: Some(&direct),
-                diffuse: None,
-            },
-        )
-        .unwrap();
-    (
-        read_rgba_f32(ctx, &targets.hdr.texture).unwrap(),
-        read_u32(ctx, &targets.surface_id.texture).unwrap(),
-    )
+    support::direct_frame(ctx, graph, scene, camera, lights, SIZE)
 }
 
 /// Agreement with the CPU twin (BVH shadow rays): `(agree, compared, agree

@@ -291,6 +291,67 @@ fn facing_mirrors_show_exactly_d_nested_images_as_the_cpu_ray_tracer_does() {
     }
 }
 
+/// The CPU twin `trace` through every pixel at the centre, and which
+/// pixels are interior (the same value at four sub-pixel corners, so
+/// rasterisation rules cannot decide them).
+fn cpu_interior(camera: &Camera, trace: &dyn Fn(Ray) -> Vec3) -> (Vec<Vec3>, Vec<bool>) {
+    let cpu_at = |offset: Vec2| -> Vec<Vec3> {
+        (0..SIZE)
+            .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
+            .map(|(x, y)| trace(camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, offset))))
+            .collect()
+    };
+    let cpu = cpu_at(Vec2::splat(0.5));
+    let corners: Vec<Vec<Vec3>> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
+        .iter()
+        .map(|&(x, y)| cpu_at(Vec2::new(x, y)))
+        .collect();
+    let interior = (0..cpu.len())
+        .map(|i| {
+            corners
+                .iter()
+                .all(|c| (c[i] - cpu[i]).abs().max_element() < 1e-5)
+        })
+        .collect();
+    (cpu, interior)
+}
+
+/// The GPU image at depth 1 with every clip method the device has, against
+/// the CPU twin over the interior pixels: two views (the camera and the one
+/// through the face) and at most 0.5 % of the interior pixels different.
+fn assert_matches_twin(
+    ctx: &lustre_mpr::GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    cpu: &[Vec3],
+    interior: &[bool],
+    name: &str,
+) {
+    let mut methods = vec![ClipMethod::ObliqueNearPlane];
+    if ctx.has_clip_distances() {
+        methods.push(ClipMethod::Hardware);
+    }
+    for method in methods {
+        let (gpu, views) = gpu_image(ctx, scene, camera, 1, method);
+        assert_eq!(
+            views, 2,
+            "{name}, {method:?}: the camera and the view through the face"
+        );
+        let checked = interior.iter().filter(|&&i| i).count();
+        let wrong = (0..cpu.len())
+            .filter(|&i| interior[i])
+            .filter(|&i| {
+                (gpu[i] - cpu[i]).abs().max_element() > 1e-3 * (1.0 + cpu[i].max_element())
+            })
+            .count();
+        eprintln!("{name}, {method:?}: {wrong} of {checked} interior pixels differ");
+        assert!(
+            (wrong as f64) <= 0.005 * checked as f64,
+            "{name}, {method:?}: {wrong} of {checked} interior pixels differ from the CPU twin"
+        );
+    }
+}
+
 /// A glass slab (η = 1.5, 5 cm) between the camera and an emissive cube.
 fn slab_scene() -> Scene {
     let glass = Material::new(
@@ -385,27 +446,7 @@ fn a_glass_slab_shows_the_paraxially_shifted_scene_as_its_cpu_twin_does() {
         assert!((face.factor.x - 0.96 * 0.96).abs() < 1e-5);
     }
     let bvh = Bvh::build(&scene);
-    let cpu_at = |offset: Vec2| -> Vec<Vec3> {
-        (0..SIZE)
-            .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
-            .map(|(x, y)| {
-                let ray = camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, offset));
-                trace_slab(&scene, &bvh, ray, &faces)
-            })
-            .collect()
-    };
-    let cpu = cpu_at(Vec2::splat(0.5));
-    let corners: Vec<Vec<Vec3>> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
-        .iter()
-        .map(|&(x, y)| cpu_at(Vec2::new(x, y)))
-        .collect();
-    let interior: Vec<bool> = (0..cpu.len())
-        .map(|i| {
-            corners
-                .iter()
-                .all(|c| (c[i] - cpu[i]).abs().max_element() < 1e-5)
-        })
-        .collect();
+    let (cpu, interior) = cpu_interior(&camera, &|ray| trace_slab(&scene, &bvh, ray, &faces));
     // The cube is seen through the glass, and only through it.
     let through = cpu
         .iter()
@@ -415,28 +456,7 @@ fn a_glass_slab_shows_the_paraxially_shifted_scene_as_its_cpu_twin_does() {
         through > 100,
         "{through} pixels see the cube through the slab"
     );
-    let mut methods = vec![ClipMethod::ObliqueNearPlane];
-    if ctx.has_clip_distances() {
-        methods.push(ClipMethod::Hardware);
-    }
-    for method in methods {
-        let (gpu, views) = gpu_image(&ctx, &scene, &camera, 1, method);
-        assert_eq!(
-            views, 2,
-            "{method:?}: the camera and the view through the near face"
-        );
-        let checked = interior.iter().filter(|&&i| i).count();
-        let wrong = (0..cpu.len())
-            .filter(|&i| interior[i])
-            .filter(|&i| {
-                (gpu[i] - cpu[i]).abs().max_element() > 1e-3 * (1.0 + cpu[i].max_element())
-            })
-            .count();
-        assert!(
-            (wrong as f64) <= 0.005 * checked as f64,
-            "{method:?}: {wrong} of {checked} interior pixels differ from the CPU twin"
-        );
-    }
+    assert_matches_twin(&ctx, &scene, &camera, &cpu, &interior, "slab");
 }
 
 /// Whether the primary ray reaches a mirror face at the recursion limit
@@ -707,27 +727,8 @@ fn a_single_interface_shows_the_paraxially_scaled_scene_as_its_cpu_twin_does() {
         ("from above", scene.camera().with_aspect(1.0)),
         ("from below", below.with_aspect(1.0)),
     ] {
-        let cpu_at = |offset: Vec2| -> Vec<Vec3> {
-            (0..SIZE)
-                .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
-                .map(|(x, y)| {
-                    let ray = camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, offset));
-                    trace_interface(&scene, &bvh, ray, &faces)
-                })
-                .collect()
-        };
-        let cpu = cpu_at(Vec2::splat(0.5));
-        let corners: Vec<Vec<Vec3>> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
-            .iter()
-            .map(|&(x, y)| cpu_at(Vec2::new(x, y)))
-            .collect();
-        let interior: Vec<bool> = (0..cpu.len())
-            .map(|i| {
-                corners
-                    .iter()
-                    .all(|c| (c[i] - cpu[i]).abs().max_element() < 1e-5)
-            })
-            .collect();
+        let (cpu, interior) =
+            cpu_interior(&camera, &|ray| trace_interface(&scene, &bvh, ray, &faces));
         let through = cpu
             .iter()
             .filter(|v| (v.x - 0.96 * LE.x).abs() < 1e-4)
@@ -736,31 +737,7 @@ fn a_single_interface_shows_the_paraxially_scaled_scene_as_its_cpu_twin_does() {
             through > 100,
             "{name}: {through} pixels see a cube through the interface"
         );
-        let mut methods = vec![ClipMethod::ObliqueNearPlane];
-        if ctx.has_clip_distances() {
-            methods.push(ClipMethod::Hardware);
-        }
-        for method in methods {
-            let (gpu, views) = gpu_image(&ctx, &scene, &camera, 1, method);
-            assert_eq!(
-                views, 2,
-                "{name}, {method:?}: the camera and the view through the face"
-            );
-            let checked = interior.iter().filter(|&&i| i).count();
-            let wrong = (0..cpu.len())
-                .filter(|&i| interior[i])
-                .filter(|&i| {
-                    (gpu[i] - cpu[i]).abs().max_element() > 1e-3 * (1.0 + cpu[i].max_element())
-                })
-                .count();
-            eprintln!(
-                "{name}, {method:?}: {through} pixels through the interface, {wrong} of {checked} differ"
-            );
-            assert!(
-                (wrong as f64) <= 0.005 * checked as f64,
-                "{name}, {method:?}: {wrong} of {checked} interior pixels differ from the CPU twin"
-            );
-        }
+        assert_matches_twin(&ctx, &scene, &camera, &cpu, &interior, name);
         if name == "from above" {
             // Seen through the interface the lower cube looks nearer, so
             // larger than in the plain view of the scene without the glass.

@@ -15,17 +15,13 @@ mod support;
 use glam::Vec2;
 use lustre_geometry::light::jittered_point_lights;
 use lustre_geometry::{Bvh, Camera, Light, Scene, builtin};
-use lustre_mpr::frame::FrameInputs;
-use lustre_mpr::material::{GlossyModel, scene_materials};
-use lustre_mpr::passes::direct::{DirectLights, DirectPixel, direct_pixels_cpu_with_lights};
-use lustre_mpr::passes::shadow::ShadowSettings;
+use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::direct::{DirectPixel, direct_pixels_cpu_with_lights};
 use lustre_mpr::passes::specular::specular_faces;
-use lustre_mpr::passes::tonemap::Tonemap;
-use lustre_mpr::readback::{read_rgba_f32, read_u32};
 use lustre_mpr::virtual_light::{
     SpecularShadows, VirtualLightSettings, specular_paths, virtual_direct_pixels_cpu,
 };
-use lustre_mpr::{FrameGraph, GpuContext, NO_SURFACE, RenderTargets, SceneBuffers};
+use lustre_mpr::{FrameGraph, GpuContext, NO_SURFACE};
 use support::gpu_or_skip;
 
 const SIZE: u32 = 96;
@@ -81,50 +77,7 @@ fn render_with(
     camera: &Camera,
     lights: &[Light],
 ) -> (Vec<[f32; 4]>, Vec<u32>) {
-    let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
-    let buffers = SceneBuffers::upload(ctx, scene).unwrap();
-    let direct = DirectLights::with_settings(
-        ctx,
-        graph.direct.as_ref().unwrap(),
-        lights,
-        &scene_materials(scene, GlossyModel::Exact).unwrap(),
-        ShadowSettings::default(),
-    )
-    .unwrap();
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("virtual-output"),
-        size: wgpu::Extent3d {
-            width: SIZE,
-            height: SIZE,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: OUTPUT_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let view = output.create_view(&wgpu::TextureViewDescriptor::default());
-    graph
-        .render(
-            ctx,
-            &FrameInputs {
-                scene: &buffers,
-                camera,
-                tonemap: &Tonemap::default(),
-                targets: &targets,
-                output: &view,
-                splats: None,
-                direct: Some(&direct),
-                diffuse: None,
-            },
-        )
-        .unwrap();
-    (
-        read_rgba_f32(ctx, &targets.hdr.texture).unwrap(),
-        read_u32(ctx, &targets.surface_id.texture).unwrap(),
-    )
+    support::direct_frame(ctx, graph, scene, camera, lights, SIZE)
 }
 
 /// The CPU twins: the real lights' direct light with BVH shadow rays, and

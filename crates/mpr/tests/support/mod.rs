@@ -25,3 +25,68 @@ pub fn gpu_or_skip(test: &str) -> Option<GpuContext> {
         Err(e) => panic!("{test}: {e}"),
     }
 }
+
+/// One `size`² frame of `graph` lit by `lights` (point lights, exact
+/// materials, default shadow settings; the shadow maps drawn first where the
+/// graph has no shadow volumes): the HDR radiance and the surface ids. The
+/// frame of the direct-light tests (shadow volumes, virtual lights).
+#[allow(dead_code)]
+pub fn direct_frame(
+    ctx: &GpuContext,
+    graph: &lustre_mpr::FrameGraph,
+    scene: &lustre_geometry::Scene,
+    camera: &lustre_geometry::Camera,
+    lights: &[lustre_geometry::Light],
+    size: u32,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
+    use lustre_mpr::material::{GlossyModel, scene_materials};
+    use lustre_mpr::passes::direct::DirectLights;
+    use lustre_mpr::passes::shadow::ShadowSettings;
+    let targets = lustre_mpr::RenderTargets::new(ctx, size, size).unwrap();
+    let buffers = lustre_mpr::SceneBuffers::upload(ctx, scene).unwrap();
+    let direct = DirectLights::with_settings(
+        ctx,
+        graph.direct.as_ref().unwrap(),
+        lights,
+        &scene_materials(scene, GlossyModel::Exact).unwrap(),
+        ShadowSettings::default(),
+    )
+    .unwrap();
+    if graph.shadow_volumes.is_none() {
+        graph.update_shadows(ctx, &buffers, &direct).unwrap();
+    }
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("direct-frame-output"),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let view = output.create_view(&wgpu::TextureViewDescriptor::default());
+    graph
+        .render(
+            ctx,
+            &lustre_mpr::FrameInputs {
+                scene: &buffers,
+                camera,
+                tonemap: &lustre_mpr::passes::tonemap::Tonemap::default(),
+                targets: &targets,
+                output: &view,
+                splats: None,
+                direct: Some(&direct),
+                diffuse: None,
+            },
+        )
+        .unwrap();
+    (
+        lustre_mpr::readback::read_rgba_f32(ctx, &targets.hdr.texture).unwrap(),
+        lustre_mpr::readback::read_u32(ctx, &targets.surface_id.texture).unwrap(),
+    )
+}
