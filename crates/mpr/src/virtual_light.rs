@@ -36,6 +36,7 @@ use glam::{Affine3A, Vec3};
 use lustre_geometry::{Bvh, Light, Ray};
 
 use crate::passes::specular::{SpecularFace, SpecularKind};
+use crate::view::face_frame;
 
 /// How much of the shadowing of virtual lights is drawn (Diefenbach &
 /// Badler 1997, section 8.1, table 2: "Spec Shad", "2+ Bounces").
@@ -79,10 +80,7 @@ pub const MAX_SHADOW_DEPTH: u32 = 8;
 pub fn face_transform(face: &SpecularFace) -> Affine3A {
     match plain_kind(face) {
         SpecularKind::Mirror | SpecularKind::Glossy(_) => {
-            let n = face.plane.normal;
-            let linear =
-                glam::Mat3::IDENTITY - 2.0 * glam::Mat3::from_cols(n * n.x, n * n.y, n * n.z);
-            Affine3A::from_mat3_translation(linear, 2.0 * face.plane.offset * n)
+            Affine3A::from_mat4(face.plane.reflection_matrix())
         }
         SpecularKind::Slab { shift, .. } => Affine3A::from_translation(face.plane.normal * shift),
         SpecularKind::Interface { ratio } => {
@@ -157,11 +155,10 @@ pub fn incoming(face: &SpecularFace) -> HalfSpace {
 /// one of them cannot block light that passes the face (section 8's
 /// culling, applied to the casters of virtual lights' shadows).
 pub fn cone_planes(apex: Vec3, face: &SpecularFace) -> Vec<HalfSpace> {
-    let n = face.plane.normal;
     if face.plane.signed_distance(apex).abs() <= 1e-6 || face.corners.is_empty() {
         return Vec::new();
     }
-    let (u, v) = plane_basis(n);
+    let (u, v) = face_frame(&face.plane);
     let mut points: Vec<(f32, f32, Vec3)> = face
         .corners
         .iter()
@@ -287,12 +284,6 @@ impl SpecularPath {
     }
 }
 
-/// An orthonormal basis of a plane with normal `n`.
-fn plane_basis(n: Vec3) -> (Vec3, Vec3) {
-    let u = n.any_orthonormal_vector();
-    (u, n.cross(u))
-}
-
 /// Whether light from `source` through `from` may reach `to`: some corner
 /// of `to` lies beyond `from`, and the corners' central projection from
 /// `source` onto `from`'s plane overlaps `from`'s extent there (conservative:
@@ -307,7 +298,7 @@ fn reaches(source: Vec3, from: &SpecularFace, to: &SpecularFace) -> bool {
     if depths.iter().any(|&d| d <= 0.0) || ds >= 0.0 {
         return true;
     }
-    let (u, v) = plane_basis(from.plane.normal);
+    let (u, v) = face_frame(&from.plane);
     let extent = |points: &mut dyn Iterator<Item = Vec3>| {
         points.fold(
             (
@@ -633,7 +624,7 @@ mod tests {
     use lustre_geometry::Plane;
 
     fn mirror(point: Vec3, normal: Vec3, half: f32) -> SpecularFace {
-        let (u, v) = plane_basis(normal);
+        let (u, v) = face_frame(&Plane::from_point_normal(point, normal));
         let c = |a: f32, b: f32| point + half * (a * u + b * v);
         let corners = vec![
             c(-1., -1.),

@@ -638,10 +638,11 @@ impl DirectPass {
     }
 
     /// [`DirectPass::record_light_under_stencil`] over only the triangles of
-    /// `ranges` of [`SceneBuffers::surface_indices`] (the surfaces a light
-    /// may reach; the rest would add nothing under the stencil).
+    /// `surfaces` (the surfaces a light may reach; the rest would add
+    /// nothing under the stencil), drawn by their ranges of
+    /// [`SceneBuffers::surface_indices`], adjacent ranges merged.
     #[allow(clippy::too_many_arguments)]
-    pub fn record_light_ranges_under_stencil(
+    pub fn record_light_on_surfaces_under_stencil(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         scene: &SceneBuffers,
@@ -649,7 +650,7 @@ impl DirectPass {
         light_index: usize,
         views: &ViewBuffer,
         slot: ViewSlot,
-        ranges: &[std::ops::Range<u32>],
+        surfaces: &[u32],
     ) -> Result<()> {
         let Some(light) = lights.slots.get(light_index) else {
             return Err(MprError::InvalidSetting {
@@ -657,6 +658,17 @@ impl DirectPass {
                 message: format!("light #{light_index} of {}", lights.slots.len()),
             });
         };
+        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
+        for range in surfaces
+            .iter()
+            .filter_map(|&s| scene.surface_ranges.get(s as usize))
+            .filter(|r| !r.is_empty())
+        {
+            match ranges.last_mut() {
+                Some(last) if last.end == range.start => last.end = range.end,
+                _ => ranges.push(range.clone()),
+            }
+        }
         if ranges.is_empty() {
             return Ok(());
         }
@@ -667,7 +679,7 @@ impl DirectPass {
         pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.set_bind_group(1, &light.bind_group, &[]);
         for range in ranges {
-            pass.draw_indexed(range.clone(), 0, 0..1);
+            pass.draw_indexed(range, 0, 0..1);
         }
         Ok(())
     }

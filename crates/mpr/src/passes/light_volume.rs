@@ -79,9 +79,8 @@ struct FrameState {
     direct: Option<DirectLights>,
     /// Per real light and chain: the first block of its draws.
     first_block: Vec<Vec<usize>>,
-    /// Per real light and chain: the ranges of `SceneBuffers::surface_indices`
-    /// of the surfaces its light may reach (merged where adjacent).
-    receivers: Vec<Vec<Vec<std::ops::Range<u32>>>>,
+    /// Per real light and chain: the surfaces its light may reach.
+    receivers: Vec<Vec<Vec<u32>>>,
 }
 
 /// The virtual lights of a scene's specular faces for the real point
@@ -94,8 +93,8 @@ pub struct VirtualLights {
     chains: Vec<Chains>,
     buffers: Vec<ShadowVolumeBuffers>,
     bytes: usize,
-    /// Per surface: the world box of its triangles, and its index range.
-    surfaces: Vec<([Vec3; 2], std::ops::Range<u32>)>,
+    /// Per surface: the world box of its triangles.
+    surface_boxes: Vec<[Vec3; 2]>,
     frame: Mutex<FrameState>,
 }
 
@@ -140,7 +139,26 @@ impl VirtualLights {
         }
         let epsilon = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
         let mut volumes: Vec<Vec<ShadowVolume>> = Vec::new();
-        let mut cache: HashMap<(usize, Vec<usize>, usize, Role), usize> = HashMap::new();
+        // One buffer per central position, face prefix and role: chains
+        // sharing a prefix draw the same volumes (section 4.3's reuse).
+        let mut cache: HashMap<(usize, Vec<usize>, Role), usize> = HashMap::new();
+        // The volumes every caster casts from `source` with the triangles `keep` selects.
+        let mut build = |key: (usize, Vec<usize>, Role),
+                         source: Vec3,
+                         keep: &dyn Fn(&[Vec3; 3]) -> bool,
+                         reversed: bool|
+         -> Result<usize> {
+            if let Some(&b) = cache.get(&key) {
+                return Ok(b);
+            }
+            let built = (0..set.casters().len())
+                .map(|caster| set.volume_where(scene, caster, source, keep, reversed))
+                .collect::<lustre_geometry::Result<Vec<_>>>()
+                .map_err(geometry_error)?;
+            volumes.push(built.into_iter().filter(|v| !v.is_empty()).collect());
+            cache.insert(key, volumes.len() - 1);
+            Ok(volumes.len() - 1)
+        };
         let mut chains = Vec::with_capacity(positions.len());
         for (c, &light) in positions.iter().enumerate() {
             let paths = specular_paths(faces, light, settings.depth);
@@ -149,30 +167,20 @@ impl VirtualLights {
                 let k = path.len();
                 let mut list = Vec::new();
                 for j in 1..=k {
-                    let key = (c, path.faces[..j].to_vec(), j, Role::LightVolume);
-                    let buffer = match cache.get(&key) {
-                        Some(&b) => b,
-                        None => {
-                            let face = &faces[path.faces[j - 1]];
-                            let source = path.prefix[j].transform_point3(light);
-                            let own = face_triangles(face);
-                            let keep = |t: &[Vec3; 3]| own.contains(&triangle_key(t));
-                            // Turned to face the light's side (an interface's
-                            // turned-round face is wound that way already).
-                            let reversed = face.corners.chunks_exact(3).next().is_some_and(|t| {
-                                (t[1] - t[0]).cross(t[2] - t[0]).dot(face.plane.normal) > 0.0
-                            });
-                            let built = (0..set.casters().len())
-                                .map(|caster| {
-                                    set.volume_where(scene, caster, source, &keep, reversed)
-                                })
-                                .collect::<lustre_geometry::Result<Vec<_>>>()
-                                .map_err(geometry_error)?;
-                            volumes.push(built.into_iter().filter(|v| !v.is_empty()).collect());
-                            cache.insert(key, volumes.len() - 1);
-                            volumes.len() - 1
-                        }
-                    };
+                    let face = &faces[path.faces[j - 1]];
+                    let own = face_triangles(face);
+                    let keep = |t: &[Vec3; 3]| own.contains(&triangle_key(t));
+                    // Turned to face the light's side (an interface's
+                    // turned-round face is wound that way already).
+                    let reversed = face.corners.chunks_exact(3).next().is_some_and(|t| {
+                        (t[1] - t[0]).cross(t[2] - t[0]).dot(face.plane.normal) > 0.0
+                    });
+                    let buffer = build(
+                        (c, path.faces[..j].to_vec(), Role::LightVolume),
+                        path.prefix[j].transform_point3(light),
+                        &keep,
+                        reversed,
+                    )?;
                     list.push(Draw {
                         buffer,
                         j,
@@ -182,30 +190,22 @@ impl VirtualLights {
                 for j in path.shadowed_stretches(settings.shadows) {
                     let bounded = j < k;
                     let prefix = path.faces[..if bounded { j + 1 } else { k }].to_vec();
-                    let key = (c, prefix, j, Role::Shadows(bounded));
-                    let buffer = match cache.get(&key) {
-                        Some(&b) => b,
-                        None => {
-                            let bounds = path.stretch_bounds(faces, j);
-                            let cone = path.stretch_cone(faces, light, j);
-                            let source = path.prefix[j].transform_point3(light);
-                            // Between the faces, and not wholly outside the
-                            // cone of the light that passes them.
-                            let keep = |t: &[Vec3; 3]| {
-                                bounds.iter().all(|h| h.holds_triangle(t, epsilon))
-                                    && !cone
-                                        .iter()
-                                        .any(|h| t.iter().all(|&p| h.depth(p) < -epsilon))
-                            };
-                            let built = (0..set.casters().len())
-                                .map(|caster| set.volume_where(scene, caster, source, &keep, false))
-                                .collect::<lustre_geometry::Result<Vec<_>>>()
-                                .map_err(geometry_error)?;
-                            volumes.push(built.into_iter().filter(|v| !v.is_empty()).collect());
-                            cache.insert(key, volumes.len() - 1);
-                            volumes.len() - 1
-                        }
+                    let bounds = path.stretch_bounds(faces, j);
+                    let cone = path.stretch_cone(faces, light, j);
+                    // Between the faces, and not wholly outside the cone of
+                    // the light that passes them.
+                    let keep = |t: &[Vec3; 3]| {
+                        bounds.iter().all(|h| h.holds_triangle(t, epsilon))
+                            && !cone
+                                .iter()
+                                .any(|h| t.iter().all(|&p| h.depth(p) < -epsilon))
                     };
+                    let buffer = build(
+                        (c, prefix, Role::Shadows(bounded)),
+                        path.prefix[j].transform_point3(light),
+                        &keep,
+                        false,
+                    )?;
                     list.push(Draw {
                         buffer,
                         j,
@@ -221,25 +221,22 @@ impl VirtualLights {
             .iter()
             .map(|v| ShadowVolumeBuffers::upload(ctx, v))
             .collect::<Result<Vec<_>>>()?;
-        let triangles = scene.world_triangles();
-        let mut boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; scene.surfaces().len()];
-        for t in &triangles {
-            if let Some(b) = boxes.get_mut(t.surface as usize) {
+        let mut surface_boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; scene.surfaces().len()];
+        for t in &scene.world_triangles() {
+            if let Some(b) = surface_boxes.get_mut(t.surface as usize) {
                 for p in t.positions {
                     b[0] = b[0].min(p);
                     b[1] = b[1].max(p);
                 }
             }
         }
-        let (_, ranges) = crate::scene_buffers::surface_index_ranges(&triangles, boxes.len());
-        let surfaces = boxes.into_iter().zip(ranges).collect();
         Ok(Self {
             settings,
             faces: faces.to_vec(),
             chains,
             buffers,
             bytes,
-            surfaces,
+            surface_boxes,
             frame: Mutex::new(FrameState {
                 blocks: VolumeLights::new(ctx, pass, 1),
                 first: Vec::new(),
@@ -334,20 +331,20 @@ impl VirtualLights {
         Ok(())
     }
 
-    /// The index ranges of the surfaces the virtual light at `source` may
-    /// light through `path`: not wholly behind its last face nor wholly
-    /// outside the cone from `source` through it (its light volume, section
-    /// 4.2), tested on each surface's box (section 8's culling).
-    fn receivers(&self, path: &SpecularPath, source: Vec3) -> Vec<std::ops::Range<u32>> {
+    /// The surfaces the virtual light at `source` may light through `path`:
+    /// not wholly behind its last face nor wholly outside the cone from
+    /// `source` through it (its light volume, section 4.2), tested on each
+    /// surface's box (section 8's culling).
+    fn receivers(&self, path: &SpecularPath, source: Vec3) -> Vec<u32> {
         let Some(&last) = path.faces.last() else {
             return Vec::new();
         };
         let face = &self.faces[last];
         let mut planes = cone_planes(source, face);
         planes.push(outgoing(face));
-        let mut out: Vec<std::ops::Range<u32>> = Vec::new();
-        for ([lo, hi], range) in &self.surfaces {
-            if range.is_empty() || !lo.is_finite() {
+        let mut out = Vec::new();
+        for (surface, [lo, hi]) in self.surface_boxes.iter().enumerate() {
+            if !lo.is_finite() {
                 continue;
             }
             let corners = (0..8).map(|i| {
@@ -360,14 +357,10 @@ impl VirtualLights {
             let outside = planes.iter().any(|h| {
                 corners
                     .clone()
-                    .all(|c| h.depth(c) < -1e-4 * (hi - lo).length().max(1e-3))
+                    .all(|c| h.depth(c) < -1e-4 * (*hi - *lo).length().max(1e-3))
             });
-            if outside {
-                continue;
-            }
-            match out.last_mut() {
-                Some(r) if r.end == range.start => r.end = range.end,
-                _ => out.push(range.clone()),
+            if !outside {
+                out.push(surface as u32);
             }
         }
         out
@@ -422,7 +415,7 @@ impl VirtualLights {
                     slot.mirrored ^ mirrors ^ draw.light_volume,
                 )?;
             }
-            direct_pass.record_light_ranges_under_stencil(
+            direct_pass.record_light_on_surfaces_under_stencil(
                 render,
                 frame.scene,
                 direct,
