@@ -63,14 +63,14 @@ pub enum PhotonError {
     },
     /// The file was written by an incompatible version of the format.
     #[error(
-        "{path}: photon file version {found} is not supported (this build reads version {supported})"
+        "{path}: photon file version {found} is not supported (this build reads versions 1 to {supported})"
     )]
     UnsupportedVersion {
         /// The file.
         path: PathBuf,
         /// The version in the file.
         found: u32,
-        /// The version this build reads and writes.
+        /// The newest version this build reads (and the one it writes).
         supported: u32,
     },
     /// The file is shorter than its header says.
@@ -129,6 +129,14 @@ pub enum PhotonError {
         /// The file.
         path: PathBuf,
         /// What differs.
+        message: String,
+    },
+    /// Photon files that cannot be merged or appended to: other scenes, lights, seeds, or overlapping photon ranges.
+    #[error("{path}: {message}")]
+    Incompatible {
+        /// The file at fault.
+        path: PathBuf,
+        /// What does not match.
         message: String,
     },
 }

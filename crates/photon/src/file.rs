@@ -1,6 +1,6 @@
 //! The on-disk hit-record file (section 2.1, "Photon hits are stored on disk"; section 3.1, 21 bytes per record).
 //!
-//! Layout, little-endian (version 1):
+//! Layout, little-endian (version 2):
 //!
 //! | bytes | content |
 //! |---|---|
@@ -9,43 +9,61 @@
 //! | 12..16 | number of lights `L` (`u32`) |
 //! | 16..20 | number of surfaces `S` (`u32`) |
 //! | 20..28 | number of records `N` (`u64`) |
-//! | 28.. | light table, `L` × 20 bytes: power `Φ_i` (3 × `f32`), emitted photons `m_i` (`u64`) |
+//! | 28..36 | seed of the photons' random streams (`u64`) |
+//! | 36 | flags: bit 0 set when the seed, emission and bounce limit are known ([`Provenance`]) |
+//! | 37 | emission sampling (0 random, 1 Halton, 2 Sobol') |
+//! | 38 | largest number of hits per photon (`u8`) |
+//! | 39 | reserved, 0 |
+//! | 40.. | light table, `L` × 28 bytes: power `Φ_i` (3 × `f32`), emitted photons `m_i` (`u64`), index of the light's first photon (`u64`) |
 //! | .. | surface table, `S` × 17 bytes: kind (`u8`, 0 planar, 1 curved), `u`/`v` minimum and extent (4 × `f32`) |
 //! | .. | CRC-32 of all header bytes above (`u32`) |
 //! | .. | `N` records of 21 bytes ([`crate::quantise`]) |
 //! | last 4 | CRC-32 of the record bytes (`u32`) |
 //!
+//! Version 1 files (no bytes 28..40, light entries without the first index)
+//! are still read, with unknown provenance and first indices 0.
+//!
 //! The photon power is not stored: it follows from the light table by
-//! equation 1, so [`append_photon_file`] adds photons by rewriting the
-//! header (new `m_i`, new `N`) and extending the records without touching
-//! earlier ones. Readers check the magic, the version, both checksums and
-//! the exact length before decoding anything, then every record's fields,
-//! so a corrupt or truncated file is an error, never half-read. Every write
-//! goes to a temporary file in the same directory which is synced and
-//! renamed over the target.
+//! equation 1, so adding photons (incremental refinement) rewrites only the
+//! header (new `m_i`, new `N`) and extends the records without touching
+//! earlier ones. A light's photons in a file are those with indices
+//! `first_i .. first_i + m_i` of its random streams ([`crate::emission`]), so
+//! files traced in batches ([`crate::trace::batch_range`]) merge into the file
+//! of one run, and a merge refuses overlapping or non-adjacent ranges.
+//! Readers check the magic, the version, both checksums and the exact length
+//! before decoding anything, then every record's fields, so a corrupt or
+//! truncated file is an error, never half-read. Files are written and read
+//! as streams ([`crate::stream`]): memory is bounded by one batch of records,
+//! whatever the file's size. Every write goes to a temporary file in the
+//! same directory which is synced and renamed over the target.
 
-use std::fs;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::io::Read;
+use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
-use crate::crc32::{Crc32, crc32};
+use crate::crc32::crc32;
+use crate::emission::EmissionSampling;
 use crate::error::{PhotonError, Result};
-use crate::hit_record::{LightEmission, PhotonMap};
+use crate::hit_record::{HitRecord, LightEmission, PhotonMap};
 use crate::parameterisation::{SurfaceParam, SurfaceParams};
-use crate::quantise::{PositionRange, RECORD_BYTES, pack_record, packed_surface, unpack_record};
+use crate::quantise::{PositionRange, RECORD_BYTES, packed_surface, unpack_record};
+use crate::stream::{PhotonFileReader, PhotonFileWriter};
 
 /// The file's first eight bytes.
 pub const MAGIC: [u8; 8] = *b"LUSTPHOT";
 
-/// The format version this build reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version this build writes (it reads versions 1 and 2).
+pub const FORMAT_VERSION: u32 = 2;
 
+/// Bytes before the light table in version 1.
+const FIXED_HEADER_V1: usize = 28;
 /// Bytes before the light table.
-const FIXED_HEADER: usize = 28;
+const FIXED_HEADER: usize = 40;
+/// Bytes per light table entry in version 1.
+const LIGHT_ENTRY_V1: usize = 20;
 /// Bytes per light table entry.
-const LIGHT_ENTRY: usize = 20;
+const LIGHT_ENTRY: usize = 28;
 /// Bytes per surface table entry.
 const SURFACE_ENTRY: usize = 17;
 
@@ -80,7 +98,7 @@ impl SurfaceEntry {
     }
 
     /// Whether two entries are equal bit for bit.
-    fn same(&self, other: &Self) -> bool {
+    pub(crate) fn same(&self, other: &Self) -> bool {
         let bits = |e: &Self| {
             (
                 e.planar,
@@ -92,49 +110,141 @@ impl SurfaceEntry {
     }
 }
 
-/// A decoded file header.
-#[derive(Debug, Clone)]
-struct Header {
-    /// The light table.
-    lights: Vec<LightEmission>,
-    /// The surface table.
-    surfaces: Vec<SurfaceEntry>,
-    /// Number of records.
-    records: u64,
-    /// Length of the header including its CRC.
-    length: usize,
+/// How a file's photons were traced: what must agree for two files to hold different photons of one run (section 2.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Provenance {
+    /// Seed of the photons' random streams.
+    pub seed: u64,
+    /// Emission sampling.
+    pub emission: EmissionSampling,
+    /// Largest number of hits recorded per photon.
+    pub max_bounces: u8,
 }
 
-/// The bytes of a header.
-fn encode_header(lights: &[LightEmission], surfaces: &[SurfaceEntry], records: u64) -> Vec<u8> {
-    let mut b = Vec::with_capacity(
-        FIXED_HEADER + lights.len() * LIGHT_ENTRY + surfaces.len() * SURFACE_ENTRY + 4,
-    );
-    b.extend_from_slice(&MAGIC);
-    b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    b.extend_from_slice(&(lights.len() as u32).to_le_bytes());
-    b.extend_from_slice(&(surfaces.len() as u32).to_le_bytes());
-    b.extend_from_slice(&records.to_le_bytes());
-    for l in lights {
-        for c in l.power.to_array() {
-            b.extend_from_slice(&c.to_le_bytes());
-        }
-        b.extend_from_slice(&l.emitted.to_le_bytes());
+/// The byte of an emission sampling.
+fn emission_code(e: EmissionSampling) -> u8 {
+    match e {
+        EmissionSampling::Random => 0,
+        EmissionSampling::Halton => 1,
+        EmissionSampling::Sobol => 2,
     }
-    for s in surfaces {
-        b.push(if s.planar { 0 } else { 1 });
-        for c in [
-            s.range.min.x,
-            s.range.min.y,
-            s.range.extent.x,
-            s.range.extent.y,
-        ] {
-            b.extend_from_slice(&c.to_le_bytes());
-        }
+}
+
+/// A photon file's header (module table).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FileHeader {
+    /// Format version of the file (1 or 2).
+    pub version: u32,
+    /// The light table: powers `Φ_i` and emitted counts `m_i`.
+    pub lights: Vec<LightEmission>,
+    /// Index of each light's first photon: the file holds photons `first_i .. first_i + m_i`.
+    pub first: Vec<u64>,
+    /// The surface table.
+    pub surfaces: Vec<SurfaceEntry>,
+    /// Number of records.
+    pub records: u64,
+    /// Seed, emission and bounce limit, when known.
+    pub provenance: Option<Provenance>,
+}
+
+impl FileHeader {
+    /// Length of the encoded header including its CRC.
+    pub fn length(&self) -> usize {
+        let (fixed, light) = if self.version == 1 {
+            (FIXED_HEADER_V1, LIGHT_ENTRY_V1)
+        } else {
+            (FIXED_HEADER, LIGHT_ENTRY)
+        };
+        fixed + self.lights.len() * light + self.surfaces.len() * SURFACE_ENTRY + 4
     }
-    let crc = crc32(&b);
-    b.extend_from_slice(&crc.to_le_bytes());
-    b
+
+    /// Length of the whole file this header describes.
+    pub fn file_length(&self) -> u128 {
+        self.length() as u128 + self.records as u128 * RECORD_BYTES as u128 + 4
+    }
+
+    /// Total photons emitted over all lights.
+    pub fn emitted(&self) -> u64 {
+        self.lights.iter().map(|l| l.emitted).sum()
+    }
+
+    /// The bytes of this header in the current version (a version 1 header is written as version 2).
+    pub(crate) fn encode(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(
+            FIXED_HEADER
+                + self.lights.len() * LIGHT_ENTRY
+                + self.surfaces.len() * SURFACE_ENTRY
+                + 4,
+        );
+        b.extend_from_slice(&MAGIC);
+        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        b.extend_from_slice(&(self.lights.len() as u32).to_le_bytes());
+        b.extend_from_slice(&(self.surfaces.len() as u32).to_le_bytes());
+        b.extend_from_slice(&self.records.to_le_bytes());
+        let p = self.provenance;
+        b.extend_from_slice(&p.map_or(0, |p| p.seed).to_le_bytes());
+        b.push(u8::from(p.is_some()));
+        b.push(p.map_or(0, |p| emission_code(p.emission)));
+        b.push(p.map_or(0, |p| p.max_bounces));
+        b.push(0);
+        for (i, l) in self.lights.iter().enumerate() {
+            for c in l.power.to_array() {
+                b.extend_from_slice(&c.to_le_bytes());
+            }
+            b.extend_from_slice(&l.emitted.to_le_bytes());
+            b.extend_from_slice(&self.first.get(i).copied().unwrap_or(0).to_le_bytes());
+        }
+        for s in &self.surfaces {
+            b.push(if s.planar { 0 } else { 1 });
+            for c in [
+                s.range.min.x,
+                s.range.min.y,
+                s.range.extent.x,
+                s.range.extent.y,
+            ] {
+                b.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        let crc = crc32(&b);
+        b.extend_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// Fails unless the file's surface table equals `scene`'s (the file was traced in this scene's pose).
+    pub fn check_surfaces(&self, path: &Path, scene: &[SurfaceEntry]) -> Result<()> {
+        check_surfaces(path, &self.surfaces, scene)
+    }
+
+    /// Decodes and checks one packed record (surface, light, bounce, attenuation byte); `index` names it in errors.
+    pub(crate) fn decode_record(
+        &self,
+        path: &Path,
+        index: u64,
+        b: &[u8; RECORD_BYTES],
+    ) -> Result<HitRecord> {
+        let corrupt = |message: String| PhotonError::CorruptRecord {
+            path: path.to_owned(),
+            index,
+            message,
+        };
+        let surface = packed_surface(b);
+        let entry = self
+            .surfaces
+            .get(surface as usize)
+            .ok_or_else(|| corrupt(format!("surface {surface} does not exist")))?;
+        let r = unpack_record(b, entry.range);
+        if r.light as usize >= self.lights.len() {
+            return Err(corrupt(format!("light {} does not exist", r.light)));
+        }
+        if r.bounce == 0 {
+            return Err(corrupt("bounce 0".into()));
+        }
+        let exponent = b[20];
+        if b[17..20] != [0, 0, 0] && !(8..=248).contains(&exponent) {
+            return Err(corrupt(format!("attenuation exponent byte {exponent}")));
+        }
+        Ok(r)
+    }
 }
 
 /// Little-endian readers over a byte slice known to be long enough.
@@ -150,45 +260,58 @@ fn le_f32(b: &[u8], at: usize) -> f32 {
     f32::from_bits(le_u32(b, at))
 }
 
-/// Decodes and checks the header at the start of `bytes` (magic, version, lengths, CRC, values).
-fn decode_header(path: &Path, bytes: &[u8]) -> Result<Header> {
-    let found = bytes.len() as u64;
+/// Reads and checks the header at the start of `file`, whose whole length is `found` bytes (magic, version, lengths, CRC, values).
+pub(crate) fn read_header(path: &Path, file: &mut impl Read, found: u64) -> Result<FileHeader> {
     let truncated = |expected: u64| PhotonError::Truncated {
         path: path.to_owned(),
         expected,
         found,
     };
+    let io = |source| PhotonError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut bytes = vec![0u8; found.min(FIXED_HEADER as u64) as usize];
+    file.read_exact(&mut bytes).map_err(io)?;
     if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
-        if bytes.len() < MAGIC.len() && MAGIC.starts_with(bytes) {
-            return Err(truncated(FIXED_HEADER as u64 + 8));
+        if bytes.len() < MAGIC.len() && MAGIC.starts_with(&bytes) {
+            return Err(truncated(FIXED_HEADER_V1 as u64 + 8));
         }
         return Err(PhotonError::BadMagic {
             path: path.to_owned(),
         });
     }
-    if bytes.len() < FIXED_HEADER {
-        return Err(truncated(FIXED_HEADER as u64 + 8));
+    if bytes.len() < 12 {
+        return Err(truncated(FIXED_HEADER_V1 as u64 + 8));
     }
-    let version = le_u32(bytes, 8);
-    if version != FORMAT_VERSION {
-        return Err(PhotonError::UnsupportedVersion {
-            path: path.to_owned(),
-            found: version,
-            supported: FORMAT_VERSION,
-        });
+    let version = le_u32(&bytes, 8);
+    let (fixed, light_entry) = match version {
+        1 => (FIXED_HEADER_V1, LIGHT_ENTRY_V1),
+        2 => (FIXED_HEADER, LIGHT_ENTRY),
+        _ => {
+            return Err(PhotonError::UnsupportedVersion {
+                path: path.to_owned(),
+                found: version,
+                supported: FORMAT_VERSION,
+            });
+        }
+    };
+    if bytes.len() < fixed {
+        return Err(truncated(fixed as u64 + 8));
     }
-    let light_count = le_u32(bytes, 12) as u64;
-    let surface_count = le_u32(bytes, 16) as u64;
-    let records = le_u64(bytes, 20);
-    let header_len = FIXED_HEADER as u64
-        + light_count * LIGHT_ENTRY as u64
-        + surface_count * SURFACE_ENTRY as u64
-        + 4;
+    let light_count = le_u32(&bytes, 12) as u64;
+    let surface_count = le_u32(&bytes, 16) as u64;
+    let records = le_u64(&bytes, 20);
+    let header_len =
+        fixed as u64 + light_count * light_entry as u64 + surface_count * SURFACE_ENTRY as u64 + 4;
     if found < header_len {
         return Err(truncated(header_len + 4));
     }
     let header_len = header_len as usize;
-    let stored = le_u32(bytes, header_len - 4);
+    let read = bytes.len();
+    bytes.resize(header_len, 0);
+    file.read_exact(&mut bytes[read..]).map_err(io)?;
+    let stored = le_u32(&bytes, header_len - 4);
     let computed = crc32(&bytes[..header_len - 4]);
     if stored != computed {
         return Err(PhotonError::Checksum {
@@ -202,20 +325,56 @@ fn decode_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         path: path.to_owned(),
         message,
     };
-    let mut at = FIXED_HEADER;
+    let provenance = if version == 1 {
+        None
+    } else {
+        let emission = match bytes[37] {
+            0 => EmissionSampling::Random,
+            1 => EmissionSampling::Halton,
+            2 => EmissionSampling::Sobol,
+            k => return Err(corrupt(format!("emission sampling {k}"))),
+        };
+        match bytes[36] {
+            0 => None,
+            1 if bytes[38] > 0 => Some(Provenance {
+                seed: le_u64(&bytes, 28),
+                emission,
+                max_bounces: bytes[38],
+            }),
+            f => {
+                return Err(corrupt(format!(
+                    "flags {f} with bounce limit {}",
+                    bytes[38]
+                )));
+            }
+        }
+    };
+    let mut at = fixed;
     let mut lights = Vec::with_capacity(light_count as usize);
+    let mut first = Vec::with_capacity(light_count as usize);
     for i in 0..light_count {
         let power = Vec3::new(
-            le_f32(bytes, at),
-            le_f32(bytes, at + 4),
-            le_f32(bytes, at + 8),
+            le_f32(&bytes, at),
+            le_f32(&bytes, at + 4),
+            le_f32(&bytes, at + 8),
         );
-        let emitted = le_u64(bytes, at + 12);
+        let emitted = le_u64(&bytes, at + 12);
         if !power.is_finite() || power.min_element() < 0.0 {
             return Err(corrupt(format!("light #{i} has power {power}")));
         }
+        let start = if version == 1 {
+            0
+        } else {
+            le_u64(&bytes, at + 20)
+        };
+        if start.checked_add(emitted).is_none() {
+            return Err(corrupt(format!(
+                "light #{i}: photons {start} + {emitted} overflow"
+            )));
+        }
         lights.push(LightEmission { power, emitted });
-        at += LIGHT_ENTRY;
+        first.push(start);
+        at += light_entry;
     }
     let mut surfaces = Vec::with_capacity(surface_count as usize);
     for i in 0..surface_count {
@@ -225,8 +384,8 @@ fn decode_header(path: &Path, bytes: &[u8]) -> Result<Header> {
             k => return Err(corrupt(format!("surface #{i} has kind {k}"))),
         };
         let range = PositionRange {
-            min: Vec2::new(le_f32(bytes, at + 1), le_f32(bytes, at + 5)),
-            extent: Vec2::new(le_f32(bytes, at + 9), le_f32(bytes, at + 13)),
+            min: Vec2::new(le_f32(&bytes, at + 1), le_f32(&bytes, at + 5)),
+            extent: Vec2::new(le_f32(&bytes, at + 9), le_f32(&bytes, at + 13)),
         };
         if !range.is_valid() {
             return Err(corrupt(format!(
@@ -236,133 +395,19 @@ fn decode_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         surfaces.push(SurfaceEntry { planar, range });
         at += SURFACE_ENTRY;
     }
-    Ok(Header {
+    Ok(FileHeader {
+        version,
         lights,
+        first,
         surfaces,
         records,
-        length: header_len,
+        provenance,
     })
-}
-
-/// The header of a file whose whole length and both checksums have been verified, with the records' CRC.
-fn verify(path: &Path, bytes: &[u8]) -> Result<(Header, u32)> {
-    let header = decode_header(path, bytes)?;
-    let expected = (header.records as u128) * RECORD_BYTES as u128 + header.length as u128 + 4;
-    let found = bytes.len() as u64;
-    if (found as u128) < expected {
-        return Err(PhotonError::Truncated {
-            path: path.to_owned(),
-            expected: expected.min(u64::MAX as u128) as u64,
-            found,
-        });
-    }
-    if found as u128 > expected {
-        return Err(PhotonError::TrailingBytes {
-            path: path.to_owned(),
-            expected: expected as u64,
-            found,
-        });
-    }
-    let end = bytes.len() - 4;
-    let stored = le_u32(bytes, end);
-    let computed = crc32(&bytes[header.length..end]);
-    if stored != computed {
-        return Err(PhotonError::Checksum {
-            path: path.to_owned(),
-            part: "records",
-            stored,
-            computed,
-        });
-    }
-    Ok((header, computed))
 }
 
 /// The surface table of a scene's parameterisation.
 pub fn surface_table(params: &SurfaceParams) -> Vec<SurfaceEntry> {
     params.all().iter().map(SurfaceEntry::of).collect()
-}
-
-/// Packs every record of `map`; errors name the record that does not fit.
-fn pack_all(map: &PhotonMap, params: &SurfaceParams, surfaces: &[SurfaceEntry]) -> Result<Vec<u8>> {
-    let mut out = Vec::with_capacity(map.len() * RECORD_BYTES);
-    for (index, r) in map.records().iter().enumerate() {
-        let entry = surfaces
-            .get(r.surface as usize)
-            .ok_or_else(|| PhotonError::InvalidRecord {
-                index,
-                message: format!("surface {} does not exist", r.surface),
-            })?;
-        if r.triangle as usize >= params.triangle_count(r.surface) {
-            return Err(PhotonError::InvalidRecord {
-                index,
-                message: format!("surface {} has no triangle {}", r.surface, r.triangle),
-            });
-        }
-        if r.light as usize >= map.lights().len() {
-            return Err(PhotonError::InvalidRecord {
-                index,
-                message: format!("light {} does not exist", r.light),
-            });
-        }
-        let packed = pack_record(r, entry.range).map_err(|e| PhotonError::Unrepresentable {
-            index,
-            message: e.0,
-        })?;
-        out.extend_from_slice(&packed);
-    }
-    Ok(out)
-}
-
-/// A temporary path beside `path`, unique to this process and call.
-fn temporary_path(path: &Path) -> PathBuf {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "photons".into());
-    path.with_file_name(format!(".{name}.{}.{n}.tmp", std::process::id()))
-}
-
-/// Writes `parts` to a temporary file beside `path`, syncs it and renames it over `path` (DESIGN.md: no half-written file).
-fn write_atomically(path: &Path, parts: &[&[u8]]) -> Result<()> {
-    let tmp = temporary_path(path);
-    let io = |source| PhotonError::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let result = (|| -> std::io::Result<()> {
-        let mut f = fs::File::create(&tmp)?;
-        for p in parts {
-            f.write_all(p)?;
-        }
-        f.sync_all()?;
-        drop(f);
-        fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result.map_err(io)
-}
-
-/// Reads a whole file, naming it on failure.
-fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    fs::read(path).map_err(|source| PhotonError::Io {
-        path: path.to_owned(),
-        source,
-    })
-}
-
-/// Writes a photon map as a new file (section 2.1), atomically; `params` are the parameterisations of the scene it was traced in.
-pub fn write_photon_file(path: &Path, map: &PhotonMap, params: &SurfaceParams) -> Result<()> {
-    check_table_sizes(map, params)?;
-    let surfaces = surface_table(params);
-    let records = pack_all(map, params, &surfaces)?;
-    let header = encode_header(map.lights(), &surfaces, map.len() as u64);
-    let crc = crc32(&records).to_le_bytes();
-    write_atomically(path, &[&header, &records, &crc])
 }
 
 /// Fails when the light or surface table cannot be counted in 32 bits.
@@ -386,53 +431,6 @@ fn check_table_sizes(map: &PhotonMap, params: &SurfaceParams) -> Result<()> {
         });
     }
     Ok(())
-}
-
-/// Reads a photon file (section 2.1): everything is verified before any record is returned.
-pub fn read_photon_file(path: &Path) -> Result<PhotonMap> {
-    decode_file(path, &read_bytes(path)?, None)
-}
-
-/// Reads a photon file and checks that its surface table matches the scene's parameterisation.
-pub fn read_photon_file_for(path: &Path, params: &SurfaceParams) -> Result<PhotonMap> {
-    decode_file(path, &read_bytes(path)?, Some(&surface_table(params)))
-}
-
-/// Verifies a whole file, checks its surface table against `scene` when given, then decodes and checks every record.
-fn decode_file(path: &Path, bytes: &[u8], scene: Option<&[SurfaceEntry]>) -> Result<PhotonMap> {
-    let (header, _) = verify(path, bytes)?;
-    if let Some(scene) = scene {
-        check_surfaces(path, &header.surfaces, scene)?;
-    }
-    let mut records = Vec::with_capacity(header.records as usize);
-    let body = &bytes[header.length..bytes.len() - 4];
-    for (index, chunk) in body.chunks_exact(RECORD_BYTES).enumerate() {
-        let mut b = [0u8; RECORD_BYTES];
-        b.copy_from_slice(chunk);
-        let corrupt = |message: String| PhotonError::CorruptRecord {
-            path: path.to_owned(),
-            index: index as u64,
-            message,
-        };
-        let surface = packed_surface(&b);
-        let entry = header
-            .surfaces
-            .get(surface as usize)
-            .ok_or_else(|| corrupt(format!("surface {surface} does not exist")))?;
-        let r = unpack_record(&b, entry.range);
-        if r.light as usize >= header.lights.len() {
-            return Err(corrupt(format!("light {} does not exist", r.light)));
-        }
-        if r.bounce == 0 {
-            return Err(corrupt("bounce 0".into()));
-        }
-        let exponent = b[20];
-        if b[17..20] != [0, 0, 0] && !(8..=248).contains(&exponent) {
-            return Err(corrupt(format!("attenuation exponent byte {exponent}")));
-        }
-        records.push(r);
-    }
-    PhotonMap::from_parts(header.lights, records)
 }
 
 /// Fails unless two surface tables are equal.
@@ -459,37 +457,44 @@ fn check_surfaces(path: &Path, file: &[SurfaceEntry], scene: &[SurfaceEntry]) ->
     Ok(())
 }
 
-/// Appends the photons of `more` to an existing file (incremental refinement, section 2.1): the file is verified, its emitted counts `m_i` grow by `more`'s, its records are kept byte for byte and `more`'s are added; the result replaces the file atomically.
+/// Writes a photon map as a new file (section 2.1), atomically; `params` are the parameterisations of the scene it was traced in. Its first photon indices are 0 and its provenance unknown (use [`PhotonFileWriter`] to record them).
+pub fn write_photon_file(path: &Path, map: &PhotonMap, params: &SurfaceParams) -> Result<()> {
+    check_table_sizes(map, params)?;
+    let powers: Vec<_> = map.lights().iter().map(|l| l.power).collect();
+    let first = vec![0; powers.len()];
+    let mut writer = PhotonFileWriter::create(path, &powers, first, params, None)?;
+    let emitted: Vec<u64> = map.lights().iter().map(|l| l.emitted).collect();
+    writer.push(&emitted, map.records())?;
+    writer.finish().map(|_| ())
+}
+
+/// Reads a whole photon file into memory (section 2.1): everything is verified before any record is returned. [`PhotonFileReader::batches`] reads it in bounded memory.
+pub fn read_photon_file(path: &Path) -> Result<PhotonMap> {
+    collect(PhotonFileReader::open(path)?)
+}
+
+/// Reads a whole photon file and checks that its surface table matches the scene's parameterisation.
+pub fn read_photon_file_for(path: &Path, params: &SurfaceParams) -> Result<PhotonMap> {
+    collect(PhotonFileReader::open_for(path, params)?)
+}
+
+/// Every record of a verified file in one map.
+fn collect(reader: PhotonFileReader) -> Result<PhotonMap> {
+    let mut map = PhotonMap::from_parts(reader.header().lights.clone(), Vec::new())?;
+    for batch in reader.batches(1 << 20)? {
+        let batch = batch?;
+        map.extend_records(batch.records());
+    }
+    Ok(map)
+}
+
+/// Appends the photons of `more` to an existing file (incremental refinement, section 2.1): the file is verified, its emitted counts `m_i` grow by `more`'s, its records are kept byte for byte and `more`'s are added; the result replaces the file atomically. Streams the file: memory is bounded by `more`.
 pub fn append_photon_file(path: &Path, more: &PhotonMap, params: &SurfaceParams) -> Result<()> {
     check_table_sizes(more, params)?;
-    let bytes = read_bytes(path)?;
-    let (header, records_crc) = verify(path, &bytes)?;
-    let surfaces = surface_table(params);
-    check_surfaces(path, &header.surfaces, &surfaces)?;
-    let existing = PhotonMap::from_parts(header.lights.clone(), Vec::new())?;
+    let mut writer = PhotonFileWriter::append(path, params)?;
+    let existing = PhotonMap::from_parts(writer.header().lights.clone(), Vec::new())?;
     existing.check_same_lights(more.lights())?;
-    let new_records = pack_all(more, params, &surfaces)?;
-    let lights: Vec<LightEmission> = header
-        .lights
-        .iter()
-        .zip(more.lights())
-        .map(|(a, b)| LightEmission {
-            power: a.power,
-            emitted: a.emitted + b.emitted,
-        })
-        .collect();
-    let count = header.records + more.len() as u64;
-    let new_header = encode_header(&lights, &header.surfaces, count);
-    let mut crc = Crc32::resume(records_crc);
-    crc.update(&new_records);
-    let old_records = &bytes[header.length..bytes.len() - 4];
-    write_atomically(
-        path,
-        &[
-            &new_header,
-            old_records,
-            &new_records,
-            &crc.value().to_le_bytes(),
-        ],
-    )
+    let emitted: Vec<u64> = more.lights().iter().map(|l| l.emitted).collect();
+    writer.push(&emitted, more.records())?;
+    writer.finish().map(|_| ())
 }

@@ -182,6 +182,11 @@ impl PhotonMap {
         Ok(())
     }
 
+    /// Appends records without changing the emitted counts (a file read batch by batch).
+    pub(crate) fn extend_records(&mut self, records: &[HitRecord]) {
+        self.records.extend_from_slice(records);
+    }
+
     /// Records emitted photons and appends hit records (used by the tracer).
     pub(crate) fn extend_traced(&mut self, emitted: &[u64], records: Vec<HitRecord>) {
         for (l, &m) in self.lights.iter_mut().zip(emitted) {

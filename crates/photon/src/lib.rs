@@ -14,6 +14,7 @@
 //! | 2.1/3.1 hit records, equation 1 `φ = Φ_i/m_i ρ_φ`, incremental refinement | [`HitRecord`], [`PhotonMap`] |
 //! | 3.1 position `(u, v)` on the surface | [`SurfaceParams`], [`PlanarFrame`] |
 //! | 3.1 21 bytes per record, stored on disk | [`quantise`], [`write_photon_file`], [`append_photon_file`], [`read_photon_file`] |
+//! | 2.1 hits stored on disk, incremental refinement, in bounded memory | [`PhotonFileWriter`], [`PhotonFileReader::batches`], [`merge_photon_files`], [`trace::batch_range`], [`PhotonTracer::trace_streamed`] |
 //! | 2.2 unit-volume kernel `k`, equation 3 `h = C √(A/n)` | [`Kernel`], [`kernel_support`] |
 //! | 2.2 the kernel `k` of Silverman's book (reference 13): the `n^(-1/6)` bandwidth rate | [`kernel_support_silverman`], [`Support::Silverman`] |
 //! | 2.2 equation 2 (with `1/h²`, see [`estimator`]) | [`SplatEstimator`] |
@@ -47,6 +48,7 @@ pub mod kernel;
 pub mod parameterisation;
 mod progress;
 pub mod quantise;
+pub mod stream;
 pub mod trace;
 
 pub use crc32::{Crc32, crc32};
@@ -54,11 +56,15 @@ pub use edge::{KernelMass, MassGrid};
 pub use emission::{EmissionSampling, allocate_photons, photon_stream};
 pub use error::{PhotonError, Result};
 pub use estimator::{BounceSelection, Edges, EstimatorOptions, Splat, SplatEstimator, Support};
-pub use file::{append_photon_file, read_photon_file, read_photon_file_for, write_photon_file};
+pub use file::{
+    FileHeader, Provenance, append_photon_file, read_photon_file, read_photon_file_for,
+    write_photon_file,
+};
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};
 pub use kernel::{Kernel, kernel_support, kernel_support_silverman, splat_triangle};
 pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams};
 pub use progress::{NoProgress, Progress};
 pub use quantise::RECORD_BYTES;
+pub use stream::{PhotonBatches, PhotonFileReader, PhotonFileWriter, merge_photon_files};
 pub use trace::{PhotonTracer, TraceOptions, trace_photons};

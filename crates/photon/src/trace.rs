@@ -48,6 +48,27 @@ use crate::progress::Progress;
 /// Photons traced per task: the unit of parallel work and of progress reports; it does not change the result.
 pub const PHOTONS_PER_CHUNK: u64 = 1024;
 
+/// Photons traced per block of [`PhotonTracer::trace_streamed`]: the records of one block are what it holds in memory; it does not change the result.
+pub const PHOTONS_PER_BLOCK: u64 = 1 << 18;
+
+/// The photon range of batch `index` of `of` of a run that emits `counts[i]` photons from light `i` (section 2.1: photons are independent given their light and index): per light, the first photon index and the count, `⌊counts·index/of⌋ .. ⌊counts·(index+1)/of⌋`. The batches of one run tile its photons exactly.
+pub fn batch_range(counts: &[u64], index: u64, of: u64) -> Result<(Vec<u64>, Vec<u64>)> {
+    if of == 0 || index >= of {
+        return Err(PhotonError::InvalidOption {
+            option: "batch",
+            message: format!("batch {index} of {of}: need 0 <= index < count"),
+        });
+    }
+    let at = |c: u64, k: u64| (u128::from(c) * u128::from(k) / u128::from(of)) as u64;
+    Ok(counts
+        .iter()
+        .map(|&c| {
+            let lo = at(c, index);
+            (lo, at(c, index + 1) - lo)
+        })
+        .unzip())
+}
+
 /// Settings of a particle-tracing run (section 2.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceOptions {
@@ -138,38 +159,121 @@ impl<'a> PhotonTracer<'a> {
         options: &TraceOptions,
         progress: &dyn Progress,
     ) -> Result<()> {
+        self.check_options(options)?;
+        let powers: Vec<_> = self.scene.lights().iter().map(|l| l.power()).collect();
+        map.check_same_lights(PhotonMap::new(powers.iter().copied()).lights())?;
+        let counts = allocate_photons(&powers, options.photons);
+        let first: Vec<u64> = map.lights().iter().map(|l| l.emitted).collect();
+        let total: u64 = counts.iter().sum();
+        progress.begin(total);
+        let (emitted, records) = self.trace_block(&first, &counts, 0..total, options, progress);
+        progress.finish();
+        map.extend_traced(&emitted, records);
+        Ok(())
+    }
+
+    /// Traces photons `first[i] .. first[i] + counts[i]` of each light `i`
+    /// (section 2.1) in blocks of [`PHOTONS_PER_BLOCK`], handing each block's
+    /// emitted counts and hit records to `sink` in emission order, so memory
+    /// holds one block whatever the count (the records go to a
+    /// [`crate::PhotonFileWriter`]). The records equal those of one
+    /// [`PhotonTracer::trace_more`] over the same photons.
+    pub fn trace_streamed(
+        &self,
+        first: &[u64],
+        counts: &[u64],
+        options: &TraceOptions,
+        progress: &dyn Progress,
+        sink: &mut dyn FnMut(&[u64], Vec<HitRecord>) -> Result<()>,
+    ) -> Result<()> {
+        self.check_options(options)?;
+        let lights = self.scene.lights().len();
+        if first.len() != lights || counts.len() != lights {
+            return Err(PhotonError::InvalidOption {
+                option: "photon ranges",
+                message: format!(
+                    "{} first indices and {} counts for {lights} lights",
+                    first.len(),
+                    counts.len()
+                ),
+            });
+        }
+        if let Some(i) = (0..lights).find(|&i| first[i].checked_add(counts[i]).is_none()) {
+            return Err(PhotonError::InvalidOption {
+                option: "photon ranges",
+                message: format!("light #{i}: photon indices overflow 64 bits"),
+            });
+        }
+        let total = counts
+            .iter()
+            .try_fold(0u64, |a, &c| a.checked_add(c))
+            .ok_or_else(|| PhotonError::InvalidOption {
+                option: "photons",
+                message: "more than 2^64 photons".into(),
+            })?;
+        progress.begin(total);
+        let mut lo = 0;
+        while lo < total {
+            let hi = (lo + PHOTONS_PER_BLOCK).min(total);
+            let (emitted, records) = self.trace_block(first, counts, lo..hi, options, progress);
+            sink(&emitted, records)?;
+            lo = hi;
+        }
+        progress.finish();
+        Ok(())
+    }
+
+    /// Fails on options no run can use.
+    fn check_options(&self, options: &TraceOptions) -> Result<()> {
         if options.max_bounces == 0 {
             return Err(PhotonError::InvalidOption {
                 option: "max_bounces",
                 message: "must be at least 1".into(),
             });
         }
-        let lights = self.scene.lights();
-        let powers: Vec<_> = lights.iter().map(|l| l.power()).collect();
-        map.check_same_lights(PhotonMap::new(powers.iter().copied()).lights())?;
-        if lights.len() > u32::MAX as usize {
+        if self.scene.lights().len() > u32::MAX as usize {
             return Err(PhotonError::InvalidOption {
                 option: "lights",
                 message: "more than 2^32 lights".into(),
             });
         }
-        let counts = allocate_photons(&powers, options.photons);
-        let first: Vec<u64> = map.lights().iter().map(|l| l.emitted).collect();
-        // Global photon numbers 0..total, light by light; chunks of fixed size.
+        Ok(())
+    }
+
+    /// Traces the photons numbered `block` of the run that numbers light
+    /// `i`'s photons `first[i] .. first[i] + counts[i]` consecutively, light
+    /// by light, in parallel chunks of [`PHOTONS_PER_CHUNK`]: the photons
+    /// each light emitted in the block and their records, in order.
+    fn trace_block(
+        &self,
+        first: &[u64],
+        counts: &[u64],
+        block: std::ops::Range<u64>,
+        options: &TraceOptions,
+        progress: &dyn Progress,
+    ) -> (Vec<u64>, Vec<HitRecord>) {
+        // Global photon numbers 0..total, light by light.
         let mut starts = Vec::with_capacity(counts.len() + 1);
         let mut total = 0u64;
-        for &c in &counts {
+        for &c in counts {
             starts.push(total);
             total += c;
         }
         starts.push(total);
-        let chunks = total.div_ceil(PHOTONS_PER_CHUNK);
-        progress.begin(total);
+        let emitted: Vec<u64> = (0..counts.len())
+            .map(|l| {
+                block
+                    .end
+                    .min(starts[l + 1])
+                    .saturating_sub(block.start.max(starts[l]))
+            })
+            .collect();
+        let chunks = (block.end - block.start).div_ceil(PHOTONS_PER_CHUNK);
         let records: Vec<Vec<HitRecord>> = (0..chunks)
             .into_par_iter()
             .map(|chunk| {
-                let lo = chunk * PHOTONS_PER_CHUNK;
-                let hi = (lo + PHOTONS_PER_CHUNK).min(total);
+                let lo = block.start + chunk * PHOTONS_PER_CHUNK;
+                let hi = (lo + PHOTONS_PER_CHUNK).min(block.end);
                 let mut out = Vec::new();
                 let mut light = starts.partition_point(|&s| s <= lo) - 1;
                 for g in lo..hi {
@@ -183,9 +287,7 @@ impl<'a> PhotonTracer<'a> {
                 out
             })
             .collect();
-        progress.finish();
-        map.extend_traced(&counts, records.into_iter().flatten().collect());
-        Ok(())
+        (emitted, records.into_iter().flatten().collect())
     }
 
     /// The shading frame at a hit, on the side of `side` (two-sided surfaces).

@@ -73,7 +73,7 @@ fn round_trip_is_within_quantisation_bounds() {
     write_photon_file(&path, &map, &params).unwrap();
     let len = std::fs::metadata(&path).unwrap().len() as usize;
     let table = surface_table(&params);
-    let header = 28 + 20 * map.lights().len() + 17 * table.len() + 4;
+    let header = 40 + 28 * map.lights().len() + 17 * table.len() + 4;
     assert_eq!(len, header + 21 * map.len() + 4, "21 bytes per record");
     let back = read_photon_file_for(&path, &params).unwrap();
     assert_eq!(back.lights(), map.lights());
@@ -157,11 +157,11 @@ fn truncated_and_corrupt_files_are_typed_errors() {
         }
     }
     let mut v2 = good.clone();
-    v2[8] = 2;
+    v2[8] = 3;
     std::fs::write(&bad, &v2).unwrap();
     assert!(matches!(
         read_photon_file(&bad),
-        Err(PhotonError::UnsupportedVersion { found: 2, .. })
+        Err(PhotonError::UnsupportedVersion { found: 3, .. })
     ));
     std::fs::write(&bad, b"not a photon file at all, just some text").unwrap();
     assert!(matches!(
