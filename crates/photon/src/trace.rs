@@ -69,6 +69,9 @@ pub fn batch_range(counts: &[u64], index: u64, of: u64) -> Result<(Vec<u64>, Vec
         .unzip())
 }
 
+/// Receives each block of [`PhotonTracer::trace_streamed`]: the photons each light emitted in it and their hit records.
+pub type BlockSink<'a> = dyn FnMut(&[u64], Vec<HitRecord>) -> Result<()> + 'a;
+
 /// Settings of a particle-tracing run (section 2.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceOptions {
@@ -184,7 +187,7 @@ impl<'a> PhotonTracer<'a> {
         counts: &[u64],
         options: &TraceOptions,
         progress: &dyn Progress,
-        sink: &mut dyn FnMut(&[u64], Vec<HitRecord>) -> Result<()>,
+        sink: &mut BlockSink<'_>,
     ) -> Result<()> {
         self.check_options(options)?;
         let lights = self.scene.lights().len();
