@@ -47,6 +47,7 @@ use crate::grid::PointGrid;
 use crate::hit_record::{HitRecord, PhotonMap};
 use crate::kernel::{Kernel, kernel_support, kernel_support_silverman};
 use crate::parameterisation::{SurfaceParam, SurfaceParams};
+use crate::tally::SplatTally;
 use crate::trace::scene_brdfs;
 
 /// Which photons are splatted (section 2.2.1).
@@ -178,6 +179,45 @@ pub struct SplatEstimator {
 impl SplatEstimator {
     /// Indexes the selected photons of `map` per surface of `scene` and sets each surface's support (equation 3).
     pub fn build(scene: &Scene, map: &PhotonMap, options: EstimatorOptions) -> Result<Self> {
+        Self::build_counted(scene, map, options, None)
+    }
+
+    /// [`SplatEstimator::build`] for one batch of a larger map: the supports follow `tally`'s counts over the whole map (equation 3's `n`), so the estimates of the batches add up to the whole map's. The batch's light table must be the whole map's (equation 1).
+    pub fn build_tallied(
+        scene: &Scene,
+        batch: &PhotonMap,
+        options: EstimatorOptions,
+        tally: &SplatTally,
+    ) -> Result<Self> {
+        if tally.selection != options.selection {
+            return Err(PhotonError::InvalidOption {
+                option: "tally",
+                message: format!(
+                    "counted {:?} bounces, the estimator selects {:?}",
+                    tally.selection, options.selection
+                ),
+            });
+        }
+        if tally.counts.len() != scene.surfaces().len() {
+            return Err(PhotonError::InvalidOption {
+                option: "tally",
+                message: format!(
+                    "{} surfaces counted, the scene has {}",
+                    tally.counts.len(),
+                    scene.surfaces().len()
+                ),
+            });
+        }
+        Self::build_counted(scene, batch, options, Some(&tally.counts))
+    }
+
+    /// [`SplatEstimator::build`] with equation 3's `n` per surface from `counts` where given, else from `map`.
+    fn build_counted(
+        scene: &Scene,
+        map: &PhotonMap,
+        options: EstimatorOptions,
+        counts: Option<&[usize]>,
+    ) -> Result<Self> {
         match options.support {
             Support::Scaled(c) | Support::Fixed(c) | Support::Silverman(c)
                 if !(c > 0.0 && c.is_finite()) =>
@@ -235,13 +275,14 @@ impl SplatEstimator {
             s.powers.push(map.photon_power(r));
         }
         for (id, s) in surfaces.iter_mut().enumerate() {
+            let n = counts.map_or(s.points.len(), |c| c[id]);
             s.h = match options.support {
                 Support::Scaled(c) => {
-                    kernel_support(c, params.area(id as SurfaceId), s.points.len())
+                    kernel_support(c, params.area(id as SurfaceId), n)
                 }
                 Support::Fixed(h) => h,
                 Support::Silverman(c) => {
-                    kernel_support_silverman(c, params.area(id as SurfaceId), s.points.len())
+                    kernel_support_silverman(c, params.area(id as SurfaceId), n)
                 }
                 Support::GlossySilverman { kernel_c, c } => {
                     let area = params.area(id as SurfaceId);
@@ -251,9 +292,9 @@ impl SplatEstimator {
                         .and_then(|surface| scene.materials().get(surface.material as usize))
                         .is_some_and(|m| m.model.is_diffuse());
                     if diffuse {
-                        kernel_support(kernel_c, area, s.points.len())
+                        kernel_support(kernel_c, area, n)
                     } else {
-                        kernel_support_silverman(c, area, s.points.len())
+                        kernel_support_silverman(c, area, n)
                     }
                 }
             };

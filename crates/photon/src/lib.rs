@@ -49,6 +49,7 @@ pub mod parameterisation;
 mod progress;
 pub mod quantise;
 pub mod stream;
+pub mod tally;
 pub mod trace;
 
 pub use crc32::{Crc32, crc32};
@@ -66,5 +67,6 @@ pub use kernel::{Kernel, kernel_support, kernel_support_silverman, splat_triangl
 pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams};
 pub use progress::{NoProgress, Progress};
 pub use quantise::RECORD_BYTES;
+pub use tally::SplatTally;
 pub use stream::{PhotonBatches, PhotonFileReader, PhotonFileWriter, merge_photon_files};
 pub use trace::{PhotonTracer, TraceOptions, trace_photons};

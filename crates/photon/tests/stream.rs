@@ -252,3 +252,63 @@ fn appending_continues_the_run() {
     assert_eq!(left.len(), 2, "{left:?}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn tallied_batch_estimates_add_up_to_the_whole_maps() {
+    use lustre_photon::{BounceSelection, EstimatorOptions, SplatEstimator, SplatTally, Support};
+    let dir = scratch("tally");
+    let scene = builtin("glosbox").unwrap();
+    let bvh = Bvh::build(&scene);
+    let tracer = PhotonTracer::new(&scene, &bvh).unwrap();
+    let options = TraceOptions {
+        photons: 20_000,
+        seed: 5,
+        ..TraceOptions::default()
+    };
+    let path = dir.join("photons.lph");
+    trace_file(&scene, &path, &[0], &[options.photons], &options, true);
+    let whole = read_photon_file(&path).unwrap();
+    let estimator_options = EstimatorOptions {
+        support: Support::GlossySilverman {
+            kernel_c: 40.0,
+            c: 1.25,
+        },
+        selection: BounceSelection::Indirect,
+        edges: lustre_photon::Edges::Normalised,
+        ..EstimatorOptions::default()
+    };
+    let reference = SplatEstimator::build(&scene, &whole, estimator_options).unwrap();
+    let reader = PhotonFileReader::open_for(&path, tracer.params()).unwrap();
+    let mut tally = SplatTally::new(tracer.params(), BounceSelection::Indirect);
+    for batch in reader.batches(4_000).unwrap() {
+        tally.add(tracer.params(), batch.unwrap().records()).unwrap();
+    }
+    let batches: Vec<SplatEstimator> = reader
+        .batches(4_000)
+        .unwrap()
+        .map(|b| SplatEstimator::build_tallied(&scene, &b.unwrap(), estimator_options, &tally))
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert!(batches.len() >= 4, "{} batches", batches.len());
+    // Points on every surface: each surface's photons' own positions.
+    let mut checked = 0;
+    for splat in reference.splats().iter().step_by(97) {
+        let s = splat.surface;
+        assert!(batches.iter().all(|b| b.support(s) == reference.support(s)));
+        let x = splat.position + 0.3 * splat.h * splat.normal.any_orthonormal_vector();
+        let wo = splat.normal;
+        let expected = reference.radiance(s, x, splat.normal, wo);
+        let sum: glam::Vec3 = batches
+            .iter()
+            .map(|b| b.radiance(s, x, splat.normal, wo))
+            .sum();
+        let tolerance = 1e-5 * expected.max_element().max(1e-6);
+        assert!(
+            (sum - expected).abs().max_element() <= tolerance,
+            "surface {s}: {sum} against {expected}"
+        );
+        checked += usize::from(expected.max_element() > 0.0);
+    }
+    assert!(checked > 20, "{checked} lit points");
+    std::fs::remove_dir_all(dir).unwrap();
+}
