@@ -565,6 +565,79 @@ impl FrameGraph {
         Ok(())
     }
 
+    /// Adds one batch of splats to the frame that [`FrameGraph::render`] or
+    /// [`FrameGraph::render_accumulated`] left in the HDR target, and tone
+    /// maps the sum to `frame.output`: the splats of a photon map streamed
+    /// from disk in batches (Stürzlinger & Bastos 1997, section 2.1: hits
+    /// stored on disk; section 2.2), drawn through the pixel centres at every
+    /// level of the specular recursion as [`AccumulatedSplats::Once`] draws
+    /// them, so the GPU holds one batch at a time. The sum is kept in
+    /// [`RenderTargets::accumulation`]: `first` copies the frame there before
+    /// the first batch. `frame.splats` must be given.
+    pub fn add_splats(&self, ctx: &GpuContext, frame: &FrameInputs<'_>, first: bool) -> Result<()> {
+        let Some(accumulate) = &self.accumulate else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "frame",
+                message: "splat batches are summed by the accumulation pass \
+                          (FrameGraph::with_accumulation)"
+                    .into(),
+            });
+        };
+        let passes = self.resolve(frame)?;
+        let Some((inputs, pass)) = passes.splat else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "frame",
+                message: "add_splats needs a batch of splats (FrameInputs::splats)".into(),
+            });
+        };
+        self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
+        pass.prepare(&ctx.queue, inputs.filtering);
+        let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
+        let tree = self.view_tree(ctx, frame.camera)?;
+        let slots = views.write(ctx, &tree.views)?;
+        ctx.checked_result("splat batch", || {
+            let mut encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("splat-batch"),
+                });
+            let accumulation = &frame.targets.accumulation.texture;
+            if first {
+                encoder.copy_texture_to_texture(
+                    frame.targets.hdr.texture.as_image_copy(),
+                    accumulation.as_image_copy(),
+                    accumulation.size(),
+                );
+            }
+            let splat_light: [&dyn LightPass; 1] = [pass];
+            // The limit faces' light is in the frame already.
+            self.encode_light(
+                ctx,
+                &mut encoder,
+                frame,
+                &splat_light,
+                &views,
+                &tree,
+                &slots,
+                false,
+            )?;
+            accumulate.encode(&ctx.device, &mut encoder, frame.targets, 1.0, false);
+            encoder.copy_texture_to_texture(
+                accumulation.as_image_copy(),
+                frame.targets.hdr.texture.as_image_copy(),
+                accumulation.size(),
+            );
+            self.tonemap.encode(
+                &ctx.device,
+                &mut encoder,
+                &frame.targets.hdr.view,
+                frame.output,
+            );
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })
+    }
+
     /// Pairs each input of `frame` with its pass; an input without its pass is an error.
     fn resolve<'a>(&'a self, frame: &FrameInputs<'a>) -> Result<ResolvedPasses<'a>> {
         let splat = match (frame.splats, &self.splat) {

@@ -13,7 +13,7 @@
 //! | 36 | flags: bit 0 set when the seed, emission and bounce limit are known ([`Provenance`]) |
 //! | 37 | emission sampling (0 random, 1 Halton, 2 Sobol') |
 //! | 38 | largest number of hits per photon (`u8`) |
-//! | 39 | reserved, 0 |
+//! | 39 | 1 when the scene's area lights were replaced by cosine point lights of equal power (Stürzlinger & Bastos section 3), else 0 |
 //! | 40.. | light table, `L` × 28 bytes: power `Φ_i` (3 × `f32`), emitted photons `m_i` (`u64`), index of the light's first photon (`u64`) |
 //! | .. | surface table, `S` × 17 bytes: kind (`u8`, 0 planar, 1 curved), `u`/`v` minimum and extent (4 × `f32`) |
 //! | .. | CRC-32 of all header bytes above (`u32`) |
@@ -119,6 +119,8 @@ pub struct Provenance {
     pub emission: EmissionSampling,
     /// Largest number of hits recorded per photon.
     pub max_bounces: u8,
+    /// Whether the photons left cosine point lights that replaced the scene's area lights with their power (section 3: "replaced by point light sources with equivalent power for both phases"), rather than the area lights themselves.
+    pub point_lights: bool,
 }
 
 /// The byte of an emission sampling.
@@ -186,7 +188,7 @@ impl FileHeader {
         b.push(u8::from(p.is_some()));
         b.push(p.map_or(0, |p| emission_code(p.emission)));
         b.push(p.map_or(0, |p| p.max_bounces));
-        b.push(0);
+        b.push(p.map_or(0, |p| u8::from(p.point_lights)));
         for (i, l) in self.lights.iter().enumerate() {
             for c in l.power.to_array() {
                 b.extend_from_slice(&c.to_le_bytes());
@@ -334,16 +336,17 @@ pub(crate) fn read_header(path: &Path, file: &mut impl Read, found: u64) -> Resu
             2 => EmissionSampling::Sobol,
             k => return Err(corrupt(format!("emission sampling {k}"))),
         };
-        match bytes[36] {
-            0 => None,
-            1 if bytes[38] > 0 => Some(Provenance {
+        match (bytes[36], bytes[39]) {
+            (0, _) => None,
+            (1, lights @ (0 | 1)) if bytes[38] > 0 => Some(Provenance {
                 seed: le_u64(&bytes, 28),
                 emission,
                 max_bounces: bytes[38],
+                point_lights: lights == 1,
             }),
-            f => {
+            (f, lights) => {
                 return Err(corrupt(format!(
-                    "flags {f} with bounce limit {}",
+                    "flags {f}, bounce limit {}, light kind {lights}",
                     bytes[38]
                 )));
             }

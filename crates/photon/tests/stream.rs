@@ -26,6 +26,7 @@ fn provenance(options: &TraceOptions) -> Provenance {
         seed: options.seed,
         emission: options.emission,
         max_bounces: options.max_bounces,
+        point_lights: false,
     }
 }
 

@@ -76,7 +76,7 @@ use std::ops::Range;
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec2, Vec3};
 use lustre_geometry::{Bvh, Camera, Rgb, Scene, SurfaceId};
-use lustre_photon::{PlanarFrame, SplatEstimator, SurfaceParam};
+use lustre_photon::{PlanarFrame, SplatEstimator, SurfaceParam, SurfaceParams};
 use rayon::prelude::*;
 
 use crate::material::{GlossyModel, GpuMaterial};
@@ -293,6 +293,21 @@ fn pack_shelves(sizes: &[UVec2], max_side: u32) -> Result<(u32, u32, Vec<UVec2>)
     }
 }
 
+/// The atlas layers in (surface, side) order: one per lit side of each textured surface.
+fn layers_of(surfaces: &[Option<DiffuseSurfaceTexture>]) -> Vec<(usize, Side)> {
+    surfaces
+        .iter()
+        .enumerate()
+        .filter_map(|(id, s)| s.as_ref().map(|s| (id, s)))
+        .flat_map(|(id, s)| {
+            Side::BOTH
+                .into_iter()
+                .filter(|side| s.layers[side.index()].is_some())
+                .map(move |side| (id, side))
+        })
+        .collect()
+}
+
 /// Whether each side of each surface received a photon (by `SurfaceId`, [`Side::index`]); goes through [`SplatEstimator::splats`], one pass over the photons.
 fn lit_sides(estimator: &SplatEstimator, surfaces: usize) -> Vec<[bool; 2]> {
     let mut lit = vec![[false; 2]; surfaces];
@@ -321,7 +336,39 @@ impl DiffuseAtlas {
         estimator: &SplatEstimator,
         options: DiffuseTextureOptions,
     ) -> Result<Self> {
+        let lit = lit_sides(estimator, scene.surfaces().len());
+        let mut atlas = Self::layout(
+            scene,
+            estimator.params(),
+            &|id| estimator.support(id),
+            &lit,
+            options,
+        )?;
+        atlas.accumulate(estimator)?;
+        Ok(atlas)
+    }
+
+    /// The textures' layout with every texel black: a texture per planar Lambertian surface (as [`DiffuseAtlas::build`]), its texel size from `support` (the kernel support of equation 3 per surface), a layer per side where `lit` (by `SurfaceId`, [`Side::index`]) says photons arrive. With [`DiffuseAtlas::accumulate`], the atlas of a photon map streamed in batches ([`lustre_photon::SplatTally`] gives `lit` and, through the estimators, `support`).
+    pub fn layout(
+        scene: &Scene,
+        params: &SurfaceParams,
+        support: &dyn Fn(SurfaceId) -> f32,
+        lit: &[[bool; 2]],
+        options: DiffuseTextureOptions,
+    ) -> Result<Self> {
         options.validate()?;
+        if params.len() != scene.surfaces().len() || lit.len() != scene.surfaces().len() {
+            return Err(MprError::InvalidSetting {
+                what: "diffuse textures",
+                message: format!(
+                    "{} parameterised and {} tallied surfaces, scene `{}` has {}",
+                    params.len(),
+                    lit.len(),
+                    scene.name,
+                    scene.surfaces().len()
+                ),
+            });
+        }
         let reflectances: Vec<Option<Rgb>> = scene
             .materials()
             .iter()
@@ -332,19 +379,6 @@ impl DiffuseAtlas {
                     .map(|g| g.diffuse_reflectance())
             })
             .collect();
-        let params = estimator.params();
-        if params.len() != scene.surfaces().len() {
-            return Err(MprError::InvalidSetting {
-                what: "diffuse textures",
-                message: format!(
-                    "the estimator has {} surfaces, scene `{}` has {}",
-                    params.len(),
-                    scene.name,
-                    scene.surfaces().len()
-                ),
-            });
-        }
-        let lit = lit_sides(estimator, scene.surfaces().len());
         let mut surfaces: Vec<Option<DiffuseSurfaceTexture>> = Vec::new();
         for (id, surface) in scene.surfaces().iter().enumerate() {
             let reflectance = reflectances
@@ -359,7 +393,7 @@ impl DiffuseAtlas {
             };
             let extent = frame.max - frame.min;
             let t = match options.texel_size {
-                TexelSize::Support(f) => f * estimator.support(id as SurfaceId),
+                TexelSize::Support(f) => f * support(id as SurfaceId),
                 TexelSize::Metres(m) => m,
             };
             let (nu, tu) = sample_grid(extent.x, t, options.max_samples_per_side);
@@ -373,18 +407,7 @@ impl DiffuseAtlas {
                 layers: lit[id].map(|l| l.then_some(UVec2::ZERO)),
             }));
         }
-        // Layers in (surface, side) order.
-        let layers: Vec<(usize, Side)> = surfaces
-            .iter()
-            .enumerate()
-            .filter_map(|(id, s)| s.as_ref().map(|s| (id, s)))
-            .flat_map(|(id, s)| {
-                Side::BOTH
-                    .into_iter()
-                    .filter(|side| s.layers[side.index()].is_some())
-                    .map(move |side| (id, side))
-            })
-            .collect();
+        let layers = layers_of(&surfaces);
         let sizes: Vec<UVec2> = layers
             .iter()
             .map(|&(id, _)| surfaces[id].as_ref().map_or(UVec2::ONE, |s| s.size))
@@ -395,7 +418,30 @@ impl DiffuseAtlas {
                 s.layers[side.index()] = Some(corner);
             }
         }
-        // Evaluate every layer's samples in parallel, then place them.
+        Ok(Self {
+            width,
+            height,
+            texels: vec![[0.0f32; 4]; width as usize * height as usize],
+            surfaces,
+            options,
+        })
+    }
+
+    /// Adds the radiance of `estimator`'s photons to every texel (section 2.2.1: the flux density times `ρ/π`; rayon over samples). The estimators of a map's batches, built with the whole map's supports ([`SplatEstimator::build_tallied`]), add up to the map's textures.
+    pub fn accumulate(&mut self, estimator: &SplatEstimator) -> Result<()> {
+        if estimator.params().len() != self.surfaces.len() {
+            return Err(MprError::InvalidSetting {
+                what: "diffuse textures",
+                message: format!(
+                    "the estimator has {} surfaces, the atlas {}",
+                    estimator.params().len(),
+                    self.surfaces.len()
+                ),
+            });
+        }
+        let surfaces = &self.surfaces;
+        let layers = layers_of(surfaces);
+        // Evaluate every layer's samples in parallel, then add them in place.
         let values: Vec<Vec<[f32; 4]>> = layers
             .par_iter()
             .map(|&(id, side)| {
@@ -420,21 +466,23 @@ impl DiffuseAtlas {
                     .collect()
             })
             .collect();
-        let mut texels = vec![[0.0f32; 4]; width as usize * height as usize];
-        for ((&(id, _), corner), layer) in layers.iter().zip(&corners).zip(values) {
-            let size = surfaces[id].as_ref().map_or(UVec2::ONE, |s| s.size);
-            for (j, row) in layer.chunks_exact(size.x as usize).enumerate() {
-                let start = (corner.y as usize + j) * width as usize + corner.x as usize;
-                texels[start..start + row.len()].copy_from_slice(row);
+        for (&(id, side), layer) in layers.iter().zip(values) {
+            let Some(s) = self.surfaces[id].as_ref() else {
+                continue;
+            };
+            let Some(corner) = s.layers[side.index()] else {
+                continue;
+            };
+            for (j, row) in layer.chunks_exact(s.size.x as usize).enumerate() {
+                let start = (corner.y as usize + j) * self.width as usize + corner.x as usize;
+                for (texel, value) in self.texels[start..start + row.len()].iter_mut().zip(row) {
+                    for c in 0..4 {
+                        texel[c] += value[c];
+                    }
+                }
             }
         }
-        Ok(Self {
-            width,
-            height,
-            texels,
-            surfaces,
-            options,
-        })
+        Ok(())
     }
 
     /// Per `SurfaceId`, whether this pass renders the surface (the `exclude` mask of [`crate::passes::splat::SplatBuffers::new_excluding`]).
