@@ -277,9 +277,7 @@ impl SplatEstimator {
         for (id, s) in surfaces.iter_mut().enumerate() {
             let n = counts.map_or(s.points.len(), |c| c[id]);
             s.h = match options.support {
-                Support::Scaled(c) => {
-                    kernel_support(c, params.area(id as SurfaceId), n)
-                }
+                Support::Scaled(c) => kernel_support(c, params.area(id as SurfaceId), n),
                 Support::Fixed(h) => h,
                 Support::Silverman(c) => {
                     kernel_support_silverman(c, params.area(id as SurfaceId), n)

@@ -14,7 +14,8 @@
 //! | 37 | emission sampling (0 random, 1 Halton, 2 Sobol') |
 //! | 38 | largest number of hits per photon (`u8`) |
 //! | 39 | 1 when the scene's area lights were replaced by cosine point lights of equal power (Stürzlinger & Bastos section 3), else 0 |
-//! | 40.. | light table, `L` × 28 bytes: power `Φ_i` (3 × `f32`), emitted photons `m_i` (`u64`), index of the light's first photon (`u64`) |
+//! | 40..44 | fingerprint of the scene's materials and lights ([`scene_fingerprint`], `u32`) |
+//! | 44.. | light table, `L` × 28 bytes: power `Φ_i` (3 × `f32`), emitted photons `m_i` (`u64`), index of the light's first photon (`u64`) |
 //! | .. | surface table, `S` × 17 bytes: kind (`u8`, 0 planar, 1 curved), `u`/`v` minimum and extent (4 × `f32`) |
 //! | .. | CRC-32 of all header bytes above (`u32`) |
 //! | .. | `N` records of 21 bytes ([`crate::quantise`]) |
@@ -59,7 +60,7 @@ pub const FORMAT_VERSION: u32 = 2;
 /// Bytes before the light table in version 1.
 const FIXED_HEADER_V1: usize = 28;
 /// Bytes before the light table.
-const FIXED_HEADER: usize = 40;
+const FIXED_HEADER: usize = 44;
 /// Bytes per light table entry in version 1.
 const LIGHT_ENTRY_V1: usize = 20;
 /// Bytes per light table entry.
@@ -121,6 +122,20 @@ pub struct Provenance {
     pub max_bounces: u8,
     /// Whether the photons left cosine point lights that replaced the scene's area lights with their power (section 3: "replaced by point light sources with equivalent power for both phases"), rather than the area lights themselves.
     pub point_lights: bool,
+    /// [`scene_fingerprint`] of the scene as traced: its materials and lights (the surface table covers its geometry).
+    pub scene: u32,
+}
+
+/// A CRC-32 of a scene's materials (names, models, emission) and lights, as `Debug` writes them: photons traced in one scene must not be used with another of the same geometry (`cornell` and `glosbox`).
+pub fn scene_fingerprint(scene: &lustre_geometry::Scene) -> u32 {
+    let mut crc = crate::crc32::Crc32::new();
+    for m in scene.materials() {
+        crc.update(format!("{}|{:?}|{:?};", m.name, m.model, m.emission).as_bytes());
+    }
+    for l in scene.lights() {
+        crc.update(format!("{l:?};").as_bytes());
+    }
+    crc.value()
 }
 
 /// The byte of an emission sampling.
@@ -189,6 +204,7 @@ impl FileHeader {
         b.push(p.map_or(0, |p| emission_code(p.emission)));
         b.push(p.map_or(0, |p| p.max_bounces));
         b.push(p.map_or(0, |p| u8::from(p.point_lights)));
+        b.extend_from_slice(&p.map_or(0, |p| p.scene).to_le_bytes());
         for (i, l) in self.lights.iter().enumerate() {
             for c in l.power.to_array() {
                 b.extend_from_slice(&c.to_le_bytes());
@@ -343,6 +359,7 @@ pub(crate) fn read_header(path: &Path, file: &mut impl Read, found: u64) -> Resu
                 emission,
                 max_bounces: bytes[38],
                 point_lights: lights == 1,
+                scene: le_u32(&bytes, 40),
             }),
             (f, lights) => {
                 return Err(corrupt(format!(

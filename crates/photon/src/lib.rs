@@ -59,7 +59,7 @@ pub use error::{PhotonError, Result};
 pub use estimator::{BounceSelection, Edges, EstimatorOptions, Splat, SplatEstimator, Support};
 pub use file::{
     FileHeader, Provenance, append_photon_file, read_photon_file, read_photon_file_for,
-    write_photon_file,
+    scene_fingerprint, write_photon_file,
 };
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};
@@ -67,6 +67,6 @@ pub use kernel::{Kernel, kernel_support, kernel_support_silverman, splat_triangl
 pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams};
 pub use progress::{NoProgress, Progress};
 pub use quantise::RECORD_BYTES;
-pub use tally::SplatTally;
 pub use stream::{PhotonBatches, PhotonFileReader, PhotonFileWriter, merge_photon_files};
+pub use tally::SplatTally;
 pub use trace::{PhotonTracer, TraceOptions, trace_photons};

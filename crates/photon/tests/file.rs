@@ -73,7 +73,7 @@ fn round_trip_is_within_quantisation_bounds() {
     write_photon_file(&path, &map, &params).unwrap();
     let len = std::fs::metadata(&path).unwrap().len() as usize;
     let table = surface_table(&params);
-    let header = 40 + 28 * map.lights().len() + 17 * table.len() + 4;
+    let header = 44 + 28 * map.lights().len() + 17 * table.len() + 4;
     assert_eq!(len, header + 21 * map.len() + 4, "21 bytes per record");
     let back = read_photon_file_for(&path, &params).unwrap();
     assert_eq!(back.lights(), map.lights());

@@ -20,9 +20,10 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// The provenance of a run with `options`.
-fn provenance(options: &TraceOptions) -> Provenance {
+/// The provenance of a run with `options` in `scene`.
+fn provenance(scene: &Scene, options: &TraceOptions) -> Provenance {
     Provenance {
+        scene: lustre_photon::scene_fingerprint(scene),
         seed: options.seed,
         emission: options.emission,
         max_bounces: options.max_bounces,
@@ -47,7 +48,7 @@ fn trace_file(
         &powers,
         first.to_vec(),
         tracer.params(),
-        known.then(|| provenance(options)),
+        known.then(|| provenance(scene, options)),
     )
     .unwrap();
     tracer
@@ -282,7 +283,9 @@ fn tallied_batch_estimates_add_up_to_the_whole_maps() {
     let reader = PhotonFileReader::open_for(&path, tracer.params()).unwrap();
     let mut tally = SplatTally::new(tracer.params(), BounceSelection::Indirect);
     for batch in reader.batches(4_000).unwrap() {
-        tally.add(tracer.params(), batch.unwrap().records()).unwrap();
+        tally
+            .add(tracer.params(), batch.unwrap().records())
+            .unwrap();
     }
     let batches: Vec<SplatEstimator> = reader
         .batches(4_000)

@@ -1,10 +1,14 @@
-//! `lustre`: information about a scene, Mitsuba 3 export, and headless
-//! rendering (`lustre render`, see [`render`]).
+//! `lustre`: information about a scene, Mitsuba 3 export, headless
+//! rendering (`lustre render`, see [`render`]), and photon files traced,
+//! merged and read in bounded memory (`lustre trace`, `lustre merge`, see
+//! [`trace`]).
 
 mod render;
 mod render_density;
 mod render_frames;
+mod render_stream;
 mod scene_arg;
+mod trace;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,9 +29,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Print a scene's triangles, surfaces, materials, lights and bounds.
+    /// Print a scene's triangles, surfaces, materials, lights and bounds, or a photon file's header.
     Info {
-        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom) or an OBJ file.
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom), an OBJ file, or a photon file (`.lph`).
         scene: String,
     },
     /// Write a scene as Mitsuba 3 XML, with its meshes as PLY files beside it.
@@ -49,6 +53,17 @@ enum Command {
     },
     /// Render a scene to an EXR or PNG file (photon splatting, Stürzlinger & Bastos 1997).
     Render(render::RenderArgs),
+    /// Trace photons into a photon file on disk in bounded memory (`lustre render --photons-file` reads it).
+    Trace(trace::TraceArgs),
+    /// Merge the photon files of one run's batches (`lustre trace --batch I/N`) into the file of the whole run.
+    Merge {
+        /// The batch files, in any order.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// The merged file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// Exit status when no GPU adapter (not even the software one) exists, so scripts can skip rather than fail.
@@ -168,6 +183,9 @@ fn export(
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
+        Command::Info { scene } if scene.to_ascii_lowercase().ends_with(".lph") => {
+            trace::info(std::path::Path::new(scene))
+        }
         Command::Info { scene } => info(scene),
         Command::ExportMitsuba {
             scene,
@@ -177,6 +195,8 @@ fn main() -> ExitCode {
             approximate,
         } => export(scene, out, *size, *spp, *approximate),
         Command::Render(args) => render::run(args),
+        Command::Trace(args) => trace::run(args),
+        Command::Merge { inputs, out } => trace::merge(inputs, out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

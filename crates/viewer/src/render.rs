@@ -40,7 +40,6 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::ValueEnum;
-use indicatif::{ProgressBar, ProgressStyle};
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
@@ -53,14 +52,14 @@ use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance, specular_fac
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::virtual_light::{
-    MAX_SHADOW_DEPTH, SpecularShadows, VirtualLightSettings, drawn_by_virtual_lights, equation_7,
+    MAX_SHADOW_DEPTH, SpecularShadows, VirtualLightSettings, equation_7,
 };
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
 };
 use lustre_photon::{
-    BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, PhotonMap, Progress,
-    SplatEstimator, Support, TraceOptions, trace_photons,
+    BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, SplatEstimator, Support,
+    TraceOptions, trace_photons,
 };
 use serde_json::json;
 
@@ -69,7 +68,9 @@ use crate::render_density::{
     DensitySettings, DetpAcceleration, Estimator, GlossyEstimate, PreTestArg, vertex_lit_scene,
     vertex_radiance,
 };
+use crate::render_stream::{StreamedPhotons, without_virtual_light_photons};
 use crate::scene_arg;
+use crate::trace::{PhotonBar, emission_of};
 
 /// Rendering technique.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -243,6 +244,12 @@ pub struct RenderArgs {
     /// Photons to emit over all lights.
     #[arg(long, default_value_t = 1_000_000)]
     pub photons: u64,
+    /// Read the photons from this file (`lustre trace`) in batches instead of tracing them: memory stays bounded by one batch whatever the file's size (splatting techniques).
+    #[arg(long, conflicts_with_all = ["photons", "seed", "emission"])]
+    pub photons_file: Option<PathBuf>,
+    /// Hit records per batch with --photons-file (host memory about 0.5 KB per record of a batch).
+    #[arg(long, default_value_t = 1_000_000, requires = "photons_file")]
+    pub batch_records: usize,
     /// The constant C of the kernel support h = C sqrt(A/n) (equation 3).
     #[arg(long, default_value_t = DEFAULT_KERNEL_C, allow_negative_numbers = true)]
     pub kernel_c: f32,
@@ -402,6 +409,11 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// Whether the photons and the direct light leave point lights that replace the area lights (section 3; one light sample of a direct-light technique).
+    pub fn point_lights(&self) -> bool {
+        self.technique.direct_light() && self.light_samples == 1
+    }
+
     /// The splats' support rule (equation 3 or Silverman's rate, section 2.2) from `--support`, `--kernel-c` and `--support-c`.
     pub fn support_rule(&self) -> Support {
         match self.support {
@@ -468,19 +480,12 @@ fn ms(start: Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
 }
 
-/// A progress bar on stderr for photon tracing (hidden when stderr is not a terminal).
-struct TraceBar(ProgressBar);
-
-impl Progress for TraceBar {
-    fn begin(&self, total: u64) {
-        self.0.set_length(total);
-    }
-    fn advance(&self, photons: u64) {
-        self.0.inc(photons);
-    }
-    fn finish(&self) {
-        self.0.finish_and_clear();
-    }
+/// The process's peak resident memory (`VmHWM` of `/proc/self/status`), where the system reports it.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// The scene with every area light replaced by a cosine point light of equal power (section 3: "small area light sources ... replaced by point light sources with equivalent power for both phases").
@@ -517,6 +522,30 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     if args.aa == 0 {
         bail!("--aa 0: at least one sample per pixel is needed");
+    }
+    if args.photons_file.is_some() {
+        if !matches!(
+            args.technique,
+            Technique::Splat | Technique::SplatDirect | Technique::Mpr
+        ) {
+            bail!(
+                "--photons-file: only the splatting techniques (splat, splat-direct, mpr) read \
+                 photons in batches; --technique {:?} needs them all in memory",
+                args.technique
+            );
+        }
+        if args.aa_splats {
+            bail!(
+                "--photons-file: batches of splats are drawn once through the pixel centres; \
+                 leave out --aa-splats"
+            );
+        }
+        if args.batch_records == 0 {
+            bail!("--batch-records 0: at least one record per batch");
+        }
+        if args.frames.is_some() {
+            bail!("--photons-file: --frames animates the per-vertex techniques only");
+        }
     }
     let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
         ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
@@ -595,7 +624,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Section 3: one point light of equal power for both phases; with more
     // light samples the photons leave the area light itself and only the
     // direct light uses its jittered point lights.
-    if args.technique.direct_light() && args.light_samples == 1 {
+    if args.point_lights() {
         scene = with_point_lights(&scene)?;
     }
     if density.is_some() {
@@ -655,19 +684,28 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Diffuse surfaces precomputed into textures (section 2.2.1).
     let start = Instant::now();
     let diffuse = args.diffuse;
+    let texture_options = DiffuseTextureOptions {
+        lambertian_lobes: diffuse == DiffuseArg::Texture,
+        ..DiffuseTextureOptions::default()
+    };
     let atlas = match (diffuse, &splatting) {
         (DiffuseArg::Texture | DiffuseArg::DiffuseSurfaces, Some(splatting)) => Some(
-            DiffuseAtlas::build(
-                &scene,
-                splatting
-                    .lambertian
-                    .as_ref()
-                    .unwrap_or(&splatting.estimator),
-                DiffuseTextureOptions {
-                    lambertian_lobes: diffuse == DiffuseArg::Texture,
-                    ..DiffuseTextureOptions::default()
-                },
-            )
+            match &splatting.photons {
+                Photons::Memory {
+                    estimator,
+                    lambertian,
+                } => DiffuseAtlas::build(
+                    &scene,
+                    lambertian.as_ref().unwrap_or(estimator),
+                    texture_options,
+                )
+                .map_err(anyhow::Error::from),
+                Photons::File(streamed) => streamed.atlas(
+                    &scene,
+                    splatting.lambertian_options.unwrap_or(splatting.options),
+                    texture_options,
+                ),
+            }
             .context("cannot precompute the diffuse textures")?,
         ),
         _ => None,
@@ -700,20 +738,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..glossy_images
     };
     let imaged = imaged_surfaces(&scene, &glossy_images);
-    let splats = splatting
-        .as_ref()
-        .map(|s| {
-            SplatBuffers::new_excluding_imaged(
-                &ctx,
-                &scene,
-                &s.estimator,
-                glossy,
-                &exclude,
-                &imaged,
-            )
-        })
-        .transpose()
-        .with_context(|| format!("scene `{}`", scene.name))?;
+    // Streamed photons are splatted batch by batch after the frame.
+    let splats = match splatting.as_ref().map(|s| &s.photons) {
+        Some(Photons::Memory { estimator, .. }) => Some(
+            SplatBuffers::new_excluding_imaged(&ctx, &scene, estimator, glossy, &exclude, &imaged)
+                .with_context(|| format!("scene `{}`", scene.name))?,
+        ),
+        _ => None,
+    };
+    let streamed = match splatting.as_ref().map(|s| &s.photons) {
+        Some(Photons::File(streamed)) => Some(streamed),
+        _ => None,
+    };
     let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
     let mut graph =
         FrameGraph::new(&ctx, output_format)?.with_emission(&ctx, targets.hdr_format(), &scene)?;
@@ -775,7 +811,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             &glossy_images,
         )?;
     }
-    if args.aa > 1 {
+    if args.aa > 1 || streamed.is_some() {
         graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
     }
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -856,6 +892,49 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .poll(wgpu::PollType::wait_indefinitely())
         .context("waiting for the frame")?;
     timings.insert("frame".into(), json!(ms(start)));
+    // A streamed photon file: each batch's splats uploaded, added, dropped.
+    let mut streamed_splats = (0u64, 0u64);
+    if let (Some(streamed), Some(splatting)) = (streamed, &splatting) {
+        let start = Instant::now();
+        let bar = PhotonBar::new("splatting photons", splatting.hit_records)?;
+        streamed.for_each_batch(
+            &scene,
+            &mut |batch| {
+                let estimator = streamed.estimator(&scene, batch, splatting.options)?;
+                let buffers = SplatBuffers::new_excluding_imaged(
+                    &ctx, &scene, &estimator, glossy, &exclude, &imaged,
+                )
+                .with_context(|| format!("scene `{}`", scene.name))?;
+                graph.add_splats(
+                    &ctx,
+                    &FrameInputs {
+                        scene: &scene_buffers,
+                        camera: &camera,
+                        tonemap: &Tonemap::default(),
+                        targets: &targets,
+                        output: &output_view,
+                        splats: Some(SplatInputs {
+                            buffers: &buffers,
+                            restriction,
+                            filtering,
+                        }),
+                        direct: None,
+                        diffuse: None,
+                    },
+                    streamed_splats.1 == 0,
+                )?;
+                // One batch on the GPU at a time.
+                ctx.device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .context("waiting for a batch of splats")?;
+                streamed_splats.0 += u64::from(buffers.count);
+                streamed_splats.1 += 1;
+                Ok(())
+            },
+            &bar,
+        )?;
+        timings.insert("streamed_splats".into(), json!(ms(start)));
+    }
 
     let start = Instant::now();
     let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
@@ -891,12 +970,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     timings.insert("total".into(), json!(total));
 
     let sidecar = sidecar_path(&args.out);
-    let info = json!({
+    let mut info = json!({
         "scene": scene.name,
         "technique": args.technique.to_possible_value().map(|v| v.get_name().to_owned()),
         "photons": splatting.as_ref().map_or(args.photons, |s| s.emitted),
         "hit_records": splatting.as_ref().map(|s| s.hit_records),
-        "splats": splats.as_ref().map(|s| s.count),
+        "splats": splats.as_ref().map(|s| u64::from(s.count)).or(streamed.map(|_| streamed_splats.0)),
         "kernel": format!("{kernel:?}"),
         "kernel_c": args.kernel_c,
         "support": format!("{:?}", args.support_rule()),
@@ -939,6 +1018,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "timings_ms": timings,
         "version": env!("CARGO_PKG_VERSION"),
     });
+    info["photons_file"] = json!(args.photons_file.as_ref().map(|p| json!({
+        "path": p.display().to_string(),
+        "batches": streamed_splats.1,
+        "batch_records": args.batch_records,
+    })));
+    info["peak_memory_bytes"] = json!(peak_memory_bytes());
     lustre_image::write_json_atomic(&sidecar, &info)
         .with_context(|| format!("cannot write {}", sidecar.display()))?;
     eprintln!("wrote {} and {}", args.out.display(), sidecar.display());
@@ -949,17 +1034,30 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 struct Splatting {
     /// Photons emitted.
     emitted: u64,
-    /// Hit records of the photon map.
-    hit_records: usize,
+    /// Hit records of the photon map (after the virtual lights' filter).
+    hit_records: u64,
     /// Emission sampling of the photon tracer.
     emission: EmissionSampling,
-    /// The splats.
-    estimator: SplatEstimator,
-    /// Under `--support glossy-silverman` with `--diffuse texture`: the same photons with equation 3's support on every surface, for the Lambertian lobes of glossy surfaces in their textures (a diffuse estimate keeps equation 3's support); `None` where `estimator` serves.
-    lambertian: Option<SplatEstimator>,
+    /// The estimator settings of the splats.
+    options: EstimatorOptions,
+    /// Under `--support glossy-silverman` with `--diffuse texture`: the settings with equation 3's support on every surface, for the Lambertian lobes of glossy surfaces in their textures (a diffuse estimate keeps equation 3's support); `None` where `options` serve.
+    lambertian_options: Option<EstimatorOptions>,
+    /// Where the photons are.
+    photons: Photons,
 }
 
-/// Particle tracing (section 2.1) and one splat per selected hit, sized by equation 3 (section 2.2).
+/// The photons of a render: traced into memory, or streamed from a file.
+enum Photons {
+    /// Traced now: the splats' estimator, and the Lambertian lobes' one where its settings differ.
+    Memory {
+        estimator: SplatEstimator,
+        lambertian: Option<SplatEstimator>,
+    },
+    /// Read from `--photons-file` batch by batch.
+    File(StreamedPhotons),
+}
+
+/// Particle tracing (section 2.1), or a photon file's tally, and the splat settings (section 2.2).
 fn splat_setup(
     args: &RenderArgs,
     scene: &Scene,
@@ -968,38 +1066,69 @@ fn splat_setup(
     virtual_depth: Option<u32>,
     timings: &mut serde_json::Map<String, serde_json::Value>,
 ) -> anyhow::Result<Splatting> {
-    let start = Instant::now();
-    let bar = ProgressBar::new(args.photons).with_style(
-        ProgressStyle::with_template("tracing photons {bar:40} {pos}/{len} ({eta} left)")
-            .context("progress bar template")?,
-    );
-    let options = TraceOptions {
-        photons: args.photons,
-        seed: args.seed,
-        emission: match args.emission {
-            EmissionArg::Random => EmissionSampling::Random,
-            EmissionArg::Halton => EmissionSampling::Halton,
-            EmissionArg::Sobol => EmissionSampling::Sobol,
-        },
-        ..TraceOptions::default()
+    let selection = match args.technique {
+        Technique::Splat => BounceSelection::All,
+        Technique::SplatDirect | Technique::Mpr => BounceSelection::Indirect,
+        Technique::Detp | Technique::Impact | Technique::Photonmap => {
+            bail!("--technique {:?} does not splat", args.technique)
+        }
     };
-    let mut map = trace_photons(scene, bvh, &options, &TraceBar(bar))
-        .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
-    timings.insert("trace".into(), json!(ms(start)));
+    let options = EstimatorOptions {
+        kernel,
+        support: args.support_rule(),
+        selection,
+        edges: args.edges.into(),
+    };
+    let lambertian_options = match (args.support, args.diffuse) {
+        (SupportArg::GlossySilverman, DiffuseArg::Texture) => Some(EstimatorOptions {
+            support: Support::Scaled(args.kernel_c),
+            ..options
+        }),
+        _ => None,
+    };
     // Light that passed only mirrors and slabs is drawn by the virtual
     // lights (Diefenbach & Badler 1997, sections 4.2, 6): the splats leave it out.
-    if let Some(depth) = virtual_depth.filter(|&d| d > 0) {
-        let faces = specular_faces(scene);
-        let drawn = drawn_by_virtual_lights(map.records(), &faces, depth);
-        let kept = map
-            .records()
-            .iter()
-            .zip(&drawn)
-            .filter(|&(_, &d)| !d)
-            .map(|(r, _)| *r)
-            .collect();
-        map = PhotonMap::from_parts(map.lights().to_vec(), kept)
-            .context("cannot leave the virtual lights' photons out")?;
+    let virtual_depth = virtual_depth.filter(|&d| d > 0);
+    let start = Instant::now();
+    if let Some(path) = &args.photons_file {
+        let streamed = StreamedPhotons::open(
+            path,
+            scene,
+            args.point_lights(),
+            args.batch_records,
+            &options,
+            virtual_depth,
+        )?;
+        timings.insert("tally".into(), json!(ms(start)));
+        eprintln!(
+            "{}: {} photons, {} hit records ({} indirect), read in batches of {} records",
+            path.display(),
+            streamed.emitted(),
+            streamed.kept_records,
+            streamed.indirect_records,
+            args.batch_records
+        );
+        return Ok(Splatting {
+            emitted: streamed.emitted(),
+            hit_records: streamed.kept_records,
+            emission: streamed.emission(),
+            options,
+            lambertian_options,
+            photons: Photons::File(streamed),
+        });
+    }
+    let trace_options = TraceOptions {
+        photons: args.photons,
+        seed: args.seed,
+        emission: emission_of(args.emission),
+        ..TraceOptions::default()
+    };
+    let bar = PhotonBar::new("tracing photons", args.photons)?;
+    let mut map = trace_photons(scene, bvh, &trace_options, &bar)
+        .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
+    timings.insert("trace".into(), json!(ms(start)));
+    if let Some(depth) = virtual_depth {
+        map = without_virtual_light_photons(map, &specular_faces(scene), depth)?;
     }
     eprintln!(
         "traced {} photons: {} hit records ({} indirect)",
@@ -1010,42 +1139,23 @@ fn splat_setup(
 
     // Preprocessing (section 2.2): one splat per selected hit, sized by equation 3.
     let start = Instant::now();
-    let selection = match args.technique {
-        Technique::Splat => BounceSelection::All,
-        Technique::SplatDirect | Technique::Mpr => BounceSelection::Indirect,
-        Technique::Detp | Technique::Impact | Technique::Photonmap => {
-            bail!("--technique {:?} does not splat", args.technique)
-        }
-    };
-    let estimator_options = EstimatorOptions {
-        kernel,
-        support: args.support_rule(),
-        selection,
-        edges: args.edges.into(),
-    };
     let estimator =
-        SplatEstimator::build(scene, &map, estimator_options).context("cannot build the splats")?;
-    let lambertian = match (args.support, args.diffuse) {
-        (SupportArg::GlossySilverman, DiffuseArg::Texture) => Some(
-            SplatEstimator::build(
-                scene,
-                &map,
-                EstimatorOptions {
-                    support: Support::Scaled(args.kernel_c),
-                    ..estimator_options
-                },
-            )
-            .context("cannot build the splats of the Lambertian lobes")?,
-        ),
-        _ => None,
-    };
+        SplatEstimator::build(scene, &map, options).context("cannot build the splats")?;
+    let lambertian = lambertian_options
+        .map(|o| SplatEstimator::build(scene, &map, o))
+        .transpose()
+        .context("cannot build the splats of the Lambertian lobes")?;
     timings.insert("splat_setup".into(), json!(ms(start)));
     Ok(Splatting {
         emitted: map.emitted(),
-        hit_records: map.len(),
-        emission: options.emission,
-        estimator,
-        lambertian,
+        hit_records: map.len() as u64,
+        emission: trace_options.emission,
+        options,
+        lambertian_options,
+        photons: Photons::Memory {
+            estimator,
+            lambertian,
+        },
     })
 }
 

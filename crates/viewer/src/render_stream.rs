@@ -1,0 +1,211 @@
+//! `lustre render --photons-file`: a photon file read in batches, so memory is bounded by one batch whatever the file's size (Stürzlinger & Bastos 1997, section 2.1: hits stored on disk; section 2.2 splats; section 2.2.1 diffuse textures).
+//!
+//! Three passes over the file: a tally (equation 3's photon count per
+//! surface and the lit sides of planar surfaces), the diffuse textures
+//! (each batch's flux added to the atlas), and, after the frame without
+//! splats is drawn, each batch's splats uploaded, added to the frame on the
+//! GPU and dropped ([`lustre_mpr::FrameGraph::add_splats`]).
+
+use std::path::Path;
+
+use anyhow::{Context, bail};
+use lustre_geometry::Scene;
+use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
+use lustre_mpr::passes::specular::{SpecularFace, specular_faces};
+use lustre_mpr::virtual_light::drawn_by_virtual_lights;
+use lustre_photon::{
+    EmissionSampling, EstimatorOptions, PhotonFileReader, PhotonMap, SplatEstimator, SplatTally,
+    SurfaceParams, scene_fingerprint,
+};
+
+use crate::trace::PhotonBar;
+
+/// `map` without the records of light that reached them through mirrors and slabs only, which the virtual lights draw (Diefenbach & Badler 1997, sections 4.2, 6; [`drawn_by_virtual_lights`]); `map` must hold whole photon paths.
+pub fn without_virtual_light_photons(
+    map: PhotonMap,
+    faces: &[SpecularFace],
+    depth: u32,
+) -> anyhow::Result<PhotonMap> {
+    let drawn = drawn_by_virtual_lights(map.records(), faces, depth);
+    let kept = map
+        .records()
+        .iter()
+        .zip(&drawn)
+        .filter(|&(_, &d)| !d)
+        .map(|(r, _)| *r)
+        .collect();
+    PhotonMap::from_parts(map.lights().to_vec(), kept)
+        .context("cannot leave the virtual lights' photons out")
+}
+
+/// A verified photon file and the tally of its selected photons.
+pub struct StreamedPhotons {
+    /// The file.
+    reader: PhotonFileReader,
+    /// Records per batch.
+    batch_records: usize,
+    /// The scene's parameterisations.
+    params: SurfaceParams,
+    /// Equation 3's counts and the lit sides over the whole file.
+    tally: SplatTally,
+    /// Depth of the virtual lights whose photons the splats leave out (Diefenbach & Badler 1997, sections 4.2, 6), if any.
+    virtual_depth: Option<u32>,
+    /// Hit records kept after the virtual lights' filter.
+    pub kept_records: u64,
+    /// Indirect records kept.
+    pub indirect_records: u64,
+}
+
+impl StreamedPhotons {
+    /// Opens `path` for `scene` (whose lights emit as the file says: `point_lights`), checks it, and tallies it batch by batch.
+    pub fn open(
+        path: &Path,
+        scene: &Scene,
+        point_lights: bool,
+        batch_records: usize,
+        options: &EstimatorOptions,
+        virtual_depth: Option<u32>,
+    ) -> anyhow::Result<Self> {
+        let params = SurfaceParams::new(scene);
+        let reader = PhotonFileReader::open_for(path, &params).with_context(|| {
+            format!(
+                "--photons-file {}: not a photon file of `{}` as this render loads it",
+                path.display(),
+                scene.name
+            )
+        })?;
+        let Some(provenance) = reader.header().provenance else {
+            bail!(
+                "--photons-file {}: the file does not record how its lights emitted; \
+                 trace it with `lustre trace`",
+                path.display()
+            );
+        };
+        if provenance.point_lights != point_lights {
+            let (file, render) = if provenance.point_lights {
+                ("area lights replaced by point lights", "the area lights")
+            } else {
+                ("the area lights", "point lights of equal power")
+            };
+            bail!(
+                "--photons-file {}: its photons left {file}, this render's photons leave {render}; \
+                 trace with `lustre trace --area-lights {}`",
+                path.display(),
+                if point_lights { "points" } else { "area" }
+            );
+        }
+        if provenance.scene != scene_fingerprint(scene) {
+            bail!(
+                "--photons-file {}: traced in another scene than `{}` (its materials or lights \
+                 differ); trace it with `lustre trace {}`",
+                path.display(),
+                scene.name,
+                scene.name
+            );
+        }
+        let mut streamed = Self {
+            reader,
+            batch_records,
+            tally: SplatTally::new(&params, options.selection),
+            params,
+            virtual_depth,
+            kept_records: 0,
+            indirect_records: 0,
+        };
+        let bar = PhotonBar::new("reading photons", streamed.reader.header().records)?;
+        let mut tally = SplatTally::new(&streamed.params, options.selection);
+        let (mut kept, mut indirect) = (0u64, 0u64);
+        streamed.for_each_batch(
+            scene,
+            &mut |batch| {
+                tally.add(&streamed.params, batch.records())?;
+                kept += batch.len() as u64;
+                indirect += batch.indirect().count() as u64;
+                Ok(())
+            },
+            &bar,
+        )?;
+        streamed.tally = tally;
+        streamed.kept_records = kept;
+        streamed.indirect_records = indirect;
+        Ok(streamed)
+    }
+
+    /// The emission sampling the file was traced with.
+    pub fn emission(&self) -> EmissionSampling {
+        self.reader
+            .header()
+            .provenance
+            .map_or(EmissionSampling::Random, |p| p.emission)
+    }
+
+    /// Photons emitted by the file's lights.
+    pub fn emitted(&self) -> u64 {
+        self.reader.header().emitted()
+    }
+
+    /// Calls `f` with each batch of the file, the virtual lights' photons left out; `bar` counts records.
+    pub fn for_each_batch(
+        &self,
+        scene: &Scene,
+        f: &mut dyn FnMut(&PhotonMap) -> anyhow::Result<()>,
+        bar: &PhotonBar,
+    ) -> anyhow::Result<()> {
+        let faces = self
+            .virtual_depth
+            .filter(|&d| d > 0)
+            .map(|d| (specular_faces(scene), d));
+        bar.0.set_position(0);
+        for batch in self.reader.batches(self.batch_records)? {
+            let batch = batch?;
+            bar.0.inc(batch.len() as u64);
+            let batch = match &faces {
+                Some((faces, depth)) => without_virtual_light_photons(batch, faces, *depth)?,
+                None => batch,
+            };
+            f(&batch)?;
+        }
+        bar.0.finish_and_clear();
+        Ok(())
+    }
+
+    /// One batch's estimator, its kernels sized by the whole file's counts (equation 3).
+    pub fn estimator(
+        &self,
+        scene: &Scene,
+        batch: &PhotonMap,
+        options: EstimatorOptions,
+    ) -> anyhow::Result<SplatEstimator> {
+        SplatEstimator::build_tallied(scene, batch, options, &self.tally)
+            .context("cannot build the splats of a batch")
+    }
+
+    /// The diffuse textures of the whole file (section 2.2.1), accumulated batch by batch with the estimator `options`.
+    pub fn atlas(
+        &self,
+        scene: &Scene,
+        options: EstimatorOptions,
+        texture_options: DiffuseTextureOptions,
+    ) -> anyhow::Result<DiffuseAtlas> {
+        // The supports come from the tally: an estimator without photons has them.
+        let empty = PhotonMap::from_parts(self.reader.header().lights.clone(), Vec::new())?;
+        let sizes = self.estimator(scene, &empty, options)?;
+        let mut atlas = DiffuseAtlas::layout(
+            scene,
+            &self.params,
+            &|id| sizes.support(id),
+            &self.tally.lit,
+            texture_options,
+        )?;
+        let bar = PhotonBar::new("diffuse textures", self.reader.header().records)?;
+        self.for_each_batch(
+            scene,
+            &mut |batch| {
+                atlas.accumulate(&self.estimator(scene, batch, options)?)?;
+                Ok(())
+            },
+            &bar,
+        )?;
+        Ok(atlas)
+    }
+}
