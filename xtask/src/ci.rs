@@ -21,7 +21,8 @@ pub fn cargo(args: &[&str]) -> anyhow::Result<()> {
 
 /// Format check, clippy with warnings denied, every test of the workspace
 /// (closing with one line that sums the test binaries' results), then the
-/// golden images and the reference checks (each closing with its own summary line).
+/// golden images and the reference checks (each closing with its own summary
+/// line), then the Ray driver's check (`cargo xtask ray`).
 pub fn run() -> anyhow::Result<()> {
     cargo(&["fmt", "--all", "--", "--check"])?;
     cargo(&[
@@ -33,10 +34,13 @@ pub fn run() -> anyhow::Result<()> {
         "warnings",
     ])?;
     test_workspace()?;
-    // Both image checks run before either failure is reported.
+    // Every check runs before any failure is reported.
     let golden = crate::golden::run(None);
     let reference = crate::reference_check::run(crate::reference_check::Args::all());
-    golden.and(reference)
+    let ray = crate::ray::run(crate::ray::Args {
+        install_only: false,
+    });
+    golden.and(reference).and(ray)
 }
 
 /// Runs `cargo test --workspace`, echoing its output, and prints the totals

@@ -6,6 +6,7 @@ mod ci;
 mod converge;
 mod density_errors;
 mod golden;
+mod ray;
 mod reference;
 mod reference_check;
 mod render;
@@ -73,7 +74,9 @@ enum Command {
     Converge(converge::Args),
     /// Error (noise, bias, total) and per-frame times of the quasi-static estimators, into BENCHMARKS.md (García et al. tables 2.1, 2.6-2.8).
     DensityErrors(density_errors::Args),
-    /// The README's test command: format check, clippy with warnings denied, all tests, golden images, reference checks.
+    /// Check the Ray driver (tools/ray) on a local Ray instance against a single-process trace; creates .ray-venv.
+    Ray(ray::Args),
+    /// The README's test command: format check, clippy with warnings denied, all tests, golden images, reference checks, the Ray driver.
     Ci,
 }
 
@@ -86,6 +89,7 @@ fn main() -> ExitCode {
         Command::Bless { case } => golden::bless(case.as_deref()),
         Command::Converge(args) => converge::run(args),
         Command::DensityErrors(args) => density_errors::run(args),
+        Command::Ray(args) => ray::run(args),
         Command::Ci => ci::run(),
     };
     match result {
