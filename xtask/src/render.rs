@@ -116,6 +116,28 @@ impl Lustre {
         Ok(Render { image, sidecar })
     }
 
+    /// Runs `lustre trace <scene> <args> --out <out>`: a photon file for `--photons-file`.
+    pub fn trace(&self, scene: &str, args: &[&str], out: &Path) -> Result<()> {
+        let output = Command::new(&self.path)
+            .args(&self.leading)
+            .arg("trace")
+            .arg(scene)
+            .args(args)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .with_context(|| format!("cannot run {} trace", self.path.display()))?;
+        if !output.status.success() {
+            bail!(
+                "lustre trace {scene} {} failed ({}): {}",
+                args.join(" "),
+                output.status,
+                String::from_utf8_lossy(&output.stderr).trim()
+            );
+        }
+        Ok(())
+    }
+
     /// Runs `lustre render <scene> <args> --out <out>` and reads back only its sidecar `<out>.json` (for `--frames --timing-only`, which writes no image).
     pub fn run(&self, scene: &str, args: &[&str], out: &Path) -> Result<Value> {
         let mut command = Command::new(&self.path);
