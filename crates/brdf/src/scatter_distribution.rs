@@ -65,6 +65,18 @@ impl ScatterDistribution {
         Self::new(2.0 * alpha * alpha)
     }
 
+    /// Through one rough interface of relative index η (far side over near side, the convention of [`crate::fresnel_dielectric`]), from Beckmann's α: near normal incidence a facet tilted by `s` turns the refracted direction by `(1 - 1/η) s`, so `σ² = (1 - 1/η)² α²/2` (the transmissive twin of [`ScatterDistribution::from_beckmann_alpha`]; Duvenhage et al. 2010, section 4.4, figure 13). Errors for η = 1 (no spread: a specular beam).
+    pub fn from_beckmann_alpha_refracted(alpha: f32, eta: f32) -> Result<Self> {
+        let k = 1.0 - 1.0 / eta;
+        Self::new(k * k * alpha * alpha / 2.0)
+    }
+
+    /// Through a thin slab of index η with both faces rough (Beckmann α each, independent): the entry facet turns the ray by `(1 - 1/η) s₁` inside, which leaves the slab multiplied by η, and the exit facet adds `(1 - η) s₂`, so the scatter angle is `(η - 1)(s₁ - s₂)` and `σ² = (η - 1)² α²` (a stained-glass pane lit from behind, Duvenhage et al. 2010, figures 1 and 13). Errors for η = 1.
+    pub fn from_beckmann_alpha_thin_slab(alpha: f32, eta: f32) -> Result<Self> {
+        let k = eta - 1.0;
+        Self::new(k * k * alpha * alpha)
+    }
+
     /// The peak `P_O = 1/(2πσ²)` at the specular direction (Duvenhage et al. 2010, figure 11, step 1).
     pub fn peak(&self) -> f32 {
         1.0 / (2.0 * std::f32::consts::PI * self.variance)

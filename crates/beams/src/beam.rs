@@ -1,0 +1,274 @@
+//! One polygon beam: three vertex rays with a flux, its flux plane and flux triangle, the point-in-beam test, and its irradiance at a fragment, specular (Duvenhage et al. 2010, section 3.1, equation 1) or glossy (section 4.2, equation 5, figures 11 and 12).
+
+use glam::{Vec2, Vec3};
+use lustre_brdf::scatter_distribution::ScatterDistribution;
+use lustre_geometry::{Aabb, Rgb};
+
+/// What made a beam.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BeamKind {
+    /// Reflected off the scatterer (mirror, conductor, or the Fresnel part of a dielectric).
+    Reflected,
+    /// Refracted through a dielectric interface by Snell's law.
+    Refracted,
+    /// Straight through a thin slab.
+    Transmitted,
+    /// The negative shadow beam behind the scatterer (section 3.1, first-order shadows): the light it blocks, subtracted.
+    Shadow,
+}
+
+/// The least cosine between a vertex ray and the beam's mean direction; beams wider than this (about 89.4°) are not built.
+const MIN_COS: f32 = 0.01;
+/// The widest angle from the mean direction a glossy beam's support reaches (85°).
+const MAX_SUPPORT_ANGLE: f32 = 85.0 * std::f32::consts::PI / 180.0;
+
+/// A polygon beam: rays from the scatterer's corners `A_W, B_W, C_W` along the scattered (or, for shadow beams, the incident) unit directions, carrying the flux `Φ_s` (negative for shadow beams) through every cross-section (section 3.1: "each triplet of vectors is associated with a beam flux that is conserved within the beam"; section 4.3's beam attributes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beam {
+    /// What made it.
+    pub kind: BeamKind,
+    /// Index of its light.
+    pub light: usize,
+    /// Index of its scatterer.
+    pub scatterer: usize,
+    /// Ray origins: the scatterer's corners.
+    pub vertices: [Vec3; 3],
+    /// Unit ray directions: the specular scatter directions `S_A, S_B, S_C`.
+    pub directions: [Vec3; 3],
+    /// The beam flux `Φ_s = I_light Ω_light` times the scatterer's reflectance or transmittance (negative for shadow beams), RGB.
+    pub flux: Rgb,
+    /// The glossy scatter distribution ρ (section 4.2); `None` for a specular beam.
+    pub distribution: Option<ScatterDistribution>,
+    /// Unit normal of the generator plane (the scatterer's plane), towards the side the beam goes.
+    pub generator_normal: Vec3,
+    /// Offset of the generator plane: `generator_normal · x` for x on it.
+    pub generator_offset: f32,
+    /// The average wavefront normal: the flux plane's normal (section 3.1, figure 5).
+    pub wavefront_normal: Vec3,
+    /// The rays bounding where a glossy beam is evaluated: the directions turned away from the mean by the cut-off angle (equal to `directions` for specular beams).
+    pub support_directions: [Vec3; 3],
+}
+
+/// The flux triangle `A_F B_F C_F`: where the three rays cross the flux plane through a fragment, perpendicular to the average wavefront normal (section 3.1, figure 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FluxTriangle {
+    /// `A_F, B_F, C_F`.
+    pub vertices: [Vec3; 3],
+    /// Its area `A_⊥`.
+    pub area: f32,
+    /// The fragment's barycentric coordinates in it (all non-negative inside).
+    pub barycentrics: [f32; 3],
+}
+
+impl FluxTriangle {
+    /// Whether the fragment lies in the flux triangle (section 3.1: "the fragment-in-beam test may be reduced to whether or not the fragment (F) is within the flux triangle").
+    pub fn contains_fragment(&self) -> bool {
+        self.barycentrics.iter().all(|&b| b >= 0.0)
+    }
+}
+
+impl Beam {
+    /// A beam from its rays; `None` when a ray turns more than about 89° from the mean direction (no flux plane crosses all three) or the flux is zero. `cutoff` is the glossy cut-off in standard deviations ([`crate::BuildOptions::glossy_cutoff`]).
+    pub fn new(
+        kind: BeamKind,
+        light: usize,
+        scatterer: usize,
+        vertices: [Vec3; 3],
+        directions: [Vec3; 3],
+        flux: Rgb,
+        generator_normal: Vec3,
+        distribution: Option<ScatterDistribution>,
+        cutoff: f32,
+    ) -> Option<Self> {
+        if flux == Rgb::ZERO || !flux.is_finite() {
+            return None;
+        }
+        let mean = (directions[0] + directions[1] + directions[2]).normalize_or_zero();
+        if mean == Vec3::ZERO || directions.iter().any(|d| d.dot(mean) < MIN_COS) {
+            return None;
+        }
+        let centroid = (vertices[0] + vertices[1] + vertices[2]) / 3.0;
+        let support_directions = match distribution {
+            None => directions,
+            Some(d) => {
+                let widen = cutoff * d.variance.sqrt();
+                std::array::from_fn(|i| widened(directions[i], mean, vertices[i] - centroid, widen))
+            }
+        };
+        Some(Self {
+            kind,
+            light,
+            scatterer,
+            vertices,
+            directions,
+            flux,
+            distribution,
+            generator_normal,
+            generator_offset: generator_normal.dot(vertices[0]),
+            wavefront_normal: mean,
+            support_directions,
+        })
+    }
+
+    /// Whether `p` lies strictly on the beam's side of the generator plane (section 4.3: the generator plane's normal and offset are beam attributes).
+    pub fn in_front(&self, p: Vec3) -> bool {
+        self.generator_normal.dot(p) - self.generator_offset > 0.0
+    }
+
+    /// The flux triangle of the beam's rays at the flux plane through `p` (section 3.1, figure 5); `None` where it degenerates (a focus).
+    pub fn flux_triangle(&self, p: Vec3) -> Option<FluxTriangle> {
+        flux_triangle(&self.vertices, &self.directions, self.wavefront_normal, p)
+    }
+
+    /// Whether `p` is in the beam volume: in front of the generator plane and inside the flux triangle (section 3.1).
+    pub fn contains(&self, p: Vec3) -> bool {
+        self.in_front(p) && self.flux_triangle(p).is_some_and(|t| t.contains_fragment())
+    }
+
+    /// Whether `p` is where the beam is evaluated: the beam volume for a specular beam; for a glossy one the volume of the rays turned `glossy_cutoff · σ` further from the mean direction (at most 85° from it), beyond which its Gaussian is cut off.
+    pub fn support(&self, p: Vec3) -> bool {
+        if self.distribution.is_none() {
+            return self.contains(p);
+        }
+        self.in_front(p)
+            && flux_triangle(
+                &self.vertices,
+                &self.support_directions,
+                self.wavefront_normal,
+                p,
+            )
+            .is_some_and(|t| t.contains_fragment())
+    }
+
+    /// The irradiance the beam gives a fragment at `p` with unit normal `normal`: `E = Φ_s / A_⊥ cos θ` inside a specular beam (equation 1), `E = Φ_s / A_⊥ cos θ min(P_E, 1)` for a glossy one (section 4.2, figures 11 and 12), zero outside the support; negative for shadow beams.
+    pub fn irradiance(&self, p: Vec3, normal: Vec3) -> Rgb {
+        if !self.support(p) {
+            return Rgb::ZERO;
+        }
+        let Some(ft) = self.flux_triangle(p) else {
+            return Rgb::ZERO;
+        };
+        let cos_theta = self.cos_theta(&ft, normal);
+        if cos_theta <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let density = self.flux / ft.area * cos_theta;
+        match self.distribution {
+            None => density,
+            Some(dist) => density * self.scatter_volume(&dist, &ft, p).min(1.0),
+        }
+    }
+
+    /// `cos θ` of the incoming direction at the fragment: the vertex directions interpolated with the fragment's barycentrics in the flux triangle (clamped to the triangle outside it, so that glossy beams stay continuous), against `normal`; zero from behind.
+    pub fn cos_theta(&self, ft: &FluxTriangle, normal: Vec3) -> f32 {
+        let b = ft.barycentrics.map(|b| b.max(0.0));
+        let sum = b[0] + b[1] + b[2];
+        if !(sum > 0.0) {
+            return 0.0;
+        }
+        let d = (self.directions[0] * b[0] + self.directions[1] * b[1] + self.directions[2] * b[2])
+            .normalize_or_zero();
+        (-d.dot(normal)).max(0.0)
+    }
+
+    /// The volume `P_E` under the 2D Gaussian over the triangular domain ABC (section 4.2.1: `A = φ_a l_a` with φ_a the angle between `A_W F` and the specular direction at `A_W`, and `l_a` the unit direction from F to `A_F` in the flux plane; section 4.2.2 via [`ScatterDistribution::triangle_volume`]), not clamped.
+    pub fn scatter_volume(&self, dist: &ScatterDistribution, ft: &FluxTriangle, p: Vec3) -> f32 {
+        let (u, v) = self.wavefront_normal.any_orthonormal_pair();
+        let corner = |i: usize| -> Vec2 {
+            let to_f = p - self.vertices[i];
+            let d = self.directions[i];
+            let phi = to_f.cross(d).length().atan2(to_f.dot(d));
+            let l = ft.vertices[i] - p;
+            let l2 = Vec2::new(l.dot(u), l.dot(v)).normalize_or_zero();
+            l2 * phi
+        };
+        dist.triangle_volume(corner(0), corner(1), corner(2))
+    }
+
+    /// A box holding every point of `within` where [`Beam::support`] holds (so every point the beam lights there): the three support rays, each over the range of ray parameters at which flux planes through `within` cross it, clipped to `within` (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty when the beam misses `within`.
+    pub fn bounds_within(&self, within: Aabb) -> Aabb {
+        let n = self.wavefront_normal;
+        let corners: [Vec3; 8] = std::array::from_fn(|k| {
+            Vec3::new(
+                if k & 1 == 0 {
+                    within.min.x
+                } else {
+                    within.max.x
+                },
+                if k & 2 == 0 {
+                    within.min.y
+                } else {
+                    within.max.y
+                },
+                if k & 4 == 0 {
+                    within.min.z
+                } else {
+                    within.max.z
+                },
+            )
+        });
+        let mut hull = Aabb::EMPTY;
+        for i in 0..3 {
+            let (o, d) = (self.vertices[i], self.support_directions[i]);
+            let den = d.dot(n);
+            let (mut t0, mut t1) = (f32::INFINITY, f32::NEG_INFINITY);
+            for c in corners {
+                let t = (c - o).dot(n) / den;
+                t0 = t0.min(t);
+                t1 = t1.max(t);
+            }
+            hull = hull.grow(o + t0 * d).grow(o + t1 * d);
+        }
+        let clipped = Aabb {
+            min: hull.min.max(within.min),
+            max: hull.max.min(within.max),
+        };
+        if clipped.is_empty() || !clipped.min.is_finite() || !clipped.max.is_finite() {
+            Aabb::EMPTY
+        } else {
+            clipped
+        }
+    }
+}
+
+/// The flux triangle of rays `origins + t directions` at the plane through `p` with normal `n` (section 3.1, figure 5).
+fn flux_triangle(
+    origins: &[Vec3; 3],
+    directions: &[Vec3; 3],
+    n: Vec3,
+    p: Vec3,
+) -> Option<FluxTriangle> {
+    let x: [Vec3; 3] = std::array::from_fn(|i| {
+        let t = (p - origins[i]).dot(n) / directions[i].dot(n);
+        origins[i] + t * directions[i]
+    });
+    let total = (x[1] - x[0]).cross(x[2] - x[0]).dot(n);
+    if total == 0.0 || !total.is_finite() {
+        return None;
+    }
+    let b = [
+        (x[1] - p).cross(x[2] - p).dot(n) / total,
+        (x[2] - p).cross(x[0] - p).dot(n) / total,
+        (x[0] - p).cross(x[1] - p).dot(n) / total,
+    ];
+    Some(FluxTriangle {
+        vertices: x,
+        area: 0.5 * total.abs(),
+        barycentrics: b,
+    })
+}
+
+/// `d` turned by `angle` away from `mean` (in their common plane; along `outward`, made perpendicular to `mean`, when `d` is parallel to it), at most [`MAX_SUPPORT_ANGLE`] from `mean`.
+fn widened(d: Vec3, mean: Vec3, outward: Vec3, angle: f32) -> Vec3 {
+    let mut perp = d - d.dot(mean) * mean;
+    if perp.length_squared() < 1e-12 {
+        perp = outward - outward.dot(mean) * mean;
+    }
+    let perp = perp.normalize_or_zero();
+    if perp == Vec3::ZERO {
+        return d;
+    }
+    let current = d.dot(mean).clamp(-1.0, 1.0).acos();
+    let target = (current + angle).min(MAX_SUPPORT_ANGLE.max(current));
+    mean * target.cos() + perp * target.sin()
+}
