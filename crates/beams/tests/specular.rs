@@ -298,11 +298,7 @@ fn shadow_beam_cancels_the_direct_light_behind_the_scatterer() {
         }
         // Beside the shadow the direct light stays whole.
         let beside = f + Vec3::new(3.0, 0.0, 0.0);
-        assert_eq!(
-            set.irradiance_at(beside, Vec3::Y),
-            glam::Vec3::ZERO,
-            "{beside}"
-        );
+        assert_eq!(set.irradiance_at(beside, Vec3::Y), Vec3::ZERO, "{beside}");
     }
     println!("shadow: worst |shadow/direct - 1| = {worst:.2e}");
 }
