@@ -185,9 +185,10 @@ impl Beam {
         dist.triangle_volume(corner(0), corner(1), corner(2))
     }
 
-    /// A box holding every point of `within` where [`Beam::support`] holds (so every point the beam lights there): the three support rays, each over the range of ray parameters at which flux planes through `within` cross it, clipped to `within` (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty when the beam misses `within`.
-    pub fn bounds_within(&self, within: Aabb) -> Aabb {
-        let n = self.wavefront_normal;
+    /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of `pieces` equal slabs along the mean direction: the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.
+    pub fn bounds_within(&self, within: Aabb, pieces: usize) -> Vec<Aabb> {
+        // The corners of `within` cut by the generator plane: the box's
+        // corners in front of it and where its edges cross it.
         let corners: [Vec3; 8] = std::array::from_fn(|k| {
             Vec3::new(
                 if k & 1 == 0 {
@@ -207,27 +208,64 @@ impl Beam {
                 },
             )
         });
-        let mut hull = Aabb::EMPTY;
-        for i in 0..3 {
-            let (o, d) = (self.vertices[i], self.support_directions[i]);
-            let den = d.dot(n);
-            let (mut t0, mut t1) = (f32::INFINITY, f32::NEG_INFINITY);
-            for c in corners {
-                let t = (c - o).dot(n) / den;
-                t0 = t0.min(t);
-                t1 = t1.max(t);
+        let height = |p: Vec3| self.generator_normal.dot(p) - self.generator_offset;
+        let mut region: Vec<Vec3> = corners
+            .iter()
+            .copied()
+            .filter(|&c| height(c) >= 0.0)
+            .collect();
+        for a in 0..8 {
+            for bit in [1, 2, 4] {
+                let b = a | bit;
+                if b == a {
+                    continue;
+                }
+                let (ha, hb) = (height(corners[a]), height(corners[b]));
+                if (ha < 0.0) != (hb < 0.0) {
+                    let t = ha / (ha - hb);
+                    region.push(corners[a] + (corners[b] - corners[a]) * t);
+                }
             }
-            hull = hull.grow(o + t0 * d).grow(o + t1 * d);
         }
-        let clipped = Aabb {
-            min: hull.min.max(within.min),
-            max: hull.max.min(within.max),
-        };
-        if clipped.is_empty() || !clipped.min.is_finite() || !clipped.max.is_finite() {
-            Aabb::EMPTY
-        } else {
-            clipped
+        if region.is_empty() {
+            return Vec::new();
         }
+        let n = self.wavefront_normal;
+        let (s0, s1) = region
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), c| {
+                (a.min(c.dot(n)), b.max(c.dot(n)))
+            });
+        let region = Aabb::from_points(region);
+        let pieces = pieces.max(1);
+        (0..pieces)
+            .map(|k| {
+                // Flux planes n·F = s for s in this slab cross ray i at
+                // t = (s - n·o) / (n·d): a segment of it.
+                let (sa, sb) = (
+                    s0 + (s1 - s0) * k as f32 / pieces as f32,
+                    s0 + (s1 - s0) * (k + 1) as f32 / pieces as f32,
+                );
+                let mut hull = Aabb::EMPTY;
+                for i in 0..3 {
+                    let (o, d) = (self.vertices[i], self.support_directions[i]);
+                    let den = d.dot(n);
+                    let on = o.dot(n);
+                    hull = hull
+                        .grow(o + (sa - on) / den * d)
+                        .grow(o + (sb - on) / den * d);
+                }
+                let clipped = Aabb {
+                    min: hull.min.max(region.min),
+                    max: hull.max.min(region.max),
+                };
+                if clipped.is_empty() || !clipped.min.is_finite() || !clipped.max.is_finite() {
+                    Aabb::EMPTY
+                } else {
+                    clipped
+                }
+            })
+            .collect()
     }
 }
 

@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 use lustre_geometry::{Aabb, Rgb, Scene};
+use rayon::prelude::*;
 
 use crate::beam::Beam;
 use crate::construction::{BuildOptions, BuildStats, build_beams};
@@ -11,6 +12,8 @@ use crate::scatterer::{BeamInput, PointSource, Scatterer};
 
 /// Relative padding of the beam boxes (of the bounds' diagonal), so that rounding in the point-in-beam test never puts a point outside its beam's box.
 const BOX_PADDING: f32 = 1e-4;
+/// Boxes per beam: slabs along its mean direction, so that a long beam crossing the scene diagonally is not one large box.
+const SLABS: usize = 16;
 
 /// Every scattered and shadow beam of a set of point lights and scatterers, with a hierarchy over their volumes clipped to `bounds`.
 #[derive(Debug, Clone)]
@@ -20,6 +23,8 @@ pub struct BeamSet {
     stats: BuildStats,
     bounds: Aabb,
     hierarchy: BeamHierarchy,
+    /// The beam of each box in the hierarchy.
+    owner: Vec<u32>,
 }
 
 impl BeamSet {
@@ -41,20 +46,20 @@ impl BeamSet {
         }
         let (beams, stats) = build_beams(lights, scatterers, options)?;
         let pad = Vec3::splat(BOX_PADDING * bounds.extent().length());
-        let boxes: Vec<Aabb> = beams
-            .iter()
-            .map(|b| {
-                let bb = b.bounds_within(bounds);
-                if bb.is_empty() {
-                    bb
-                } else {
-                    Aabb {
-                        min: bb.min - pad,
-                        max: bb.max + pad,
-                    }
-                }
-            })
+        let pieces: Vec<Vec<Aabb>> = beams
+            .par_iter()
+            .map(|b| b.bounds_within(bounds, SLABS))
             .collect();
+        let (mut boxes, mut owner) = (Vec::new(), Vec::new());
+        for (i, p) in pieces.into_iter().enumerate() {
+            for bb in p.into_iter().filter(|bb| !bb.is_empty()) {
+                boxes.push(Aabb {
+                    min: bb.min - pad,
+                    max: bb.max + pad,
+                });
+                owner.push(i as u32);
+            }
+        }
         let hierarchy = BeamHierarchy::build(&boxes);
         Ok(Self {
             beams,
@@ -62,6 +67,7 @@ impl BeamSet {
             stats,
             bounds,
             hierarchy,
+            owner,
         })
     }
 
@@ -104,8 +110,10 @@ impl BeamSet {
             return (0..self.beams.len() as u32).collect();
         }
         let mut out = Vec::new();
-        self.hierarchy.for_each_containing(p, |i| out.push(i));
+        self.hierarchy
+            .for_each_containing(p, |i| out.push(self.owner[i as usize]));
         out.sort_unstable();
+        out.dedup();
         out
     }
 
