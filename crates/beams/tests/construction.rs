@@ -185,3 +185,45 @@ fn bad_input_is_refused_with_typed_errors() {
         Err(BeamError::InvalidInput { .. })
     ));
 }
+
+#[test]
+fn cosine_and_spot_lights_scale_the_flux_by_their_profile_towards_the_scatterer() {
+    use lustre_beams::Emission;
+    use lustre_geometry::light::SpotLight;
+    let tri = mirror_triangle(0.0);
+    let position = Vec3::new(0.3, 2.0, 0.1);
+    let centroid = (tri.vertices[0] + tri.vertices[1] + tri.vertices[2]) / 3.0;
+    let towards = (centroid - position).normalize();
+    let flux = |emission: Emission| {
+        let light = PointSource {
+            position,
+            intensity: Rgb::ONE,
+            emission,
+        };
+        BeamSet::build(&[light], &[tri], bounds(), &BuildOptions::default())
+            .unwrap()
+            .beams()
+            .iter()
+            .find(|b| b.kind == BeamKind::Reflected)
+            .map_or(0.0, |b| b.flux.x)
+    };
+    let iso = flux(Emission::Isotropic);
+    let want_iso = support::REFLECTANCE.x * solid_angle(position, tri.vertices);
+    assert!((iso - want_iso).abs() < 1e-6 * want_iso);
+    let normal = Vec3::new(0.2, -1.0, 0.3).normalize();
+    let cosine = flux(Emission::Cosine { normal });
+    assert!((cosine - iso * normal.dot(towards)).abs() < 1e-6 * iso);
+    // Facing away: no light, no beam.
+    assert_eq!(flux(Emission::Cosine { normal: -normal }), 0.0);
+    let spot = SpotLight {
+        position,
+        direction: -Vec3::Y,
+        intensity: Rgb::ONE,
+        cutoff_angle: 0.5,
+        beam_width: 0.1,
+    };
+    let theta = towards.dot(-Vec3::Y).acos();
+    assert!(theta > 0.1 && theta < 0.5, "{theta}");
+    let want = iso * (0.5 - theta) / 0.4;
+    assert!((flux(Emission::Spot(spot)) - want).abs() < 1e-5 * iso);
+}
