@@ -100,8 +100,7 @@ pub enum ScatterMaterial {
     },
 }
 
-/// The name of the thin-slab material in `MaterialModel::Named` ([`ScatterMaterial::ThinSlab`]).
-pub const THIN_DIELECTRIC: &str = "thin-dielectric";
+pub use lustre_geometry::material::THIN_DIELECTRIC;
 
 impl ScatterMaterial {
     /// The scatter material of a scene material, or `None` for a receiver (diffuse and every other model). Errors on out-of-range `thin-dielectric` parameters.

@@ -118,3 +118,47 @@ fn stained_glass_panes_face_the_light_with_the_given_roughness() {
     assert_eq!(builtin("stained-glass").unwrap().name, "stained-glass");
     assert_eq!(cardioid().name, "cardioid");
 }
+
+#[test]
+fn the_beam_scenes_export_to_mitsuba() {
+    use lustre_geometry::mitsuba::{ExportOptions, export};
+    let dir = std::env::temp_dir().join(format!("lustre-beam-scenes-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let smooth_glass = stained_glass::stained_glass_with(0.0);
+    for scene in [cardioid(), pool(), smooth_glass] {
+        let xml_path = dir.join(&scene.name).join("scene.xml");
+        let report = export(&scene, &xml_path, &ExportOptions::default()).unwrap();
+        assert!(
+            report.warnings.is_empty(),
+            "{}: {:?}",
+            scene.name,
+            report.warnings
+        );
+        let xml = std::fs::read_to_string(&xml_path).unwrap();
+        assert_eq!(
+            xml.matches("<emitter type=\"point\"").count(),
+            1,
+            "{}",
+            scene.name
+        );
+        let (conductor, dielectric, thin) = match scene.name.as_str() {
+            "cardioid" => (1, 0, 0),
+            "pool" => (0, 1, 0),
+            _ => (0, 0, stained_glass::PALETTE.len()),
+        };
+        assert_eq!(xml.matches("<bsdf type=\"conductor\"").count(), conductor);
+        assert_eq!(xml.matches("<bsdf type=\"dielectric\"").count(), dielectric);
+        assert_eq!(xml.matches("<bsdf type=\"thindielectric\"").count(), thin);
+    }
+    // Rough panes: Mitsuba has no rough thin dielectric.
+    let rough = stained_glass::stained_glass_with(0.1);
+    let xml_path = dir.join("rough").join("scene.xml");
+    assert!(export(&rough, &xml_path, &ExportOptions::default()).is_err());
+    let options = ExportOptions {
+        approximate: true,
+        ..ExportOptions::default()
+    };
+    let report = export(&rough, &xml_path, &options).unwrap();
+    assert_eq!(report.warnings.len(), stained_glass::PALETTE.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -66,7 +66,7 @@ pub fn stained_glass_with(roughness: f32) -> Scene {
         materials.push(Material::new(
             format!("glass-{i}"),
             MaterialModel::Named {
-                model: "thin-dielectric".into(),
+                model: crate::material::THIN_DIELECTRIC.into(),
                 params,
             },
         ));
