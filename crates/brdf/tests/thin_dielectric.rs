@@ -3,7 +3,7 @@
 mod support;
 
 use glam::{Vec2, Vec3};
-use lustre_brdf::{Brdf, fresnel_dielectric, from_model};
+use lustre_brdf::{fresnel_dielectric, from_model};
 use support::{dir, named};
 
 #[test]
