@@ -185,7 +185,7 @@ impl Beam {
         dist.triangle_volume(corner(0), corner(1), corner(2))
     }
 
-    /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of `pieces` equal slabs along the mean direction: the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.
+    /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of equal slabs along the mean direction (about as long as the beam is wide, at most `pieces`): the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.
     pub fn bounds_within(&self, within: Aabb, pieces: usize) -> Vec<Aabb> {
         // The corners of `within` cut by the generator plane: the box's
         // corners in front of it and where its edges cross it.
@@ -237,7 +237,24 @@ impl Beam {
                 (a.min(c.dot(n)), b.max(c.dot(n)))
             });
         let region = Aabb::from_points(region);
-        let pieces = pieces.max(1);
+        // As many slabs as make each about as long as the beam is wide
+        // (more for long, thin beams), at most `pieces`.
+        let width = |s: f32| {
+            let x: [Vec3; 3] = std::array::from_fn(|i| {
+                let (o, d) = (self.vertices[i], self.support_directions[i]);
+                o + (s - o.dot(n)) / d.dot(n) * d
+            });
+            (x[0] - x[1])
+                .length()
+                .max((x[1] - x[2]).length())
+                .max((x[2] - x[0]).length())
+        };
+        let widest = width(s0).max(width(s1));
+        let pieces = if widest > 0.0 {
+            ((s1 - s0) / widest).ceil().clamp(1.0, pieces.max(1) as f32) as usize
+        } else {
+            pieces.max(1)
+        };
         (0..pieces)
             .map(|k| {
                 // Flux planes n·F = s for s in this slab cross ray i at

@@ -12,8 +12,8 @@ use crate::scatterer::{BeamInput, PointSource, Scatterer};
 
 /// Relative padding of the beam boxes (of the bounds' diagonal), so that rounding in the point-in-beam test never puts a point outside its beam's box.
 const BOX_PADDING: f32 = 1e-4;
-/// Boxes per beam: slabs along its mean direction, so that a long beam crossing the scene diagonally is not one large box.
-const SLABS: usize = 16;
+/// Boxes per beam at most: slabs along its mean direction, so that a long beam crossing the scene diagonally is not one large box.
+const SLABS: usize = 64;
 
 /// Every scattered and shadow beam of a set of point lights and scatterers, with a hierarchy over their volumes clipped to `bounds`.
 #[derive(Debug, Clone)]
