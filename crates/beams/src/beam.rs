@@ -17,6 +17,30 @@ pub enum BeamKind {
     Shadow,
 }
 
+/// How a beam's rays left the scatterer, to re-scatter a ray from any point of it (the split point D of section 4.3, figure 12, step 3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scatter {
+    /// Mirror reflection about the interpolated normal.
+    Reflect,
+    /// Refraction about the interpolated normal, `eta` the far index over the near one.
+    Refract {
+        /// Far index over near index, seen from the light.
+        eta: f32,
+    },
+    /// Straight on (thin slabs, shadow beams).
+    Straight,
+}
+
+/// Where the outside case of the glossy volume splits the domain's edge (section 4.2.2, figure 12).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum SplitPoint {
+    /// D on the edge of the 2D domain ABC, where the line from O through the opposite vertex crosses it: `P_E` is continuous across the flux triangle's edges (the default; see the crate documentation).
+    #[default]
+    Domain,
+    /// The paper's construction (figure 12, step 3): `D_F` on the flux triangle's edge parameterises the scatterer's edge, the ray re-scattered from `D_W` there gives `φ_d` and `l_d`, and `D = φ_d l_d`; it falls back to [`SplitPoint::Domain`] when the ray cannot be re-scattered.
+    Rescattered,
+}
+
 /// The least cosine between a vertex ray and the beam's mean direction; beams wider than this (about 89.4°) are not built.
 const MIN_COS: f32 = 0.01;
 /// The widest angle from the mean direction a glossy beam's support reaches (85°).
@@ -47,6 +71,14 @@ pub struct Beam {
     pub wavefront_normal: Vec3,
     /// The rays bounding where a glossy beam is evaluated: the directions turned away from the mean by the cut-off angle (equal to `directions` for specular beams).
     pub support_directions: [Vec3; 3],
+    /// Position of the light the beam comes from.
+    pub light_position: Vec3,
+    /// The scatterer's vertex normals, on the light's side.
+    pub normals: [Vec3; 3],
+    /// How the rays left the scatterer.
+    pub scatter: Scatter,
+    /// Which split point the glossy volume uses.
+    pub split_point: SplitPoint,
 }
 
 /// The flux triangle `A_F B_F C_F`: where the three rays cross the flux plane through a fragment, perpendicular to the average wavefront normal (section 3.1, figure 5).
@@ -107,7 +139,26 @@ impl Beam {
             generator_offset: generator_normal.dot(vertices[0]),
             wavefront_normal: mean,
             support_directions,
+            light_position: Vec3::ZERO,
+            normals: [generator_normal; 3],
+            scatter: Scatter::Straight,
+            split_point: SplitPoint::Domain,
         })
+    }
+
+    /// This beam with how its rays left the scatterer, for [`SplitPoint::Rescattered`].
+    pub fn with_scatter(
+        mut self,
+        light_position: Vec3,
+        normals: [Vec3; 3],
+        scatter: Scatter,
+        split_point: SplitPoint,
+    ) -> Self {
+        self.light_position = light_position;
+        self.normals = normals;
+        self.scatter = scatter;
+        self.split_point = split_point;
+        self
     }
 
     /// Whether `p` lies strictly on the beam's side of the generator plane (section 4.3: the generator plane's normal and offset are beam attributes).
@@ -171,18 +222,57 @@ impl Beam {
         (-d.dot(normal)).max(0.0)
     }
 
-    /// The volume `P_E` under the 2D Gaussian over the triangular domain ABC (section 4.2.1: `A = φ_a l_a` with φ_a the angle between `A_W F` and the specular direction at `A_W`, and `l_a` the unit direction from F to `A_F` in the flux plane; section 4.2.2 via [`ScatterDistribution::triangle_volume`]), not clamped.
+    /// The volume `P_E` under the 2D Gaussian over the triangular domain ABC (section 4.2.1: `A = φ_a l_a` with φ_a the angle between `A_W F` and the specular direction at `A_W`, and `l_a` the unit direction from F to `A_F` in the flux plane; section 4.2.2 via [`ScatterDistribution::triangle_volume_split`], clamped to one there), with the beam's [`SplitPoint`].
     pub fn scatter_volume(&self, dist: &ScatterDistribution, ft: &FluxTriangle, p: Vec3) -> f32 {
         let (u, v) = self.wavefront_normal.any_orthonormal_pair();
-        let corner = |i: usize| -> Vec2 {
-            let to_f = p - self.vertices[i];
-            let d = self.directions[i];
+        let to_domain = |origin: Vec3, d: Vec3, towards: Vec3| -> Vec2 {
+            let to_f = p - origin;
             let phi = to_f.cross(d).length().atan2(to_f.dot(d));
-            let l = ft.vertices[i] - p;
-            let l2 = Vec2::new(l.dot(u), l.dot(v)).normalize_or_zero();
-            l2 * phi
+            let l = towards - p;
+            Vec2::new(l.dot(u), l.dot(v)).normalize_or_zero() * phi
         };
-        dist.triangle_volume(corner(0), corner(1), corner(2))
+        let corner = |i: usize| to_domain(self.vertices[i], self.directions[i], ft.vertices[i]);
+        let split = |k: usize, _s: f32, d: Vec2| -> Vec2 {
+            match self.split_point {
+                SplitPoint::Domain => d,
+                SplitPoint::Rescattered => self
+                    .rescattered_split(k, ft, p)
+                    .map_or(d, |(origin, dir, at)| to_domain(origin, dir, at)),
+            }
+        };
+        dist.triangle_volume_split(corner(0), corner(1), corner(2), split)
+    }
+
+    /// Figure 12, step 3: `D_F` where the line from F through the flux triangle's vertex `k` crosses the opposite edge, its parameter s on that edge, `D_W` at s on the scatterer's edge, the direction `S_D` re-scattered there from the light with the interpolated normal, and `D_T` where that ray crosses the flux plane; returns `(D_W, S_D, D_T)`.
+    fn rescattered_split(
+        &self,
+        k: usize,
+        ft: &FluxTriangle,
+        p: Vec3,
+    ) -> Option<(Vec3, Vec3, Vec3)> {
+        let n = self.wavefront_normal;
+        let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+        let (xk, xi, xj) = (ft.vertices[k], ft.vertices[i], ft.vertices[j]);
+        let (towards, edge) = (xk - p, xj - xi);
+        let denom = edge.cross(towards).dot(n);
+        if denom == 0.0 {
+            return None;
+        }
+        let s = ((p - xi).cross(towards).dot(n) / denom).clamp(0.0, 1.0);
+        let dw = self.vertices[i].lerp(self.vertices[j], s);
+        let normal = self.normals[i].lerp(self.normals[j], s).normalize_or_zero();
+        let w = (dw - self.light_position).normalize_or_zero();
+        let sd = match self.scatter {
+            Scatter::Reflect => crate::construction::reflect(w, normal),
+            Scatter::Refract { eta } => crate::construction::refract(w, normal, eta)?,
+            Scatter::Straight => w,
+        };
+        let den = sd.dot(n);
+        if !(den > 0.0) {
+            return None;
+        }
+        let dt = dw + sd * ((p - dw).dot(n) / den);
+        Some((dw, sd, dt))
     }
 
     /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of equal slabs along the mean direction (about as long as the beam is wide, at most `pieces`): the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.

@@ -6,7 +6,7 @@ use lustre_brdf::{fresnel_conductor, fresnel_dielectric};
 use lustre_geometry::Rgb;
 use rayon::prelude::*;
 
-use crate::beam::{Beam, BeamKind};
+use crate::beam::{Beam, BeamKind, Scatter, SplitPoint};
 use crate::error::Result;
 use crate::scatterer::{PointSource, ScatterMaterial, Scatterer};
 
@@ -19,6 +19,8 @@ pub struct BuildOptions {
     pub glossy_cutoff: f32,
     /// Triangles with less area than this, relative to the square of their longest edge, are degenerate and skipped.
     pub min_relative_area: f32,
+    /// Where glossy beams split the domain outside the flux triangle (section 4.2.2, figure 12).
+    pub split_point: SplitPoint,
 }
 
 impl Default for BuildOptions {
@@ -27,6 +29,7 @@ impl Default for BuildOptions {
             shadow_beams: true,
             glossy_cutoff: 4.0,
             min_relative_area: 1e-7,
+            split_point: SplitPoint::Domain,
         }
     }
 }
@@ -177,7 +180,8 @@ fn pair_beams(
                 directions: [Vec3; 3],
                 flux: Rgb,
                 generator_normal: Vec3,
-                distribution: Option<ScatterDistribution>| {
+                distribution: Option<ScatterDistribution>,
+                scatter: Scatter| {
         Beam::new(
             kind,
             light_index,
@@ -189,6 +193,7 @@ fn pair_beams(
             distribution,
             options.glossy_cutoff,
         )
+        .map(|b| b.with_scatter(lp, normals, scatter, options.split_point))
     };
     let reflected = || incident_map(incident, normals, reflect);
     match s.material {
@@ -211,6 +216,7 @@ fn pair_beams(
                     flux * reflectance * fresnel,
                     n_light,
                     dist,
+                    Scatter::Reflect,
                 ));
             }
         }
@@ -227,6 +233,7 @@ fn pair_beams(
                 flux * f,
                 n_light,
                 dist,
+                Scatter::Reflect,
             ));
             let refracted: Option<Vec<Vec3>> = incident
                 .iter()
@@ -248,6 +255,7 @@ fn pair_beams(
                         flux * (1.0 - f) * transmittance,
                         -n_light,
                         dist,
+                        Scatter::Refract { eta },
                     ));
                 }
                 _ => stats.total_internal_reflection = 1,
@@ -265,6 +273,7 @@ fn pair_beams(
                 flux * r,
                 n_light,
                 dist,
+                Scatter::Reflect,
             ));
             let dist = if (ior - 1.0).abs() > 0.0 {
                 glossy(ScatterDistribution::from_beckmann_alpha_thin_slab(
@@ -279,13 +288,21 @@ fn pair_beams(
                 flux * t * transmittance,
                 -n_light,
                 dist,
+                Scatter::Straight,
             ));
         }
     }
     stats.scattered = beams.len();
     if options.shadow_beams {
         let before = beams.len();
-        beams.extend(make(BeamKind::Shadow, incident, -flux, -n_light, None));
+        beams.extend(make(
+            BeamKind::Shadow,
+            incident,
+            -flux,
+            -n_light,
+            None,
+            Scatter::Straight,
+        ));
         stats.shadow = beams.len() - before;
     }
     Ok(PairBeams { beams, stats })

@@ -19,7 +19,7 @@
 //! | 3.1: the fragment-in-beam test; 4.3: generator plane | [`Beam::contains`], [`Beam::in_front`] |
 //! | 4.1, equation 1: `E = Φ_s / A_⊥ cos θ` | [`Beam::irradiance`] (specular beams) |
 //! | 4.2.1: the map from world space to the 2D triangular domain ABC, `A = φ_a l_a` | [`Beam::scatter_volume`] |
-//! | 4.2.2, figures 11 and 12: `P_E` from AOB, BOC, COA, the split point D outside | [`lustre_brdf::scatter_distribution::ScatterDistribution::triangle_volume`] |
+//! | 4.2.2, figures 11 and 12: `P_E` from AOB, BOC, COA, the split point D outside | [`lustre_brdf::scatter_distribution::ScatterDistribution::triangle_volume_split`], [`SplitPoint`] |
 //! | 4.2, equation 5, figure 11 step 3: `E = Φ_s / A_⊥ cos θ min(P_E, 1)` | [`Beam::irradiance`] (glossy beams) |
 //! | 1.2: σ from the micro-facet variance | [`ScatterMaterial`], `ScatterDistribution::from_beckmann_alpha{,_refracted,_thin_slab}` |
 //! | 3.1: negative shadow beams, first-order shadows | [`BeamKind::Shadow`], [`BeamSet::direct_irradiance`] |
@@ -43,10 +43,13 @@
 //! - Glossy beams are cut off `glossy_cutoff` σ (as an angle) outside
 //!   their specular beam ([`Beam::support`]), at most 85° from the mean
 //!   direction; the Gaussian tail beyond is dropped.
-//! - The split point D of figure 12 is taken on the edge of the 2D domain
-//!   (linear in ABC) rather than re-scattered from a world-space point
-//!   `D_W`; this keeps `P_E` exactly continuous across the flux triangle's
-//!   edges, which section 4.2.2 requires.
+//! - The split point D of figure 12 is by default taken on the edge of the
+//!   2D domain (linear in ABC) rather than re-scattered from a world-space
+//!   point `D_W`; this keeps `P_E` exactly continuous across the flux
+//!   triangle's edges, which section 4.2.2 requires. The paper's
+//!   construction is [`SplitPoint::Rescattered`]
+//!   ([`BuildOptions::split_point`]); `tests/glossy.rs` measures its step at
+//!   the edges.
 //!
 //! ```
 //! use glam::Vec3;
@@ -73,7 +76,7 @@ mod error;
 mod hierarchy;
 mod scatterer;
 
-pub use beam::{Beam, BeamKind, FluxTriangle};
+pub use beam::{Beam, BeamKind, FluxTriangle, Scatter, SplitPoint};
 pub use beam_set::{BeamSet, direct_irradiance};
 pub use construction::{BuildOptions, BuildStats, build_beams, reflect, refract, solid_angle};
 pub use error::{BeamError, Result};

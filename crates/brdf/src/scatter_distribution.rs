@@ -89,6 +89,17 @@ impl ScatterDistribution {
 
     /// The volume under ρ over the triangle ABC of scatter angles, the fragment at the origin, by the paper's planar-facet approximation clamped to one (Duvenhage et al. 2010, section 4.2.2, figures 11 and 12).
     pub fn triangle_volume(&self, a: Vec2, b: Vec2, c: Vec2) -> f32 {
+        self.triangle_volume_split(a, b, c, |_, _, d| d)
+    }
+
+    /// [`ScatterDistribution::triangle_volume`] with the split point D of the outside case chosen by the caller: `split(k, s, d)` gets the vertex `k` opposite the split edge, the parameter `s` in [0, 1] of D along that edge from vertex `k + 1` to `k + 2`, and that point `d` of the domain, and returns the D to use (Duvenhage et al. 2010, figure 12, step 3, recompute it from the world-space point `D_W` on the scatterer).
+    pub fn triangle_volume_split(
+        &self,
+        a: Vec2,
+        b: Vec2,
+        c: Vec2,
+        split: impl Fn(usize, f32, Vec2) -> Vec2,
+    ) -> f32 {
         let facet = |p: Vec2, q: Vec2, r: Vec2| {
             0.5 * (q - p).perp_dot(r - p).abs()
                 * (self.density(p) + self.density(q) + self.density(r))
@@ -119,7 +130,7 @@ impl ScatterDistribution {
                 } else {
                     let s = vk.perp_dot(-p) / denom;
                     let s = s.clamp(0.0, 1.0);
-                    let d = p + e * s;
+                    let d = split(k, s, p + e * s);
                     facet(vk, p, d) + facet(vk, d, q)
                 }
             }
