@@ -47,6 +47,8 @@ pub struct BuildStats {
     pub back_facing: usize,
     /// Refracted beams left out because at least one vertex ray is totally internally reflected.
     pub total_internal_reflection: usize,
+    /// Beams left out because a ray turns more than about 89° from their mean direction (no flux plane crosses all three rays), e.g. a large scatterer very close to the light.
+    pub too_wide: usize,
     /// Scattered beams built.
     pub scattered: usize,
     /// Shadow beams built.
@@ -119,6 +121,7 @@ pub fn build_beams(
         stats.edge_on += b.stats.edge_on;
         stats.back_facing += b.stats.back_facing;
         stats.total_internal_reflection += b.stats.total_internal_reflection;
+        stats.too_wide += b.stats.too_wide;
         stats.scattered += b.stats.scattered;
         stats.shadow += b.stats.shadow;
         beams.extend(b.beams);
@@ -176,13 +179,14 @@ fn pair_beams(
                 Ok(None)
             }
         };
+    let too_wide = std::cell::Cell::new(0);
     let make = |kind: BeamKind,
                 directions: [Vec3; 3],
                 flux: Rgb,
                 generator_normal: Vec3,
                 distribution: Option<ScatterDistribution>,
                 scatter: Scatter| {
-        Beam::new(
+        let beam = Beam::new(
             kind,
             light_index,
             scatterer_index,
@@ -192,8 +196,11 @@ fn pair_beams(
             generator_normal,
             distribution,
             options.glossy_cutoff,
-        )
-        .map(|b| b.with_scatter(lp, normals, scatter, options.split_point))
+        );
+        if beam.is_none() && flux != Rgb::ZERO {
+            too_wide.set(too_wide.get() + 1);
+        }
+        beam.map(|b| b.with_scatter(lp, normals, scatter, options.split_point))
     };
     let reflected = || incident_map(incident, normals, reflect);
     match s.material {
@@ -305,6 +312,7 @@ fn pair_beams(
         ));
         stats.shadow = beams.len() - before;
     }
+    stats.too_wide = too_wide.get();
     Ok(PairBeams { beams, stats })
 }
 

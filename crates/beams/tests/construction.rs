@@ -227,3 +227,27 @@ fn cosine_and_spot_lights_scale_the_flux_by_their_profile_towards_the_scatterer(
     let want = iso * (0.5 - theta) / 0.4;
     assert!((flux(Emission::Spot(spot)) - want).abs() < 1e-5 * iso);
 }
+
+#[test]
+fn beams_wider_than_a_flux_plane_can_cut_are_left_out_and_counted() {
+    // A mirror 100 m across, the light 1 cm above it: the vertex rays leave
+    // almost horizontally, 120° apart, so no plane crosses all three.
+    let huge = Scatterer::flat(
+        [
+            Vec3::new(100.0, 0.0, 0.0),
+            Vec3::new(-50.0, 0.0, -86.6),
+            Vec3::new(-50.0, 0.0, 86.6),
+        ],
+        mirror_triangle(0.0).material,
+    );
+    assert!(huge.normals[0].y > 0.0);
+    let set = BeamSet::build(
+        &[PointSource::isotropic(Vec3::new(0.0, 0.01, 0.0), Rgb::ONE)],
+        &[huge],
+        bounds(),
+        &BuildOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(set.stats().too_wide, 2, "{:?}", set.stats());
+    assert!(set.beams().is_empty());
+}
