@@ -120,3 +120,60 @@ fn hierarchy_equals_linear_traversal() {
     let far = Vec3::new(10.0, 1.0, 0.0);
     assert_eq!(set.candidates(far).len(), beams);
 }
+
+mod random_scenes {
+    use super::*;
+    use proptest::prelude::{ProptestConfig, prop, prop_assert_eq, proptest};
+    use support::Rng;
+
+    fn material(kind: u8, roughness: f32) -> ScatterMaterial {
+        match kind % 3 {
+            0 => ScatterMaterial::Reflector {
+                reflectance: Rgb::splat(0.8),
+                conductor: None,
+                roughness,
+            },
+            1 => ScatterMaterial::Interface {
+                ior: 1.4,
+                transmittance: Rgb::ONE,
+                roughness,
+            },
+            _ => ScatterMaterial::ThinSlab {
+                ior: 1.5,
+                transmittance: Rgb::splat(0.7),
+                roughness,
+            },
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        #[test]
+        fn hierarchy_equals_linear_traversal_for_random_scatterers(
+            seed in 0u64..1_000_000,
+            triangles in 1usize..40,
+            rough in prop::bool::ANY,
+        ) {
+            let mut rng = Rng::new(seed);
+            let bounds = Aabb { min: Vec3::splat(-2.0), max: Vec3::splat(2.0) };
+            let point = |rng: &mut Rng| Vec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), rng.range(-2.0, 2.0));
+            let scatterers: Vec<Scatterer> = (0..triangles)
+                .map(|k| {
+                    let c = point(&mut rng) * 0.8;
+                    let size = rng.range(0.05, 0.6);
+                    let v = [0, 1, 2].map(|_| c + rng.unit_vector() * size);
+                    let roughness = if rough { rng.range(0.0, 0.3) } else { 0.0 };
+                    Scatterer::flat(v, material(k as u8, roughness))
+                })
+                .collect();
+            let lights = [PointSource::isotropic(point(&mut rng), Rgb::splat(3.0))];
+            let set = BeamSet::build(&lights, &scatterers, bounds, &BuildOptions::default()).unwrap();
+            for _ in 0..300 {
+                let p = point(&mut rng);
+                let n = rng.unit_vector();
+                prop_assert_eq!(set.irradiance_at(p, n), set.irradiance_at_linear(p, n));
+            }
+        }
+    }
+}

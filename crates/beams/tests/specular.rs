@@ -302,3 +302,96 @@ fn shadow_beam_cancels_the_direct_light_behind_the_scatterer() {
     }
     println!("shadow: worst |shadow/direct - 1| = {worst:.2e}");
 }
+
+#[test]
+fn flux_through_a_flux_plane_is_the_beam_flux_for_every_kind() {
+    // On a receiver that is itself a flux plane (normal -n̄, a fixed
+    // distance along n̄) A_⊥ is the same at every point, so ∫ E dA over
+    // the flux triangle is Φ_s ⟨cos θ_m⟩ exactly, θ_m the angle of the
+    // interpolated direction from n̄: within [Φ_s cos α_max, Φ_s]. Checks
+    // containment and A_⊥ of reflected, refracted, transmitted and shadow
+    // beams alike (equation 1 conserves the beam flux).
+    use lustre_beams::{ScatterMaterial, Scatterer};
+    use lustre_geometry::Rgb;
+    let materials = [
+        mirror_triangle(0.0).material,
+        ScatterMaterial::Interface {
+            ior: 1.33,
+            transmittance: Rgb::ONE,
+            roughness: 0.0,
+        },
+        ScatterMaterial::ThinSlab {
+            ior: 1.5,
+            transmittance: Rgb::splat(0.8),
+            roughness: 0.0,
+        },
+    ];
+    for material in materials {
+        let tri = Scatterer {
+            material,
+            ..mirror_triangle(0.0)
+        };
+        let set = BeamSet::build(
+            &[PointSource::isotropic(LIGHT, INTENSITY)],
+            &[tri],
+            bounds(),
+            &BuildOptions::default(),
+        )
+        .unwrap();
+        for beam in set.beams() {
+            let n = beam.wavefront_normal;
+            let centroid = (beam.vertices[0] + beam.vertices[1] + beam.vertices[2]) / 3.0;
+            let plane_point = centroid + n * 1.5;
+            let ft = beam.flux_triangle(plane_point).unwrap();
+            let (u, v) = n.any_orthonormal_pair();
+            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            for x in ft.vertices {
+                let q = Vec3::new((x - plane_point).dot(u), (x - plane_point).dot(v), 0.0);
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+            let m = 500usize;
+            let (du, dv) = ((hi.x - lo.x) / m as f32, (hi.y - lo.y) / m as f32);
+            let cell = f64::from(du) * f64::from(dv);
+            let (mut total, mut e_max, mut boundary) = (0.0f64, 0.0f64, 0usize);
+            for i in 0..m {
+                for j in 0..m {
+                    let at = |a: f32, b: f32| {
+                        plane_point
+                            + u * (lo.x + (i as f32 + a) * du)
+                            + v * (lo.y + (j as f32 + b) * dv)
+                    };
+                    let e = f64::from(beam.irradiance(at(0.5, 0.5), -n).y);
+                    total += e * cell;
+                    e_max = e_max.max(e.abs());
+                    let c = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                        .map(|(a, b)| beam.contains(at(a, b)));
+                    if c.iter().any(|&x| x != c[0]) {
+                        boundary += 1;
+                    }
+                }
+            }
+            let phi = f64::from(beam.flux.y);
+            let cos_min = beam
+                .directions
+                .iter()
+                .map(|d| f64::from(d.dot(n)))
+                .fold(1.0, f64::min);
+            let quad = boundary as f64 * cell * e_max;
+            let (a, b) = (phi * cos_min, phi);
+            let (want_lo, want_hi) = (a.min(b) - quad, a.max(b) + quad);
+            println!(
+                "flux plane {:?}: ∫E dA / Φ_s = {:.5}, allowed [{:.5}, {:.5}]",
+                beam.kind,
+                total / phi,
+                want_lo / phi,
+                want_hi / phi
+            );
+            assert!(
+                (want_lo..=want_hi).contains(&total),
+                "{:?}: {total} ∉ [{want_lo}, {want_hi}]",
+                beam.kind
+            );
+        }
+    }
+}
