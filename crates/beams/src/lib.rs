@@ -59,7 +59,10 @@
 //!   rays, but each tests containment in its own flux plane, so along a
 //!   shared edge a sliver can belong to neither or both (the warped volumes
 //!   of section 3 do not tile exactly); a point exactly on the edge can be
-//!   missed. Flat meshes (shared apex per beam) tile exactly.
+//!   missed. Shadow beams (one apex, the light) and the reflected beams of
+//!   coplanar mirror triangles (one apex, the light's image) tile exactly;
+//!   differently tilted flat facets open real gaps and overlaps, as a
+//!   faceted mirror does.
 //! - The hierarchy covers the scene's box; points outside it are evaluated
 //!   by the linear traversal, so [`BeamSet::irradiance_at`] equals
 //!   [`BeamSet::irradiance_at_linear`] everywhere.
