@@ -395,3 +395,51 @@ fn flux_through_a_flux_plane_is_the_beam_flux_for_every_kind() {
         }
     }
 }
+
+#[test]
+fn beams_with_one_apex_tile_the_space_behind_a_quad() {
+    // A planar mirror quad of two triangles: the shadow beams (apex: the
+    // light) and the reflected beams (apex: the light's image) share the
+    // plane through the apex and the diagonal, whatever the flux plane, so
+    // every point of the cone through the quad lies in exactly one of them.
+    use lustre_beams::Scatterer;
+    let m = mirror_triangle(0.0).material;
+    let (a, b, c, d) = (
+        Vec3::new(-0.5, 0.0, -0.5),
+        Vec3::new(0.5, 0.0, -0.5),
+        Vec3::new(0.5, 0.0, 0.5),
+        Vec3::new(-0.5, 0.0, 0.5),
+    );
+    let quad = [Scatterer::flat([a, c, b], m), Scatterer::flat([a, d, c], m)];
+    let set = BeamSet::build(
+        &[PointSource::isotropic(LIGHT, INTENSITY)],
+        &quad,
+        bounds(),
+        &BuildOptions::default(),
+    )
+    .unwrap();
+    let image = Vec3::new(LIGHT.x, -LIGHT.y, LIGHT.z);
+    let mut rng = Rng::new(5);
+    for (kind, apex, sign) in [
+        (BeamKind::Reflected, image, 1.0f32),
+        (BeamKind::Shadow, LIGHT, -1.0),
+    ] {
+        for _ in 0..5000 {
+            // A point of the quad, seen from the apex, beyond it.
+            let x = Vec3::new(rng.range(-0.499, 0.499), 0.0, rng.range(-0.499, 0.499));
+            let f = apex + (x - apex) * rng.range(1.05, 2.5);
+            assert!(sign * f.y > 0.0);
+            let holding = set
+                .beams()
+                .iter()
+                .filter(|b| b.kind == kind && b.contains(f))
+                .count();
+            // On the diagonal (x = z) both hold it.
+            let on_diagonal = (x.x - x.z).abs() < 1e-5;
+            assert!(
+                holding == 1 || (on_diagonal && holding == 2),
+                "{kind:?} {f}: {holding}"
+            );
+        }
+    }
+}
