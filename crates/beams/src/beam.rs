@@ -31,13 +31,15 @@ pub enum Scatter {
     Straight,
 }
 
-/// Where the outside case of the glossy volume splits the domain's edge (section 4.2.2, figure 12).
+/// Where the outside case of the glossy volume splits the domain's edge (section 4.2.2, figure 12): the point D whose value stands for the Gaussian's local maximum along the edge nearest the peak.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum SplitPoint {
-    /// D on the edge of the 2D domain ABC, where the line from O through the opposite vertex crosses it: `P_E` is continuous across the flux triangle's edges (the default; see the crate documentation).
-    #[default]
+    /// D on the edge of the 2D domain ABC, where the line from O through the opposite vertex crosses it: exactly continuous across the flux triangle's edges and the cheapest; it stays within about 1 % of [`SplitPoint::Rescattered`]'s `P_E` outside the beams of `tests/glossy.rs` (the straight edge of ABC follows the angle along the scatterer's edge closely).
     Domain,
-    /// The paper's construction (figure 12, step 3): `D_F` on the flux triangle's edge parameterises the scatterer's edge, the ray re-scattered from `D_W` there gives `φ_d` and `l_d`, and `D = φ_d l_d`; it falls back to [`SplitPoint::Domain`] when the ray cannot be re-scattered.
+    /// The paper's construction (figure 12, step 3): `D_F` where the line from F through the opposite flux-triangle vertex crosses the edge, its parameter s taken to the scatterer's edge, `D_W` there, the ray re-scattered from `D_W` giving `φ_d` and `l_d`, and `D = φ_d l_d`. The linear parameter puts `D_W` off the ray through `D_F`, so `P_E` steps at the flux triangle's edges (`tests/glossy.rs` measures it).
+    Paper,
+    /// As [`SplitPoint::Paper`], with `D_W` the point of the scatterer's edge whose re-scattered ray crosses the flux triangle's edge at `D_F` (bisection): `φ_d` is the true angle at that edge point, and at the flux triangle's edge `D = O`, continuous with the inside case (exactly for beams with one apex, up to the edge's warp otherwise). The default: the paper's construction made consistent.
+    #[default]
     Rescattered,
 }
 
@@ -100,7 +102,7 @@ impl FluxTriangle {
 }
 
 impl Beam {
-    /// A beam from its rays; `None` when a ray turns more than about 89° from the mean direction (no flux plane crosses all three) or the flux is zero. `cutoff` is the glossy cut-off in standard deviations ([`crate::BuildOptions::glossy_cutoff`]).
+    /// A beam from its rays; `None` when a ray turns more than about 89° from the mean direction (no flux plane crosses all three) or the flux is zero. `cutoff` is the glossy cut-off in standard deviations ([`crate::glossy_cutoff`]).
     pub fn new(
         kind: BeamKind,
         light: usize,
@@ -122,10 +124,16 @@ impl Beam {
         let centroid = (vertices[0] + vertices[1] + vertices[2]) / 3.0;
         let support_directions = match distribution {
             None => directions,
-            Some(d) => {
+            Some(d) => widened_beam(
+                directions,
+                vertices,
+                mean,
+                (cutoff * d.variance.sqrt()).min(MAX_SUPPORT_ANGLE),
+            )
+            .unwrap_or_else(|| {
                 let widen = cutoff * d.variance.sqrt();
                 std::array::from_fn(|i| widened(directions[i], mean, vertices[i] - centroid, widen))
-            }
+            }),
         };
         Some(Self {
             kind,
@@ -142,7 +150,7 @@ impl Beam {
             light_position: Vec3::ZERO,
             normals: [generator_normal; 3],
             scatter: Scatter::Straight,
-            split_point: SplitPoint::Domain,
+            split_point: SplitPoint::Rescattered,
         })
     }
 
@@ -176,7 +184,7 @@ impl Beam {
         self.in_front(p) && self.flux_triangle(p).is_some_and(|t| t.contains_fragment())
     }
 
-    /// Whether `p` is where the beam is evaluated: the beam volume for a specular beam; for a glossy one the volume of the rays turned `glossy_cutoff · σ` further from the mean direction (at most 85° from it), beyond which its Gaussian is cut off.
+    /// Whether `p` is where the beam is evaluated: the beam volume for a specular beam; for a glossy one the volume whose edges lie [`crate::glossy_cutoff`] σ further out (at most 85° from the mean direction), beyond which its Gaussian is cut off.
     pub fn support(&self, p: Vec3) -> bool {
         if self.distribution.is_none() {
             return self.contains(p);
@@ -235,20 +243,21 @@ impl Beam {
         let split = |k: usize, _s: f32, d: Vec2| -> Vec2 {
             match self.split_point {
                 SplitPoint::Domain => d,
-                SplitPoint::Rescattered => self
-                    .rescattered_split(k, ft, p)
+                SplitPoint::Paper | SplitPoint::Rescattered => self
+                    .rescattered_split(k, ft, p, self.split_point == SplitPoint::Rescattered)
                     .map_or(d, |(origin, dir, at)| to_domain(origin, dir, at)),
             }
         };
         dist.triangle_volume_split(corner(0), corner(1), corner(2), split)
     }
 
-    /// Figure 12, step 3: `D_F` where the line from F through the flux triangle's vertex `k` crosses the opposite edge, its parameter s on that edge, `D_W` at s on the scatterer's edge, the direction `S_D` re-scattered there from the light with the interpolated normal, and `D_T` where that ray crosses the flux plane; returns `(D_W, S_D, D_T)`.
+    /// Figure 12, step 3: `D_F` where the line from F through the flux triangle's vertex `k` crosses the opposite edge, its parameter s on that edge, `D_W` on the scatterer's edge, the direction `S_D` re-scattered there from the light with the interpolated normal, and `D_T` where that ray crosses the flux plane; returns `(D_W, S_D, D_T)`. With `matched`, `D_W` is the edge point whose ray crosses the flux triangle's edge at `D_F` (found by bisection) instead of the point at the same parameter s.
     fn rescattered_split(
         &self,
         k: usize,
         ft: &FluxTriangle,
         p: Vec3,
+        matched: bool,
     ) -> Option<(Vec3, Vec3, Vec3)> {
         let n = self.wavefront_normal;
         let (i, j) = ((k + 1) % 3, (k + 2) % 3);
@@ -259,20 +268,38 @@ impl Beam {
             return None;
         }
         let s = ((p - xi).cross(towards).dot(n) / denom).clamp(0.0, 1.0);
-        let dw = self.vertices[i].lerp(self.vertices[j], s);
-        let normal = self.normals[i].lerp(self.normals[j], s).normalize_or_zero();
-        let w = (dw - self.light_position).normalize_or_zero();
-        let sd = match self.scatter {
-            Scatter::Reflect => crate::construction::reflect(w, normal),
-            Scatter::Refract { eta } => crate::construction::refract(w, normal, eta)?,
-            Scatter::Straight => w,
+        // The ray scattered at parameter t of the scatterer's edge, and where it crosses the flux plane.
+        let ray = |t: f32| -> Option<(Vec3, Vec3, Vec3)> {
+            let dw = self.vertices[i].lerp(self.vertices[j], t);
+            let normal = self.normals[i].lerp(self.normals[j], t).normalize_or_zero();
+            let w = (dw - self.light_position).normalize_or_zero();
+            let sd = match self.scatter {
+                Scatter::Reflect => crate::construction::reflect(w, normal),
+                Scatter::Refract { eta } => crate::construction::refract(w, normal, eta)?,
+                Scatter::Straight => w,
+            };
+            let den = sd.dot(n);
+            if !(den > 0.0) {
+                return None;
+            }
+            Some((dw, sd, dw + sd * ((p - dw).dot(n) / den)))
         };
-        let den = sd.dot(n);
-        if !(den > 0.0) {
-            return None;
+        if !matched {
+            return ray(s);
         }
-        let dt = dw + sd * ((p - dw).dot(n) / den);
-        Some((dw, sd, dt))
+        // The edge's rays cross the flux plane along a curve from X_i (t = 0)
+        // to X_j (t = 1); find where its projection on the edge is at s.
+        let along = |t: f32| ray(t).map(|(_, _, dt)| (dt - xi).dot(edge) / edge.length_squared());
+        let (mut lo, mut hi) = (0.0f32, 1.0f32);
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if along(mid)? < s {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        ray(0.5 * (lo + hi))
     }
 
     /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of equal slabs along the mean direction (about as long as the beam is wide, at most `pieces`): the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.
@@ -401,6 +428,49 @@ fn flux_triangle(
         area: 0.5 * total.abs(),
         barycentrics: b,
     })
+}
+
+/// The directions of a beam whose edges lie `angle` further out than the beam's, seen along `mean`: in the plane one unit along `mean` each direction's point moves by `tan(angle)` along the miter of its two edges' outward normals (at most 8 times as far, for slivers), so that each edge moves out by `tan(angle)`; then at most [`MAX_SUPPORT_ANGLE`] from `mean`. The edges are oriented by the directions' triangle, or the scatterer's when that one is degenerate; `None` when both are.
+fn widened_beam(
+    directions: [Vec3; 3],
+    vertices: [Vec3; 3],
+    mean: Vec3,
+    angle: f32,
+) -> Option<[Vec3; 3]> {
+    let (u, v) = mean.any_orthonormal_pair();
+    let flat = |x: Vec3| Vec2::new(x.dot(u), x.dot(v));
+    let g: [Vec2; 3] = std::array::from_fn(|i| flat(directions[i]) / directions[i].dot(mean));
+    let area = |t: &[Vec2; 3]| (t[1] - t[0]).perp_dot(t[2] - t[0]);
+    let centroid = (vertices[0] + vertices[1] + vertices[2]) / 3.0;
+    let shape = if area(&g).abs() > 1e-10 {
+        g
+    } else {
+        std::array::from_fn(|i| flat(vertices[i] - centroid))
+    };
+    let orient = area(&shape);
+    if orient == 0.0 || !orient.is_finite() {
+        return None;
+    }
+    // Outward unit normal of the edge from vertex k to k + 1.
+    let normal: [Vec2; 3] = std::array::from_fn(|k| {
+        let e = shape[(k + 1) % 3] - shape[k];
+        (Vec2::new(e.y, -e.x) * orient.signum()).normalize_or_zero()
+    });
+    let offset = angle.tan();
+    Some(std::array::from_fn(|i| {
+        let (a, b) = (normal[(i + 2) % 3], normal[i]);
+        let miter = (a + b) / (1.0 + a.dot(b)).max(1.0 / 64.0);
+        let miter = miter.clamp_length_max(8.0);
+        let p = g[i] + miter * offset;
+        let d = (mean + u * p.x + v * p.y).normalize();
+        let current = d.dot(mean).clamp(-1.0, 1.0).acos();
+        if current <= MAX_SUPPORT_ANGLE {
+            d
+        } else {
+            let perp = (d - d.dot(mean) * mean).normalize_or_zero();
+            mean * MAX_SUPPORT_ANGLE.cos() + perp * MAX_SUPPORT_ANGLE.sin()
+        }
+    }))
 }
 
 /// `d` turned by `angle` away from `mean` (in their common plane; along `outward`, made perpendicular to `mean`, when `d` is parallel to it), at most [`MAX_SUPPORT_ANGLE`] from `mean`.

@@ -15,8 +15,8 @@ use crate::scatterer::{PointSource, ScatterMaterial, Scatterer};
 pub struct BuildOptions {
     /// Trace negative shadow beams (section 3.1, first-order shadows).
     pub shadow_beams: bool,
-    /// A glossy beam is evaluated where a fragment is within `glossy_cutoff` standard deviations σ (as an angle) of its specular beam ([`Beam::support`]); beyond, its Gaussian is cut off.
-    pub glossy_cutoff: f32,
+    /// The largest volume `P_E` a glossy beam's cut-off may drop: a glossy beam is evaluated within [`glossy_cutoff`] standard deviations σ (as an angle) of its specular beam ([`Beam::support`]), far enough that no planar-facet volume over any domain beyond it exceeds this.
+    pub glossy_epsilon: f32,
     /// Triangles with less area than this, relative to the square of their longest edge, are degenerate and skipped.
     pub min_relative_area: f32,
     /// Where glossy beams split the domain outside the flux triangle (section 4.2.2, figure 12).
@@ -27,9 +27,9 @@ impl Default for BuildOptions {
     fn default() -> Self {
         Self {
             shadow_beams: true,
-            glossy_cutoff: 4.0,
+            glossy_epsilon: 1e-3,
             min_relative_area: 1e-7,
-            split_point: SplitPoint::Domain,
+            split_point: SplitPoint::Rescattered,
         }
     }
 }
@@ -79,6 +79,13 @@ pub fn solid_angle(o: Vec3, [a, b, c]: [Vec3; 3]) -> f32 {
     let num = a.dot(b.cross(c)).abs();
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
     (2.0 * num.atan2(den)) as f32
+}
+
+/// The cut-off k (in σ) beyond which the planar-facet volume of section 4.2.2 is below `epsilon` over any domain: with every corner at least kσ from the peak each is below `P_O exp(-k²/2)`, and the domain, a triangle with corners at most π from O, is at most `(3√3/4) π²`, so `k = √(2 ln((3√3/4) π² P_O / ε))` (at least 3). The facets overestimate the Gaussian far more when the domain is much wider than σ, so k grows as σ shrinks (about 6 to 7 for σ from 0.3 to 0.003 rad at ε = 1e-3).
+pub fn glossy_cutoff(distribution: &ScatterDistribution, epsilon: f32) -> f32 {
+    let area = 0.75 * 3f32.sqrt() * std::f32::consts::PI * std::f32::consts::PI;
+    let ratio = area * distribution.peak() / epsilon.max(f32::MIN_POSITIVE);
+    (2.0 * ratio.max(1.0).ln()).sqrt().max(3.0)
 }
 
 /// Everything built from one (light, scatterer) pair, and what was skipped.
@@ -195,7 +202,7 @@ fn pair_beams(
             flux,
             generator_normal,
             distribution,
-            options.glossy_cutoff,
+            distribution.map_or(0.0, |d| glossy_cutoff(&d, options.glossy_epsilon)),
         );
         if beam.is_none() && flux != Rgb::ZERO {
             too_wide.set(too_wide.get() + 1);
