@@ -102,7 +102,7 @@ impl FluxTriangle {
 }
 
 impl Beam {
-    /// A beam from its rays; `None` when a ray turns more than about 89° from the mean direction (no flux plane crosses all three) or the flux is zero. `cutoff` is the glossy cut-off in standard deviations ([`crate::glossy_cutoff`]).
+    /// A beam from its rays; `None` when a ray turns more than about 89° from the mean direction (no flux plane crosses all three) or the flux is zero. `cutoff` is the glossy cut-off in standard deviations ([`crate::glossy_cutoff`]). Its split point is [`SplitPoint::Domain`] until [`Beam::with_scatter`] says how the rays left the scatterer.
     pub fn new(
         kind: BeamKind,
         light: usize,
@@ -150,11 +150,11 @@ impl Beam {
             light_position: Vec3::ZERO,
             normals: [generator_normal; 3],
             scatter: Scatter::Straight,
-            split_point: SplitPoint::Rescattered,
+            split_point: SplitPoint::Domain,
         })
     }
 
-    /// This beam with how its rays left the scatterer, for [`SplitPoint::Rescattered`].
+    /// This beam with how its rays left the scatterer (light, vertex normals, reflection or refraction) and the split point to use, for [`SplitPoint::Paper`] and [`SplitPoint::Rescattered`].
     pub fn with_scatter(
         mut self,
         light_position: Vec3,
