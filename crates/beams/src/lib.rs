@@ -59,9 +59,11 @@
 //!   `σ² = (η - 1)² α²`; one rough interface spreads `σ² = (1 - 1/η)² α²/2`,
 //!   a reflector `σ² = 2α²` (`lustre-brdf`'s scatter distribution).
 //! - Adjacent beams of a mesh with smooth vertex normals share their edge
-//!   rays, but each tests containment in its own flux plane, so along a
-//!   shared edge a sliver can belong to neither or both (the warped volumes
-//!   of section 3 do not tile exactly); a point exactly on the edge can be
+//!   rays, but each tests containment in its own flux plane, so the two
+//!   boundaries of a shared edge need not coincide (the warped volumes of
+//!   section 3); in `pool` the mismatch is below what 20 000 random floor
+//!   points find (each lies in exactly one refracted beam,
+//!   `tests/scenes.rs`), though a point exactly on a shared edge can be
 //!   missed. Shadow beams (one apex, the light) and the reflected beams of
 //!   coplanar mirror triangles (one apex, the light's image) tile exactly;
 //!   differently tilted flat facets open real gaps and overlaps, as a

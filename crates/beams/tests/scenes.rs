@@ -109,3 +109,34 @@ fn scenes_without_point_lights_are_refused() {
     let set = BeamSet::from_scene(&points, &BuildOptions::default()).unwrap();
     assert!(set.beams().is_empty());
 }
+
+#[test]
+fn pool_refracted_beams_tile_the_floor_under_the_water() {
+    // The water's vertex normals are smooth, so the refracted field is
+    // continuous and, at this wave height, without folds above the floor:
+    // every floor point under exactly one water triangle (one shadow beam)
+    // lies in exactly one refracted beam, although neighbouring refracted
+    // beams, whose rays do not share an apex, test containment against
+    // their own flux planes (a point exactly on a shared edge may miss).
+    let set = BeamSet::from_scene(&pool(), &BuildOptions::default()).unwrap();
+    let mut rng = Rng::new(35);
+    let mut checked = 0;
+    for _ in 0..20_000 {
+        let p = Vec3::new(rng.range(-0.8, 0.8), 1e-4, rng.range(-0.8, 0.8));
+        let holding = |kind: BeamKind| {
+            set.candidates(p)
+                .iter()
+                .filter(|&&i| {
+                    let b = &set.beams()[i as usize];
+                    b.kind == kind && b.contains(p)
+                })
+                .count()
+        };
+        if holding(BeamKind::Shadow) != 1 {
+            continue;
+        }
+        assert_eq!(holding(BeamKind::Refracted), 1, "{p}");
+        checked += 1;
+    }
+    assert!(checked > 19_000, "{checked}");
+}
