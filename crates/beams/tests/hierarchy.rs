@@ -123,7 +123,7 @@ fn hierarchy_equals_linear_traversal() {
 
 mod random_scenes {
     use super::*;
-    use proptest::prelude::{ProptestConfig, prop, prop_assert_eq, proptest};
+    use proptest::prelude::{ProptestConfig, prop, prop_assert, prop_assert_eq, proptest};
     use support::Rng;
 
     fn material(kind: u8, roughness: f32) -> ScatterMaterial {
@@ -173,6 +173,17 @@ mod random_scenes {
                 let p = point(&mut rng);
                 let n = rng.unit_vector();
                 prop_assert_eq!(set.irradiance_at(p, n), set.irradiance_at_linear(p, n));
+                // Every beam's irradiance is finite, non-negative for light
+                // it adds and non-positive for light a shadow beam removes.
+                for b in set.beams() {
+                    let e = b.irradiance(p, n);
+                    prop_assert!(e.is_finite(), "{:?} at {}: {}", b.kind, p, e);
+                    if b.kind == lustre_beams::BeamKind::Shadow {
+                        prop_assert!(e.max_element() <= 0.0);
+                    } else {
+                        prop_assert!(e.min_element() >= 0.0);
+                    }
+                }
             }
         }
     }
