@@ -40,7 +40,7 @@
 //! | [`models::PoulinFournier`] | P. Poulin and A. Fournier, "A model for anisotropic reflection", SIGGRAPH 1990 |
 //! | [`models::Htsg`] | X. D. He, K. E. Torrance, F. X. Sillion and D. P. Greenberg, "A comprehensive physical model for light reflection", SIGGRAPH 1991 |
 //! | [`models::DiefenbachPhong`] | P. J. Diefenbach and N. I. Badler, "Multi-pass pipeline rendering", I3D 1997, equation 6 |
-//! | [`models::SpecularReflection`], [`models::SmoothDielectric`] | Born & Wolf, *Principles of Optics*, Fresnel equations |
+//! | [`models::SpecularReflection`], [`models::SmoothDielectric`], [`models::ThinDielectric`] | Born & Wolf, *Principles of Optics*, Fresnel equations |
 //! | [`models::Mixture`] | a convex combination of any of the above |
 //! | [`table::BrdfTable`] | W. Stürzlinger and R. Bastos, "Interactive rendering of globally illuminated glossy scenes", EGWR 1997, section 3.2 |
 //!
@@ -70,6 +70,7 @@
 //! | `lambert`, `diffuse` | `reflectance` (0.5) |
 //! | `mirror` | `reflectance` (1); Fresnel (F = 1) |
 //! | `dielectric` | `ior` (1.5), `transmittance` (1) |
+//! | `thin-dielectric` (a thin slab: straight transmission) | `ior` (1.5), `transmittance` (1), `roughness` (0; smooth here, used by `lustre-beams`) |
 //! | `phong` (Phong 1975), `modified-phong` (Lafortune & Willems 1994), `lewis` (Lewis 1994), `blinn-phong` (Blinn 1977) | `diffuse` (0.5), `specular` (0.2), `exponent` (20) |
 //! | `torrance-sparrow` | `diffuse` (0), `specular` (1), `roughness` m in radians (0.2), `ior` (1.5) |
 //! | `cook-torrance` (Beckmann), `cook-torrance-gaussian`, `cook-torrance-ggx` | `diffuse` (0), `specular` (1), `roughness` (0.2), `smith` 0 = V-cavity G of the paper, 1 = Smith G (0); Fresnel (F = 1) |

@@ -36,6 +36,7 @@ pub const MODEL_NAMES: &[&str] = &[
     "strauss",
     "poulin-fournier",
     "htsg",
+    "thin-dielectric",
 ];
 
 /// Builds the BRDF a material model describes; typed errors for unknown models, unknown or missing parameters and values out of range (the construction step of DESIGN.md's data flow).
@@ -245,6 +246,15 @@ fn from_named(model: &str, params: &BTreeMap<String, Vec<f32>>) -> Result<BoxedB
             p.scalar("ior", Some(1.5))?,
             p.rgb("transmittance", grey(1.0))?,
         )?),
+        "thin-dielectric" => {
+            // The roughness is for lustre-beams' glossy beams; the faces here are smooth.
+            let roughness = p.scalar("roughness", Some(0.0))?;
+            check_range("thin-dielectric", "roughness", roughness, 0.0, f32::MAX)?;
+            Box::new(ThinDielectric::new(
+                p.scalar("ior", Some(1.5))?,
+                p.rgb("transmittance", grey(1.0))?,
+            )?)
+        }
         "phong" | "modified-phong" | "lewis" | "blinn-phong" => {
             let kd = p.rgb("diffuse", grey(0.5))?;
             let ks = p.rgb("specular", grey(0.2))?;

@@ -65,6 +65,18 @@ impl ScatterDistribution {
         Self::new(2.0 * alpha * alpha)
     }
 
+    /// Through one rough interface of relative index η (far side over near side, the convention of [`crate::fresnel_dielectric`]), from Beckmann's α: near normal incidence a facet tilted by `s` turns the refracted direction by `(1 - 1/η) s`, so `σ² = (1 - 1/η)² α²/2` (the transmissive twin of [`ScatterDistribution::from_beckmann_alpha`]; Duvenhage et al. 2010, section 4.4, figure 13). Errors for η = 1 (no spread: a specular beam).
+    pub fn from_beckmann_alpha_refracted(alpha: f32, eta: f32) -> Result<Self> {
+        let k = 1.0 - 1.0 / eta;
+        Self::new(k * k * alpha * alpha / 2.0)
+    }
+
+    /// Through a thin slab of index η with both faces rough (Beckmann α each, independent): the entry facet turns the ray by `(1 - 1/η) s₁` inside, which leaves the slab multiplied by η, and the exit facet adds `(1 - η) s₂`, so the scatter angle is `(η - 1)(s₁ - s₂)` and `σ² = (η - 1)² α²` (a stained-glass pane lit from behind, Duvenhage et al. 2010, figures 1 and 13). Errors for η = 1.
+    pub fn from_beckmann_alpha_thin_slab(alpha: f32, eta: f32) -> Result<Self> {
+        let k = eta - 1.0;
+        Self::new(k * k * alpha * alpha)
+    }
+
     /// The peak `P_O = 1/(2πσ²)` at the specular direction (Duvenhage et al. 2010, figure 11, step 1).
     pub fn peak(&self) -> f32 {
         1.0 / (2.0 * std::f32::consts::PI * self.variance)
@@ -77,6 +89,17 @@ impl ScatterDistribution {
 
     /// The volume under ρ over the triangle ABC of scatter angles, the fragment at the origin, by the paper's planar-facet approximation clamped to one (Duvenhage et al. 2010, section 4.2.2, figures 11 and 12).
     pub fn triangle_volume(&self, a: Vec2, b: Vec2, c: Vec2) -> f32 {
+        self.triangle_volume_split(a, b, c, |_, _, d| d)
+    }
+
+    /// [`ScatterDistribution::triangle_volume`] with the split point D of the outside case chosen by the caller: `split(k, s, d)` gets the vertex `k` opposite the split edge, the parameter `s` in [0, 1] of D along that edge from vertex `k + 1` to `k + 2`, and that point `d` of the domain, and returns the D to use (Duvenhage et al. 2010, figure 12, step 3, recompute it from the world-space point `D_W` on the scatterer).
+    pub fn triangle_volume_split(
+        &self,
+        a: Vec2,
+        b: Vec2,
+        c: Vec2,
+        split: impl Fn(usize, f32, Vec2) -> Vec2,
+    ) -> f32 {
         let facet = |p: Vec2, q: Vec2, r: Vec2| {
             0.5 * (q - p).perp_dot(r - p).abs()
                 * (self.density(p) + self.density(q) + self.density(r))
@@ -107,7 +130,7 @@ impl ScatterDistribution {
                 } else {
                     let s = vk.perp_dot(-p) / denom;
                     let s = s.clamp(0.0, 1.0);
-                    let d = p + e * s;
+                    let d = split(k, s, p + e * s);
                     facet(vk, p, d) + facet(vk, d, q)
                 }
             }

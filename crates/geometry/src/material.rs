@@ -38,6 +38,9 @@ pub enum MicrofacetDistribution {
     Ggx,
 }
 
+/// The `MaterialModel::Named` model of a thin glass slab (a window pane): light passes straight through it, reflected with `R = 2F/(1 + F)` and transmitted with `T = (1 - F)/(1 + F)` times the filter (all internal reflections summed); parameters `ior` (1.5), `roughness` (Beckmann α of both faces, 0) and `transmittance` (one or three values, 1). Used by `lustre-beams` and exported to Mitsuba's `thindielectric`.
+pub const THIN_DIELECTRIC: &str = "thin-dielectric";
+
 /// The reflectance model of a material and its parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MaterialModel {

@@ -12,6 +12,7 @@
 //! | [`MaterialModel::RoughConductor`] (Beckmann, GGX) | `roughconductor` with `distribution`, `alpha`, `eta`/`k` (or `material="none"` for F = 1) and `specular_reflectance` |
 //! | [`MaterialModel::Mirror`] | `conductor` with `material="none"` and `specular_reflectance` |
 //! | [`MaterialModel::Dielectric`] | `dielectric` with `int_ior`, `ext_ior = 1` and `specular_transmittance` |
+//! | `MaterialModel::Named` `thin-dielectric` ([`crate::material::THIN_DIELECTRIC`]) | `thindielectric` with `int_ior`, `ext_ior = 1` and `specular_transmittance`; a rough one is approximated as smooth |
 //! | [`MaterialModel::Blend`] | `blendbsdf` with `weight` (the weight of the second nested BSDF in both) |
 //! | opacity < 1 (non-dielectric) | the BSDF nested in `mask` with `opacity` |
 //! | emissive mesh | its shape with an `area` emitter of the material's `radiance`, keeping the material's BSDF |
@@ -42,7 +43,9 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use crate::light::{AreaShape, Light};
-use crate::material::{ConductorFresnel, Material, MaterialModel, MicrofacetDistribution};
+use crate::material::{
+    ConductorFresnel, Material, MaterialModel, MicrofacetDistribution, THIN_DIELECTRIC,
+};
 use crate::{Camera, GeometryError, Result, Rgb, Scene};
 
 /// The reconstruction filter of Mitsuba's film.
@@ -490,7 +493,11 @@ fn material_bsdf(
             warnings.push(format!("{what}: {kind} texture {} dropped", path.display()));
         }
     }
-    let transmissive = matches!(material.model, MaterialModel::Dielectric { .. });
+    let transmissive = match &material.model {
+        MaterialModel::Dielectric { .. } => true,
+        MaterialModel::Named { model, .. } => model == THIN_DIELECTRIC,
+        _ => false,
+    };
     let mut attr = ("id", id);
     let mut wrappers = 0;
     if material.opacity < 1.0 && !transmissive {
@@ -596,6 +603,44 @@ fn model_bsdf(
         MaterialModel::Ward { diffuse: kd, .. } => {
             approximate("Mitsuba has no Ward model", "its diffuse term")?;
             diffuse(x, *kd);
+        }
+        MaterialModel::Named { model, params } if model == THIN_DIELECTRIC => {
+            let value = |name: &str| params.get(name).map(Vec::as_slice);
+            let bad = |name: &str| GeometryError::Unsupported {
+                what: what.to_owned(),
+                why: format!(
+                    "`{THIN_DIELECTRIC}` parameter `{name}` has the wrong number of values"
+                ),
+            };
+            let ior = match value("ior") {
+                None => 1.5,
+                Some([v]) => *v,
+                Some(_) => return Err(bad("ior")),
+            };
+            let roughness = match value("roughness") {
+                None => 0.0,
+                Some([v]) => *v,
+                Some(_) => return Err(bad("roughness")),
+            };
+            let transmittance = match value("transmittance") {
+                None => Rgb::ONE,
+                Some([g]) => Rgb::splat(*g),
+                Some([r, g, b]) => Rgb::new(*r, *g, *b),
+                Some(_) => return Err(bad("transmittance")),
+            };
+            if roughness > 0.0 {
+                approximate(
+                    "Mitsuba has no rough thin dielectric",
+                    "a smooth `thindielectric`",
+                )?;
+            }
+            x.open("bsdf", &[("type", "thindielectric"), attr]);
+            x.property("float", "int_ior", ior);
+            x.property("float", "ext_ior", 1);
+            if transmittance != Rgb::ONE {
+                x.rgb("specular_transmittance", transmittance);
+            }
+            x.close();
         }
         MaterialModel::Named { model, params } => {
             approximate(

@@ -80,7 +80,7 @@ fn bad_input_is_one_clear_line() {
     let cases: Vec<(Vec<String>, &str)> = vec![
         (
             vec!["info".into(), "nosuchscene".into()],
-            "neither a built-in scene (cornell, glosbox, tree, mirrors, bathroom) nor an existing file",
+            "neither a built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass) nor an existing file",
         ),
         (
             vec!["info".into(), bad_obj.display().to_string()],

@@ -16,6 +16,7 @@ pub mod poulin_fournier;
 pub mod schlick;
 pub mod specular;
 pub mod strauss;
+pub mod thin_dielectric;
 pub mod torrance_sparrow;
 pub mod ward;
 
@@ -35,5 +36,6 @@ pub use poulin_fournier::PoulinFournier;
 pub use schlick::Schlick;
 pub use specular::SpecularReflection;
 pub use strauss::Strauss;
+pub use thin_dielectric::ThinDielectric;
 pub use torrance_sparrow::torrance_sparrow;
 pub use ward::{Ward, WardNormalisation};

@@ -311,6 +311,17 @@ pub fn catalogue() -> Vec<(&'static str, MaterialModel)> {
                 transmittance: Rgb::splat(0.9),
             },
         ),
+        (
+            "thin-dielectric",
+            named(
+                "thin-dielectric",
+                &[
+                    ("ior", &[1.5]),
+                    ("transmittance", &[0.9, 0.5, 0.2]),
+                    ("roughness", &[0.1]),
+                ],
+            ),
+        ),
     ]
 }
 

@@ -1,20 +1,35 @@
 //! Built-in scenes that need no files (DESIGN.md, "Built-in scenes").
 
 pub mod bathroom;
+pub mod cardioid;
 mod cornell;
 pub mod mirrors;
 mod parts;
+pub mod pool;
+pub mod stained_glass;
 pub mod tree;
 
 pub use bathroom::bathroom;
+pub use cardioid::cardioid;
 pub use cornell::{cornell, glosbox, small_box_path};
 pub use mirrors::mirrors;
+pub use pool::{pool, pool_at};
+pub use stained_glass::{stained_glass, stained_glass_with};
 pub use tree::tree;
 
 use crate::{GeometryError, Result, Scene};
 
 /// Names of the built-in scenes.
-pub const BUILTIN_SCENES: &[&str] = &["cornell", "glosbox", "tree", "mirrors", "bathroom"];
+pub const BUILTIN_SCENES: &[&str] = &[
+    "cornell",
+    "glosbox",
+    "tree",
+    "mirrors",
+    "bathroom",
+    "cardioid",
+    "pool",
+    "stained-glass",
+];
 
 /// The built-in scene with the given name.
 pub fn builtin(name: &str) -> Result<Scene> {
@@ -24,6 +39,9 @@ pub fn builtin(name: &str) -> Result<Scene> {
         "tree" => Ok(tree()),
         "mirrors" => Ok(mirrors()),
         "bathroom" => Ok(bathroom()),
+        "cardioid" => Ok(cardioid()),
+        "pool" => Ok(pool()),
+        "stained-glass" => Ok(stained_glass()),
         _ => Err(GeometryError::UnknownScene {
             name: name.to_owned(),
             known: BUILTIN_SCENES.join(", "),
