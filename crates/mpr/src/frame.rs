@@ -515,7 +515,6 @@ impl FrameGraph {
                 )?;
                 accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
                 if s + 1 == samples {
-                    let accumulation = &frame.targets.accumulation.texture;
                     if splat_once {
                         // The splats once through the pixel centres, at every
                         // level of the specular recursion, into a cleared HDR
@@ -528,35 +527,18 @@ impl FrameGraph {
                                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                                     label: Some("splats-once"),
                                 });
-                        let tree = self.view_tree(ctx, frame.camera)?;
-                        let slots = views.write(ctx, &tree.views)?;
                         if let Some((_, pass)) = passes.splat {
-                            let splat_light: [&dyn LightPass; 1] = [pass];
-                            self.encode_light(
+                            self.encode_added_splats(
                                 ctx,
                                 &mut encoder,
                                 frame,
-                                &splat_light,
-                                &views,
-                                &tree,
-                                &slots,
-                                // The limit faces' light is in the average already.
-                                false,
+                                pass,
+                                &mut views,
+                                accumulate,
                             )?;
                         }
-                        accumulate.encode(&ctx.device, &mut encoder, frame.targets, 1.0, false);
                     }
-                    encoder.copy_texture_to_texture(
-                        accumulation.as_image_copy(),
-                        frame.targets.hdr.texture.as_image_copy(),
-                        accumulation.size(),
-                    );
-                    self.tonemap.encode(
-                        &ctx.device,
-                        &mut encoder,
-                        &frame.targets.hdr.view,
-                        frame.output,
-                    );
+                    self.encode_resolve(ctx, &mut encoder, frame);
                 }
                 ctx.queue.submit([encoder.finish()]);
                 Ok(())
@@ -593,8 +575,6 @@ impl FrameGraph {
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
         pass.prepare(&ctx.queue, inputs.filtering);
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
-        let tree = self.view_tree(ctx, frame.camera)?;
-        let slots = views.write(ctx, &tree.views)?;
         ctx.checked_result("splat batch", || {
             let mut encoder = ctx
                 .device
@@ -609,33 +589,58 @@ impl FrameGraph {
                     accumulation.size(),
                 );
             }
-            let splat_light: [&dyn LightPass; 1] = [pass];
-            // The limit faces' light is in the frame already.
-            self.encode_light(
-                ctx,
-                &mut encoder,
-                frame,
-                &splat_light,
-                &views,
-                &tree,
-                &slots,
-                false,
-            )?;
-            accumulate.encode(&ctx.device, &mut encoder, frame.targets, 1.0, false);
-            encoder.copy_texture_to_texture(
-                accumulation.as_image_copy(),
-                frame.targets.hdr.texture.as_image_copy(),
-                accumulation.size(),
-            );
-            self.tonemap.encode(
-                &ctx.device,
-                &mut encoder,
-                &frame.targets.hdr.view,
-                frame.output,
-            );
+            self.encode_added_splats(ctx, &mut encoder, frame, pass, &mut views, accumulate)?;
+            self.encode_resolve(ctx, &mut encoder, frame);
             ctx.queue.submit([encoder.finish()]);
             Ok(())
         })
+    }
+
+    /// The splats alone, through the pixel centres at every level of the
+    /// specular recursion, into a cleared HDR target that is then added to
+    /// [`RenderTargets::accumulation`] (the limit faces' light is in the
+    /// accumulated frame already).
+    fn encode_added_splats(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        pass: &SplatPass,
+        views: &mut ViewBuffer,
+        accumulate: &AccumulatePass,
+    ) -> Result<()> {
+        let tree = self.view_tree(ctx, frame.camera)?;
+        let slots = views.write(ctx, &tree.views)?;
+        let splat_light: [&dyn LightPass; 1] = [pass];
+        self.encode_light(
+            ctx,
+            encoder,
+            frame,
+            &splat_light,
+            views,
+            &tree,
+            &slots,
+            false,
+        )?;
+        accumulate.encode(&ctx.device, encoder, frame.targets, 1.0, false);
+        Ok(())
+    }
+
+    /// The accumulated frame copied into the HDR target and tone mapped to `frame.output`.
+    fn encode_resolve(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+    ) {
+        let accumulation = &frame.targets.accumulation.texture;
+        encoder.copy_texture_to_texture(
+            accumulation.as_image_copy(),
+            frame.targets.hdr.texture.as_image_copy(),
+            accumulation.size(),
+        );
+        self.tonemap
+            .encode(&ctx.device, encoder, &frame.targets.hdr.view, frame.output);
     }
 
     /// Pairs each input of `frame` with its pass; an input without its pass is an error.

@@ -1,21 +1,8 @@
 //! The `lustre` command as a user runs it: output, exit codes, one-line errors.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod support;
 
-fn lustre(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lustre"))
-        .args(args)
-        .output()
-        .expect("the lustre binary runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lustre-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use support::{lustre, render_or_skip, scratch};
 
 #[test]
 fn info_describes_the_builtin_scenes() {
@@ -168,21 +155,6 @@ fn export_mitsuba_writes_the_scene_or_names_what_mitsuba_lacks() {
     );
     assert!(String::from_utf8(out.stderr).unwrap().contains("warning"));
     assert!(target.exists());
-}
-
-/// `lustre render` with `args`, or `None` when the binary says no adapter exists (exit 77) and the environment allows skipping.
-fn render_or_skip(test: &str, args: &[&str]) -> Option<Output> {
-    let out = lustre(args);
-    if out.status.code() == Some(77) {
-        assert!(
-            std::env::var_os("LUSTRE_REQUIRE_GPU").is_none(),
-            "{test}: LUSTRE_REQUIRE_GPU is set but: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        eprintln!("SKIPPED {test}: no Vulkan adapter");
-        return None;
-    }
-    Some(out)
 }
 
 /// Files in `dir` whose names start with a dot: the temporaries of atomic writes.

@@ -5,24 +5,13 @@
 //! `cargo test --release -p lustre-viewer --test density_render -- --ignored --nocapture`;
 //! `LUSTRE_DENSITY_ARGS` appends options, e.g. `--mesh-edge 0.1`).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
+
+use std::path::Path;
+
+use support::{lustre, scratch};
 
 use lustre_image::metrics::{RELATIVE_MSE_EPSILON, relative_mse};
-
-fn lustre(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lustre"))
-        .args(args)
-        .output()
-        .expect("the lustre binary runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lustre-density-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `lustre render cornell` with a technique and extra options into `out`; `None` when no adapter exists and skipping is allowed.
 fn render(test: &str, technique: &str, extra: &[&str], out: &Path) -> Option<serde_json::Value> {

@@ -4,15 +4,13 @@
 //! one batch (float summation order only) and against the in-memory render (the 21-byte
 //! records' quantisation), with its memory bounded by the batch.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
 
-fn lustre(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lustre"))
-        .args(args)
-        .output()
-        .expect("the lustre binary runs")
-}
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use lustre_image::metrics::{RELATIVE_MSE_EPSILON, relative_mse};
+use support::{lustre, scratch};
 
 /// Runs `lustre` and fails the test with its stderr unless it succeeds.
 fn ok(args: &[&str]) -> Output {
@@ -37,13 +35,6 @@ fn refused(args: &[&str]) -> String {
         args.join(" ")
     );
     stderr
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lustre-photons-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 fn s(p: &Path) -> &str {
@@ -187,18 +178,9 @@ fn batches_merges_and_appends_give_the_runs_file() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// `lustre render` with `args`, or `None` when no adapter exists (exit 77) and the environment allows skipping.
+/// `lustre render` with `args`, or `None` when no adapter exists (exit 77) and the environment allows skipping; fails unless it succeeds.
 fn render_or_skip(test: &str, args: &[&str]) -> Option<Output> {
-    let out = lustre(args);
-    if out.status.code() == Some(77) {
-        assert!(
-            std::env::var_os("LUSTRE_REQUIRE_GPU").is_none(),
-            "{test}: LUSTRE_REQUIRE_GPU is set but: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        eprintln!("SKIPPED {test}: no Vulkan adapter");
-        return None;
-    }
+    let out = support::render_or_skip(test, args)?;
     assert!(
         out.status.success(),
         "lustre {}: {}",
@@ -274,13 +256,12 @@ fn streamed_renders_equal_one_batch_and_the_in_memory_render() {
         // The 21-byte records' quantisation (position 2^-24 of a surface,
         // direction 0.07°, attenuation 1/255, rounded to nearest): measured
         // relMSE 4e-7 and mean ratio 1.00008 on glosbox at 60,000 photons.
-        let relmse = a
-            .iter()
-            .flatten()
-            .zip(m.iter().flatten())
-            .map(|(x, y)| (x - y).powi(2) / (y * y + 1e-2))
-            .sum::<f32>()
-            / (3 * a.len()) as f32;
+        let relmse = relative_mse(
+            &lustre_image::read_exr(&one).unwrap(),
+            &lustre_image::read_exr(&memory).unwrap(),
+            RELATIVE_MSE_EPSILON,
+        )
+        .unwrap();
         let mean = |p: &[[f32; 3]]| p.iter().flatten().map(|&v| f64::from(v)).sum::<f64>();
         let ratio = mean(&a) / mean(&m);
         assert!(
