@@ -81,20 +81,22 @@ impl StreamedPhotons {
                 path.display()
             );
         };
-        if provenance.point_lights != point_lights {
-            let (file, render) = if provenance.point_lights {
-                ("area lights replaced by point lights", "the area lights")
-            } else {
-                ("the area lights", "point lights of equal power")
-            };
-            bail!(
-                "--photons-file {}: its photons left {file}, this render's photons leave {render}; \
-                 trace with `lustre trace --area-lights {}`",
-                path.display(),
-                if point_lights { "points" } else { "area" }
-            );
-        }
+        // The fingerprint covers the lights as they emitted; where it differs,
+        // the light model is the likelier cause to name.
         if provenance.scene != scene_fingerprint(scene) {
+            if provenance.point_lights != point_lights {
+                let (file, render) = if provenance.point_lights {
+                    ("area lights replaced by point lights", "the area lights")
+                } else {
+                    ("the area lights", "point lights of equal power")
+                };
+                bail!(
+                    "--photons-file {}: its photons left {file}, this render's photons leave \
+                     {render}; trace with `lustre trace --area-lights {}`",
+                    path.display(),
+                    if point_lights { "points" } else { "area" }
+                );
+            }
             bail!(
                 "--photons-file {}: traced in another scene than `{}` (its materials or lights \
                  differ); trace it with `lustre trace {}`",

@@ -348,6 +348,34 @@ fn render_refuses_photon_files_it_cannot_use() {
         s(&out),
     ]);
     assert!(e.contains("traced in another scene than `cornell`"), "{e}");
+    // A scene of point lights only emits the same photons either way.
+    let points = dir.join("cardioid.lph");
+    ok(&[
+        "trace",
+        "cardioid",
+        "--photons",
+        "2000",
+        "--out",
+        s(&points),
+    ]);
+    let rendered = dir.join("cardioid.exr");
+    render_or_skip(
+        "cardioid",
+        &[
+            "render",
+            "cardioid",
+            "--size",
+            "16x16",
+            "--light-samples",
+            "1",
+            "--photons-file",
+            s(&points),
+            "--out",
+            s(&rendered),
+        ],
+    );
+    std::fs::remove_file(&rendered).ok();
+    std::fs::remove_file(rendered.with_extension("json")).ok();
     assert!(!out.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
