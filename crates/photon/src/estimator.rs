@@ -36,6 +36,8 @@
 //! normal is flipped to the viewer's side, and photons that arrived on the
 //! other side contribute nothing.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
 use lustre_brdf::BoxedBrdf;
 use lustre_geometry::sampling::Frame;
@@ -164,16 +166,16 @@ pub struct Splat {
 pub struct SplatEstimator {
     /// Options used.
     options: EstimatorOptions,
-    /// Surface parameterisations.
-    params: SurfaceParams,
+    /// Surface parameterisations (shared by [`SplatEstimator::with_photons`]).
+    params: Arc<SurfaceParams>,
     /// Material of each surface.
-    materials: Vec<u32>,
-    /// One BRDF per material.
-    brdfs: Vec<BoxedBrdf>,
+    materials: Arc<Vec<u32>>,
+    /// One BRDF per material (shared by [`SplatEstimator::with_photons`]).
+    brdfs: Arc<Vec<BoxedBrdf>>,
     /// Photons per surface.
     surfaces: Vec<SurfaceSplats>,
-    /// The kernel's mass on each planar surface, with [`Edges::Normalised`].
-    mass: Option<KernelMass>,
+    /// The kernel's mass on each planar surface, with [`Edges::Normalised`] (shared by [`SplatEstimator::with_photons`]).
+    mass: Option<Arc<KernelMass>>,
 }
 
 impl SplatEstimator {
@@ -238,11 +240,73 @@ impl SplatEstimator {
             _ => {}
         }
         let params = SurfaceParams::new(scene);
+        let mut surfaces = Self::selected_photons(&params, map, options.selection)?;
+        for (id, s) in surfaces.iter_mut().enumerate() {
+            let n = counts.map_or(s.points.len(), |c| c[id]);
+            s.h = match options.support {
+                Support::Scaled(c) => kernel_support(c, params.area(id as SurfaceId), n),
+                Support::Fixed(h) => h,
+                Support::Silverman(c) => {
+                    kernel_support_silverman(c, params.area(id as SurfaceId), n)
+                }
+                Support::GlossySilverman { kernel_c, c } => {
+                    let area = params.area(id as SurfaceId);
+                    let diffuse = scene
+                        .surfaces()
+                        .get(id)
+                        .and_then(|surface| scene.materials().get(surface.material as usize))
+                        .is_some_and(|m| m.model.is_diffuse());
+                    if diffuse {
+                        kernel_support(kernel_c, area, n)
+                    } else {
+                        kernel_support_silverman(c, area, n)
+                    }
+                }
+            };
+            s.grid = PointGrid::build(&s.points, s.h);
+        }
+        let mass = (options.edges == Edges::Normalised).then(|| {
+            let supports: Vec<f32> = surfaces.iter().map(|s| s.h).collect();
+            Arc::new(KernelMass::build(&params, &supports, options.kernel))
+        });
+        Ok(Self {
+            options,
+            materials: Arc::new(scene.surfaces().iter().map(|s| s.material).collect()),
+            brdfs: Arc::new(scene_brdfs(scene)?),
+            params: Arc::new(params),
+            surfaces,
+            mass,
+        })
+    }
+
+    /// The estimator of other photons of the same map (one batch of a file read in batches, section 2.1): this estimator's options, supports, kernel mass and BRDFs, shared rather than built again, over `map`'s selected photons. With supports from a [`SplatTally`] of the whole map ([`SplatEstimator::build_tallied`]), the batches' estimates add up to the whole map's.
+    pub fn with_photons(&self, map: &PhotonMap) -> Result<Self> {
+        let mut surfaces = Self::selected_photons(&self.params, map, self.options.selection)?;
+        for (s, template) in surfaces.iter_mut().zip(&self.surfaces) {
+            s.h = template.h;
+            s.grid = PointGrid::build(&s.points, s.h);
+        }
+        Ok(Self {
+            options: self.options,
+            params: Arc::clone(&self.params),
+            materials: Arc::clone(&self.materials),
+            brdfs: Arc::clone(&self.brdfs),
+            surfaces,
+            mass: self.mass.clone(),
+        })
+    }
+
+    /// The selected photons of `map` per surface of `params`, without supports or grids.
+    fn selected_photons(
+        params: &SurfaceParams,
+        map: &PhotonMap,
+        selection: BounceSelection,
+    ) -> Result<Vec<SurfaceSplats>> {
         let mut surfaces: Vec<SurfaceSplats> = (0..params.len())
             .map(|_| SurfaceSplats::default())
             .collect();
         for (index, r) in map.records().iter().enumerate() {
-            if !options.selection.selects(r) {
+            if !selection.selects(r) {
                 continue;
             }
             let s =
@@ -274,42 +338,7 @@ impl SplatEstimator {
             s.directions.push(r.direction);
             s.powers.push(map.photon_power(r));
         }
-        for (id, s) in surfaces.iter_mut().enumerate() {
-            let n = counts.map_or(s.points.len(), |c| c[id]);
-            s.h = match options.support {
-                Support::Scaled(c) => kernel_support(c, params.area(id as SurfaceId), n),
-                Support::Fixed(h) => h,
-                Support::Silverman(c) => {
-                    kernel_support_silverman(c, params.area(id as SurfaceId), n)
-                }
-                Support::GlossySilverman { kernel_c, c } => {
-                    let area = params.area(id as SurfaceId);
-                    let diffuse = scene
-                        .surfaces()
-                        .get(id)
-                        .and_then(|surface| scene.materials().get(surface.material as usize))
-                        .is_some_and(|m| m.model.is_diffuse());
-                    if diffuse {
-                        kernel_support(kernel_c, area, n)
-                    } else {
-                        kernel_support_silverman(c, area, n)
-                    }
-                }
-            };
-            s.grid = PointGrid::build(&s.points, s.h);
-        }
-        let mass = (options.edges == Edges::Normalised).then(|| {
-            let supports: Vec<f32> = surfaces.iter().map(|s| s.h).collect();
-            KernelMass::build(&params, &supports, options.kernel)
-        });
-        Ok(Self {
-            options,
-            materials: scene.surfaces().iter().map(|s| s.material).collect(),
-            brdfs: scene_brdfs(scene)?,
-            params,
-            surfaces,
-            mass,
-        })
+        Ok(surfaces)
     }
 
     /// The options used.
@@ -324,7 +353,7 @@ impl SplatEstimator {
 
     /// The kernel's mass on each planar surface ([`Edges::Normalised`]); `None` with [`Edges::Truncated`].
     pub fn kernel_mass(&self) -> Option<&KernelMass> {
-        self.mass.as_ref()
+        self.mass.as_deref()
     }
 
     /// The divisor of the estimate at the index-space point `q` of `surface`: the kernel's mass there with [`Edges::Normalised`] on a planar surface, else 1.

@@ -430,29 +430,6 @@ pub fn surface_table(params: &SurfaceParams) -> Vec<SurfaceEntry> {
     params.all().iter().map(SurfaceEntry::of).collect()
 }
 
-/// Fails when the light or surface table cannot be counted in 32 bits.
-fn check_table_sizes(map: &PhotonMap, params: &SurfaceParams) -> Result<()> {
-    if map.lights().len() > 256 {
-        return Err(PhotonError::InvalidOption {
-            option: "lights",
-            message: format!(
-                "{} lights; the record's light field holds 256",
-                map.lights().len()
-            ),
-        });
-    }
-    if params.len() > crate::quantise::U24_MAX as usize + 1 {
-        return Err(PhotonError::InvalidOption {
-            option: "surfaces",
-            message: format!(
-                "{} surfaces; the record's surface field holds 2^24",
-                params.len()
-            ),
-        });
-    }
-    Ok(())
-}
-
 /// Fails unless two surface tables are equal.
 fn check_surfaces(path: &Path, file: &[SurfaceEntry], scene: &[SurfaceEntry]) -> Result<()> {
     if file.len() != scene.len() {
@@ -479,7 +456,6 @@ fn check_surfaces(path: &Path, file: &[SurfaceEntry], scene: &[SurfaceEntry]) ->
 
 /// Writes a photon map as a new file (section 2.1), atomically; `params` are the parameterisations of the scene it was traced in. Its first photon indices are 0 and its provenance unknown (use [`PhotonFileWriter`] to record them).
 pub fn write_photon_file(path: &Path, map: &PhotonMap, params: &SurfaceParams) -> Result<()> {
-    check_table_sizes(map, params)?;
     let powers: Vec<_> = map.lights().iter().map(|l| l.power).collect();
     let first = vec![0; powers.len()];
     let mut writer = PhotonFileWriter::create(path, &powers, first, params, None)?;
@@ -510,7 +486,6 @@ fn collect(reader: PhotonFileReader) -> Result<PhotonMap> {
 
 /// Appends the photons of `more` to an existing file (incremental refinement, section 2.1): the file is verified, its emitted counts `m_i` grow by `more`'s, its records are kept byte for byte and `more`'s are added; the result replaces the file atomically. Streams the file: memory is bounded by `more`.
 pub fn append_photon_file(path: &Path, more: &PhotonMap, params: &SurfaceParams) -> Result<()> {
-    check_table_sizes(more, params)?;
     let mut writer = PhotonFileWriter::append(path, params)?;
     let existing = PhotonMap::from_parts(writer.header().lights.clone(), Vec::new())?;
     existing.check_same_lights(more.lights())?;

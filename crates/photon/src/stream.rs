@@ -103,14 +103,21 @@ impl PhotonFileWriter {
 
     /// Starts rewriting an existing file to add photons (incremental refinement, section 2.1): the file is verified against `params`, its records are copied byte for byte, and what [`PhotonFileWriter::push`] adds follows them; [`PhotonFileWriter::finish`] replaces the file.
     pub fn append(path: &Path, params: &SurfaceParams) -> Result<Self> {
-        let reader = PhotonFileReader::open_for(path, params)?;
+        Self::append_from(PhotonFileReader::open_for(path, params)?, params)
+    }
+
+    /// [`PhotonFileWriter::append`] to a file already opened (and so verified) by `reader`, without reading it again; its surface table must be `params`'.
+    pub fn append_from(reader: PhotonFileReader, params: &SurfaceParams) -> Result<Self> {
+        reader
+            .header()
+            .check_surfaces(reader.path(), &surface_table(params))?;
         let mut header = reader.header().clone();
         header.version = crate::file::FORMAT_VERSION;
         header.records = 0;
         for l in &mut header.lights {
             l.emitted = 0;
         }
-        let mut writer = Self::start(path, header, params)?;
+        let mut writer = Self::start(reader.path(), header, params)?;
         reader.copy_records(&mut writer)?;
         Ok(writer)
     }
@@ -185,9 +192,7 @@ impl PhotonFileWriter {
         match result {
             Ok(()) => {
                 self.tmp = PathBuf::new();
-                let mut header = self.header.clone();
-                header.version = crate::file::FORMAT_VERSION;
-                Ok(header)
+                Ok(self.header.clone())
             }
             Err(e) => Err(io_error(&self.path)(e)),
         }
@@ -554,6 +559,15 @@ impl PhotonFileWriter {
                 message: format!(
                     "{} lights; the record's light field holds 256",
                     header.lights.len()
+                ),
+            });
+        }
+        if header.surfaces.len() > crate::quantise::U24_MAX as usize + 1 {
+            return Err(PhotonError::InvalidOption {
+                option: "surfaces",
+                message: format!(
+                    "{} surfaces; the record's surface field holds 2^24",
+                    header.surfaces.len()
                 ),
             });
         }

@@ -287,12 +287,20 @@ fn tallied_batch_estimates_add_up_to_the_whole_maps() {
             .add(tracer.params(), batch.unwrap().records())
             .unwrap();
     }
+    // One template from the tally; each batch's estimator shares its supports and kernel mass.
+    let empty = lustre_photon::PhotonMap::from_parts(whole.lights().to_vec(), Vec::new()).unwrap();
+    let template =
+        SplatEstimator::build_tallied(&scene, &empty, estimator_options, &tally).unwrap();
     let batches: Vec<SplatEstimator> = reader
         .batches(4_000)
         .unwrap()
-        .map(|b| SplatEstimator::build_tallied(&scene, &b.unwrap(), estimator_options, &tally))
+        .map(|b| template.with_photons(&b.unwrap()))
         .collect::<Result<_, _>>()
         .unwrap();
+    // The same as building each batch's estimator from the tally.
+    let first = reader.batches(4_000).unwrap().next().unwrap().unwrap();
+    let built = SplatEstimator::build_tallied(&scene, &first, estimator_options, &tally).unwrap();
+    assert_eq!(built.splats(), batches[0].splats());
     assert!(batches.len() >= 4, "{} batches", batches.len());
     // Points on every surface: each surface's photons' own positions.
     let mut checked = 0;

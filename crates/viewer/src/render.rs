@@ -846,22 +846,24 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         && args.paired_lights
         && scene.lights().iter().any(|l| !l.is_delta());
     let start = Instant::now();
+    let tonemap = Tonemap::default();
+    let frame = FrameInputs {
+        scene: &scene_buffers,
+        camera: &camera,
+        tonemap: &tonemap,
+        targets: &targets,
+        output: &output_view,
+        splats: splats.as_ref().map(|buffers| SplatInputs {
+            buffers,
+            restriction,
+            filtering,
+        }),
+        direct: direct.as_ref(),
+        diffuse: diffuse_textures.as_ref(),
+    };
     graph.render_accumulated(
         &ctx,
-        &FrameInputs {
-            scene: &scene_buffers,
-            camera: &camera,
-            tonemap: &Tonemap::default(),
-            targets: &targets,
-            output: &output_view,
-            splats: splats.as_ref().map(|buffers| SplatInputs {
-                buffers,
-                restriction,
-                filtering,
-            }),
-            direct: direct.as_ref(),
-            diffuse: diffuse_textures.as_ref(),
-        },
+        &frame,
         args.aa,
         if args.aa_splats {
             AccumulatedSplats::EverySample
@@ -897,10 +899,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if let (Some(streamed), Some(splatting)) = (streamed, &splatting) {
         let start = Instant::now();
         let bar = PhotonBar::new("splatting photons", splatting.hit_records)?;
+        let template = streamed.template(&scene, splatting.options)?;
         streamed.for_each_batch(
-            &scene,
             &mut |batch| {
-                let estimator = streamed.estimator(&scene, batch, splatting.options)?;
+                let estimator = template.with_photons(batch)?;
                 let buffers = SplatBuffers::new_excluding_imaged(
                     &ctx, &scene, &estimator, glossy, &exclude, &imaged,
                 )
@@ -908,11 +910,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 graph.add_splats(
                     &ctx,
                     &FrameInputs {
-                        scene: &scene_buffers,
-                        camera: &camera,
-                        tonemap: &Tonemap::default(),
-                        targets: &targets,
-                        output: &output_view,
                         splats: Some(SplatInputs {
                             buffers: &buffers,
                             restriction,
@@ -920,6 +917,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                         }),
                         direct: None,
                         diffuse: None,
+                        ..frame
                     },
                     streamed_splats.1 == 0,
                 )?;
@@ -1054,7 +1052,7 @@ enum Photons {
         lambertian: Option<SplatEstimator>,
     },
     /// Read from `--photons-file` batch by batch.
-    File(StreamedPhotons),
+    File(Box<StreamedPhotons>),
 }
 
 /// Particle tracing (section 2.1), or a photon file's tally, and the splat settings (section 2.2).
@@ -1114,7 +1112,7 @@ fn splat_setup(
             emission: streamed.emission(),
             options,
             lambertian_options,
-            photons: Photons::File(streamed),
+            photons: Photons::File(Box::new(streamed)),
         });
     }
     let trace_options = TraceOptions {

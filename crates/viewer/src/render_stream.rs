@@ -48,8 +48,8 @@ pub struct StreamedPhotons {
     params: SurfaceParams,
     /// Equation 3's counts and the lit sides over the whole file.
     tally: SplatTally,
-    /// Depth of the virtual lights whose photons the splats leave out (Diefenbach & Badler 1997, sections 4.2, 6), if any.
-    virtual_depth: Option<u32>,
+    /// The specular faces and depth of the virtual lights whose photons the splats leave out (Diefenbach & Badler 1997, sections 4.2, 6), if any.
+    virtual_lights: Option<(Vec<SpecularFace>, u32)>,
     /// Hit records kept after the virtual lights' filter.
     pub kept_records: u64,
     /// Indirect records kept.
@@ -105,32 +105,33 @@ impl StreamedPhotons {
                 scene.name
             );
         }
-        let mut streamed = Self {
-            reader,
-            batch_records,
-            tally: SplatTally::new(&params, options.selection),
-            params,
-            virtual_depth,
-            kept_records: 0,
-            indirect_records: 0,
-        };
-        let bar = PhotonBar::new("reading photons", streamed.reader.header().records)?;
-        let mut tally = SplatTally::new(&streamed.params, options.selection);
+        let virtual_lights = virtual_depth
+            .filter(|&d| d > 0)
+            .map(|d| (specular_faces(scene), d));
+        let bar = PhotonBar::new("reading photons", reader.header().records)?;
+        let mut tally = SplatTally::new(&params, options.selection);
         let (mut kept, mut indirect) = (0u64, 0u64);
-        streamed.for_each_batch(
-            scene,
+        read_batches(
+            &reader,
+            batch_records,
+            virtual_lights.as_ref(),
             &mut |batch| {
-                tally.add(&streamed.params, batch.records())?;
+                tally.add(&params, batch.records())?;
                 kept += batch.len() as u64;
                 indirect += batch.indirect().count() as u64;
                 Ok(())
             },
             &bar,
         )?;
-        streamed.tally = tally;
-        streamed.kept_records = kept;
-        streamed.indirect_records = indirect;
-        Ok(streamed)
+        Ok(Self {
+            reader,
+            batch_records,
+            params,
+            tally,
+            virtual_lights,
+            kept_records: kept,
+            indirect_records: indirect,
+        })
     }
 
     /// The emission sampling the file was traced with.
@@ -149,37 +150,27 @@ impl StreamedPhotons {
     /// Calls `f` with each batch of the file, the virtual lights' photons left out; `bar` counts records.
     pub fn for_each_batch(
         &self,
-        scene: &Scene,
         f: &mut dyn FnMut(&PhotonMap) -> anyhow::Result<()>,
         bar: &PhotonBar,
     ) -> anyhow::Result<()> {
-        let faces = self
-            .virtual_depth
-            .filter(|&d| d > 0)
-            .map(|d| (specular_faces(scene), d));
-        bar.0.set_position(0);
-        for batch in self.reader.batches(self.batch_records)? {
-            let batch = batch?;
-            bar.0.inc(batch.len() as u64);
-            let batch = match &faces {
-                Some((faces, depth)) => without_virtual_light_photons(batch, faces, *depth)?,
-                None => batch,
-            };
-            f(&batch)?;
-        }
-        bar.0.finish_and_clear();
-        Ok(())
+        read_batches(
+            &self.reader,
+            self.batch_records,
+            self.virtual_lights.as_ref(),
+            f,
+            bar,
+        )
     }
 
-    /// One batch's estimator, its kernels sized by the whole file's counts (equation 3).
-    pub fn estimator(
+    /// The estimator without photons whose supports (equation 3, from the whole file's counts), kernel mass and BRDFs every batch's estimator shares ([`SplatEstimator::with_photons`]).
+    pub fn template(
         &self,
         scene: &Scene,
-        batch: &PhotonMap,
         options: EstimatorOptions,
     ) -> anyhow::Result<SplatEstimator> {
-        SplatEstimator::build_tallied(scene, batch, options, &self.tally)
-            .context("cannot build the splats of a batch")
+        let empty = PhotonMap::from_parts(self.reader.header().lights.clone(), Vec::new())?;
+        SplatEstimator::build_tallied(scene, &empty, options, &self.tally)
+            .context("cannot size the splats from the photon file's counts")
     }
 
     /// The diffuse textures of the whole file (section 2.2.1), accumulated batch by batch with the estimator `options`.
@@ -189,25 +180,44 @@ impl StreamedPhotons {
         options: EstimatorOptions,
         texture_options: DiffuseTextureOptions,
     ) -> anyhow::Result<DiffuseAtlas> {
-        // The supports come from the tally: an estimator without photons has them.
-        let empty = PhotonMap::from_parts(self.reader.header().lights.clone(), Vec::new())?;
-        let sizes = self.estimator(scene, &empty, options)?;
+        let template = self.template(scene, options)?;
         let mut atlas = DiffuseAtlas::layout(
             scene,
             &self.params,
-            &|id| sizes.support(id),
+            &|id| template.support(id),
             &self.tally.lit,
             texture_options,
         )?;
         let bar = PhotonBar::new("diffuse textures", self.reader.header().records)?;
         self.for_each_batch(
-            scene,
             &mut |batch| {
-                atlas.accumulate(&self.estimator(scene, batch, options)?)?;
+                atlas.accumulate(&template.with_photons(batch)?)?;
                 Ok(())
             },
             &bar,
         )?;
         Ok(atlas)
     }
+}
+
+/// Calls `f` with each batch of `reader`, the photons of `virtual_lights` (faces and depth) left out; `bar` counts records.
+fn read_batches(
+    reader: &PhotonFileReader,
+    batch_records: usize,
+    virtual_lights: Option<&(Vec<SpecularFace>, u32)>,
+    f: &mut dyn FnMut(&PhotonMap) -> anyhow::Result<()>,
+    bar: &PhotonBar,
+) -> anyhow::Result<()> {
+    bar.0.set_position(0);
+    for batch in reader.batches(batch_records)? {
+        let batch = batch?;
+        bar.0.inc(batch.len() as u64);
+        let batch = match virtual_lights {
+            Some((faces, depth)) => without_virtual_light_photons(batch, faces, *depth)?,
+            None => batch,
+        };
+        f(&batch)?;
+    }
+    bar.0.finish_and_clear();
+    Ok(())
 }

@@ -136,14 +136,13 @@ pub fn run(args: &TraceArgs) -> anyhow::Result<()> {
     let existing = if args.append {
         let reader = PhotonFileReader::open(out)
             .with_context(|| format!("--append: cannot read {}", out.display()))?;
-        let header = reader.header().clone();
-        let Some(provenance) = header.provenance else {
+        let Some(provenance) = reader.header().provenance else {
             bail!(
                 "--append: {} does not record its seed and photon ranges; trace a new file",
                 out.display()
             );
         };
-        Some((header, provenance))
+        Some((reader, provenance))
     } else {
         None
     };
@@ -179,21 +178,24 @@ pub fn run(args: &TraceArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
     let powers: Vec<_> = scene.lights().iter().map(|l| l.power()).collect();
     let counts = allocate_photons(&powers, args.photons);
-    let (first, counts, mut writer) = match &existing {
-        Some((header, _)) => {
+    let (first, counts, mut writer) = match existing {
+        Some((reader, _)) => {
+            let header = reader.header();
             let first: Vec<u64> = header
                 .first
                 .iter()
                 .zip(&header.lights)
                 .map(|(f, l)| f + l.emitted)
                 .collect();
-            let writer = PhotonFileWriter::append(out, tracer.params()).with_context(|| {
-                format!(
-                    "--append: {} is not a photon file of `{}` as loaded now",
-                    out.display(),
-                    scene.name
-                )
-            })?;
+            // The file was verified when it was opened above: not read again.
+            let writer =
+                PhotonFileWriter::append_from(reader, tracer.params()).with_context(|| {
+                    format!(
+                        "--append: {} is not a photon file of `{}` as loaded now",
+                        out.display(),
+                        scene.name
+                    )
+                })?;
             (first, counts, writer)
         }
         None => {
