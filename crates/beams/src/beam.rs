@@ -201,33 +201,42 @@ impl Beam {
 
     /// The irradiance the beam gives a fragment at `p` with unit normal `normal`: `E = Φ_s / A_⊥ cos θ` inside a specular beam (equation 1), `E = Φ_s / A_⊥ cos θ min(P_E, 1)` for a glossy one (section 4.2, figures 11 and 12), zero outside the support; negative for shadow beams.
     pub fn irradiance(&self, p: Vec3, normal: Vec3) -> Rgb {
+        self.arrival(p, normal).map_or(Rgb::ZERO, |(e, _)| e)
+    }
+
+    /// [`Beam::irradiance`] with the unit direction the light travels at `p` (the vertex directions interpolated as in [`Beam::cos_theta`]), for a receiver's BRDF: `None` where the beam adds nothing.
+    pub fn arrival(&self, p: Vec3, normal: Vec3) -> Option<(Rgb, Vec3)> {
         if !self.support(p) {
-            return Rgb::ZERO;
+            return None;
         }
-        let Some(ft) = self.flux_triangle(p) else {
-            return Rgb::ZERO;
-        };
-        let cos_theta = self.cos_theta(&ft, normal);
+        let ft = self.flux_triangle(p)?;
+        let d = self.interpolated_direction(&ft);
+        let cos_theta = (-d.dot(normal)).max(0.0);
         if cos_theta <= 0.0 {
-            return Rgb::ZERO;
+            return None;
         }
         let density = self.flux / ft.area * cos_theta;
-        match self.distribution {
+        let e = match self.distribution {
             None => density,
             Some(dist) => density * self.scatter_volume(&dist, &ft, p).min(1.0),
+        };
+        Some((e, d))
+    }
+
+    /// The vertex directions interpolated with the fragment's barycentrics in the flux triangle, clamped to the triangle outside it, normalised (zero where the barycentrics vanish).
+    fn interpolated_direction(&self, ft: &FluxTriangle) -> Vec3 {
+        let b = ft.barycentrics.map(|b| b.max(0.0));
+        let sum = b[0] + b[1] + b[2];
+        if !(sum > 0.0) {
+            return Vec3::ZERO;
         }
+        (self.directions[0] * b[0] + self.directions[1] * b[1] + self.directions[2] * b[2])
+            .normalize_or_zero()
     }
 
     /// `cos θ` of the incoming direction at the fragment: the vertex directions interpolated with the fragment's barycentrics in the flux triangle (clamped to the triangle outside it, so that glossy beams stay continuous), against `normal`; zero from behind.
     pub fn cos_theta(&self, ft: &FluxTriangle, normal: Vec3) -> f32 {
-        let b = ft.barycentrics.map(|b| b.max(0.0));
-        let sum = b[0] + b[1] + b[2];
-        if !(sum > 0.0) {
-            return 0.0;
-        }
-        let d = (self.directions[0] * b[0] + self.directions[1] * b[1] + self.directions[2] * b[2])
-            .normalize_or_zero();
-        (-d.dot(normal)).max(0.0)
+        (-self.interpolated_direction(ft).dot(normal)).max(0.0)
     }
 
     /// The volume `P_E` under the 2D Gaussian over the triangular domain ABC (section 4.2.1: `A = φ_a l_a` with φ_a the angle between `A_W F` and the specular direction at `A_W`, and `l_a` the unit direction from F to `A_F` in the flux plane; section 4.2.2 via [`ScatterDistribution::triangle_volume_split`], clamped to one there), with the beam's [`SplitPoint`].
@@ -304,6 +313,14 @@ impl Beam {
 
     /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of equal slabs along the mean direction (about as long as the beam is wide, at most `pieces`): the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.
     pub fn bounds_within(&self, within: Aabb, pieces: usize) -> Vec<Aabb> {
+        self.slabs_within(within, pieces)
+            .into_iter()
+            .map(|s| s.bounds)
+            .collect()
+    }
+
+    /// [`Beam::bounds_within`] with each box's range of flux-plane offsets `n · p` (n the wavefront normal): the first slab's range open below, the last's open above, each half-open `[lo, hi)`, so that every point lies in exactly one slab's range and a traversal that counts a beam only in the box whose range holds `n · p` counts it once (the GPU pass's rule, `passes::beams` in lustre-mpr).
+    pub fn slabs_within(&self, within: Aabb, pieces: usize) -> Vec<BeamSlab> {
         // The corners of `within` cut by the generator plane: the box's
         // corners in front of it and where its edges cross it.
         let corners: [Vec3; 8] = std::array::from_fn(|k| {
@@ -380,6 +397,10 @@ impl Beam {
                     s0 + (s1 - s0) * k as f32 / pieces as f32,
                     s0 + (s1 - s0) * (k + 1) as f32 / pieces as f32,
                 );
+                let along = [
+                    if k == 0 { f32::NEG_INFINITY } else { sa },
+                    if k + 1 == pieces { f32::INFINITY } else { sb },
+                ];
                 let mut hull = Aabb::EMPTY;
                 for i in 0..3 {
                     let (o, d) = (self.vertices[i], self.support_directions[i]);
@@ -393,14 +414,25 @@ impl Beam {
                     min: hull.min.max(region.min),
                     max: hull.max.min(region.max),
                 };
-                if clipped.is_empty() || !clipped.min.is_finite() || !clipped.max.is_finite() {
-                    Aabb::EMPTY
-                } else {
-                    clipped
-                }
+                let bounds =
+                    if clipped.is_empty() || !clipped.min.is_finite() || !clipped.max.is_finite() {
+                        Aabb::EMPTY
+                    } else {
+                        clipped
+                    };
+                BeamSlab { bounds, along }
             })
             .collect()
     }
+}
+
+/// One slab of a beam's volume within a region ([`Beam::slabs_within`]): a box holding the part of the beam's support whose flux-plane offset `n · p` is in `along`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeamSlab {
+    /// The box (empty where the beam misses the region there).
+    pub bounds: Aabb,
+    /// `[lo, hi)` of `n · p`, infinite at the ends of the beam.
+    pub along: [f32; 2],
 }
 
 /// The flux triangle of rays `origins + t directions` at the plane through `p` with normal `n` (section 3.1, figure 5).

@@ -4,7 +4,7 @@ use glam::Vec3;
 use lustre_geometry::{Aabb, Rgb, Scene};
 use rayon::prelude::*;
 
-use crate::beam::Beam;
+use crate::beam::{Beam, BeamSlab};
 use crate::construction::{BuildOptions, BuildStats, build_beams};
 use crate::error::{BeamError, Result};
 use crate::hierarchy::BeamHierarchy;
@@ -25,6 +25,8 @@ pub struct BeamSet {
     hierarchy: BeamHierarchy,
     /// The beam of each box in the hierarchy.
     owner: Vec<u32>,
+    /// The range of flux-plane offsets of each box's slab ([`crate::BeamSlab::along`]).
+    along: Vec<[f32; 2]>,
 }
 
 impl BeamSet {
@@ -46,18 +48,19 @@ impl BeamSet {
         }
         let (beams, stats) = build_beams(lights, scatterers, options)?;
         let pad = Vec3::splat(BOX_PADDING * bounds.extent().length());
-        let pieces: Vec<Vec<Aabb>> = beams
+        let pieces: Vec<Vec<BeamSlab>> = beams
             .par_iter()
-            .map(|b| b.bounds_within(bounds, SLABS))
+            .map(|b| b.slabs_within(bounds, SLABS))
             .collect();
-        let (mut boxes, mut owner) = (Vec::new(), Vec::new());
+        let (mut boxes, mut owner, mut along) = (Vec::new(), Vec::new(), Vec::new());
         for (i, p) in pieces.into_iter().enumerate() {
-            for bb in p.into_iter().filter(|bb| !bb.is_empty()) {
+            for slab in p.into_iter().filter(|s| !s.bounds.is_empty()) {
                 boxes.push(Aabb {
-                    min: bb.min - pad,
-                    max: bb.max + pad,
+                    min: slab.bounds.min - pad,
+                    max: slab.bounds.max + pad,
                 });
                 owner.push(i as u32);
+                along.push(slab.along);
             }
         }
         let hierarchy = BeamHierarchy::build(&boxes);
@@ -68,6 +71,7 @@ impl BeamSet {
             bounds,
             hierarchy,
             owner,
+            along,
         })
     }
 
@@ -122,6 +126,38 @@ impl BeamSet {
         self.candidates(p).into_iter().fold(Rgb::ZERO, |acc, i| {
             acc + self.beams[i as usize].irradiance(p, normal)
         })
+    }
+
+    /// The hierarchy over the beams' slab boxes.
+    pub fn hierarchy(&self) -> &BeamHierarchy {
+        &self.hierarchy
+    }
+
+    /// The beam of hierarchy item `item` ([`BeamHierarchy::items`]) and its slab's range of flux-plane offsets `[lo, hi)` ([`crate::BeamSlab::along`]).
+    pub fn item(&self, item: u32) -> (u32, [f32; 2]) {
+        (self.owner[item as usize], self.along[item as usize])
+    }
+
+    /// Calls `visit(beam, E, d)` for every beam that lights a fragment at `p` with unit normal `normal`: its irradiance ([`Beam::irradiance`]) and the unit direction its light travels there ([`Beam::arrival`]). With `hierarchy`, over the beams the hierarchy offers, in ascending order (as [`BeamSet::irradiance_at`]); without, over all beams (as [`BeamSet::irradiance_at_linear`]).
+    pub fn for_each_arrival(
+        &self,
+        p: Vec3,
+        normal: Vec3,
+        hierarchy: bool,
+        mut visit: impl FnMut(&Beam, Rgb, Vec3),
+    ) {
+        let mut one = |b: &Beam| {
+            if let Some((e, d)) = b.arrival(p, normal) {
+                visit(b, e, d);
+            }
+        };
+        if hierarchy {
+            for i in self.candidates(p) {
+                one(&self.beams[i as usize]);
+            }
+        } else {
+            self.beams.iter().for_each(one);
+        }
     }
 
     /// The unoccluded direct irradiance `Σ I cos θ / r²` of the point lights at a fragment; with the shadow beams of [`BeamSet::irradiance_at`] it gives first-order shadows (section 3.1).

@@ -23,6 +23,17 @@ struct Node {
     right: u32,
 }
 
+/// A node of [`BeamHierarchy::nodes`]: a leaf holds `count > 0` items from `link` on in [`BeamHierarchy::items`]; an inner node (`count == 0`) has its left child right after it and its right child at `link`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HierarchyNode {
+    /// The union of the boxes below.
+    pub bounds: Aabb,
+    /// Leaf: first item; inner: index of the right child.
+    pub link: u32,
+    /// Items of a leaf; 0 for an inner node.
+    pub count: u32,
+}
+
 /// A bounding volume hierarchy over item boxes, queried with points.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct BeamHierarchy {
@@ -52,6 +63,23 @@ impl BeamHierarchy {
     /// Whether the tree holds no item.
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
+    }
+
+    /// The nodes in depth-first order (a node's left child follows it), for an upload to the GPU.
+    pub fn nodes(&self) -> Vec<HierarchyNode> {
+        self.nodes
+            .iter()
+            .map(|n| HierarchyNode {
+                bounds: n.bounds,
+                link: if n.count > 0 { n.first } else { n.right },
+                count: n.count,
+            })
+            .collect()
+    }
+
+    /// The items, leaf by leaf: a leaf's items are `items()[link..link + count]`.
+    pub fn items(&self) -> &[u32] {
+        &self.items
     }
 
     /// Calls `visit` with every item whose box holds `p` (boundaries included), in no particular order; returns how many nodes were visited.

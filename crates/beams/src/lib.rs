@@ -97,13 +97,13 @@ mod error;
 mod hierarchy;
 mod scatterer;
 
-pub use beam::{Beam, BeamKind, FluxTriangle, Scatter, SplitPoint};
+pub use beam::{Beam, BeamKind, BeamSlab, FluxTriangle, Scatter, SplitPoint};
 pub use beam_set::{BeamSet, direct_irradiance};
 pub use construction::{
     BuildOptions, BuildStats, build_beams, glossy_cutoff, reflect, refract, solid_angle,
 };
 pub use error::{BeamError, Result};
-pub use hierarchy::BeamHierarchy;
+pub use hierarchy::{BeamHierarchy, HierarchyNode};
 pub use scatterer::{
     BeamInput, Emission, PointSource, ScatterMaterial, Scatterer, THIN_DIELECTRIC,
 };

@@ -19,6 +19,7 @@ use lustre_geometry::Camera;
 use lustre_geometry::light::hammersley_centred;
 
 use crate::passes::accumulate::AccumulatePass;
+use crate::passes::beams::{BeamPass, Traversal};
 
 use crate::passes::depth::DepthPass;
 use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
@@ -117,6 +118,20 @@ impl LightPass for DirectPass {
     }
 }
 
+impl LightPass for BeamPass {
+    fn encode_view(
+        &self,
+        _ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameInputs<'_>,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<()> {
+        self.encode(encoder, frame.scene, frame.targets, views, slot);
+        Ok(())
+    }
+}
+
 impl LightPass for DiffuseTexturePass {
     fn encode_view(
         &self,
@@ -186,6 +201,8 @@ pub struct FrameGraph {
     pub specular: Option<SpecularPass>,
     /// Shadow volumes replacing the direct pass's shadow maps ([`FrameGraph::with_shadow_volumes`]).
     pub shadow_volumes: Option<ShadowVolumes>,
+    /// Caustic and glossy light beams on receivers ([`FrameGraph::with_beams`]).
+    pub beams: Option<BeamPass>,
     /// The final tone map.
     pub tonemap: TonemapPass,
     /// The frame's views (camera, virtual cameras), rewritten every frame.
@@ -205,6 +222,7 @@ impl FrameGraph {
             accumulate: None,
             specular: None,
             shadow_volumes: None,
+            beams: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
         })
@@ -221,6 +239,22 @@ impl FrameGraph {
         settings: SpecularSettings,
     ) -> Result<Self> {
         self.specular = Some(SpecularPass::new(ctx, hdr_format, scene, settings)?);
+        Ok(self)
+    }
+
+    /// Adds the beam pass (Duvenhage et al. 2010, sections 3.1, 4.3): the light of `beams` added on every surface under every view, with `scene`'s materials flattened with `glossy`, each fragment finding its beams by `traversal`.
+    pub fn with_beams(
+        mut self,
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &lustre_geometry::Scene,
+        glossy: crate::material::GlossyModel,
+        beams: &lustre_beams::BeamSet,
+        traversal: Traversal,
+    ) -> Result<Self> {
+        self.beams = Some(BeamPass::new(
+            ctx, hdr_format, scene, glossy, beams, traversal,
+        )?);
         Ok(self)
     }
 
@@ -720,6 +754,9 @@ impl FrameGraph {
         }
         if let Some((_, pass)) = passes.splat {
             list.push(pass);
+        }
+        if let Some(beams) = &self.beams {
+            list.push(beams);
         }
         list
     }

@@ -32,6 +32,7 @@
 //! # Ok::<(), lustre_mpr::MprError>(())
 //! ```
 
+pub mod beam_paths;
 mod device;
 mod error;
 pub mod frame;

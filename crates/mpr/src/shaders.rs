@@ -96,6 +96,7 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             with_materials(&with_view(crate::passes::splat::SPLAT_WGSL)),
         ),
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
+        ("passes/beams.wgsl", crate::passes::beams::beams_wgsl()),
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),
         (
             "passes/shadow_volume.wgsl",

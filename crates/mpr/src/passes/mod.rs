@@ -1,6 +1,7 @@
 //! One module per pass, its WGSL beside it (DESIGN.md "Layout").
 
 pub mod accumulate;
+pub mod beams;
 pub mod depth;
 pub mod diffuse_texture;
 pub mod direct;

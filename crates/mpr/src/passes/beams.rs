@@ -1,0 +1,503 @@
+//! The beam pass of Duvenhage, Bouatouch & Kourie (2010), sections 3.1 and
+//! 4.3: the scene redrawn over the depth pre-pass, and per fragment every
+//! specular, glossy and shadow beam of a [`BeamSet`] that may hold it
+//! evaluated and its light added, `L += f_r(-d, wo) E` (equation 1; section
+//! 4.2, figures 11 and 12 for glossy beams). The beams live in a storage
+//! buffer (the paper packs them into a texture, eight texels a beam); the
+//! fragment visits all of them, the paper's linear traversal, or only those
+//! whose slab boxes in the beam hierarchy hold it ([`Traversal`], the
+//! hierarchy the paper leaves to future work, section 5.2). A beam is cut
+//! into up to 64 slab boxes and a point may lie in several; the GPU counts
+//! a beam only from the box whose flux-plane range `[lo, hi)` holds the
+//! point ([`lustre_beams::BeamSlab`]), where the CPU sorts and
+//! de-duplicates. CPU twin: [`beam_pixels_cpu`], lustre-beams'
+//! [`lustre_beams::Beam::arrival`] through the same BRDFs.
+
+use glam::Vec2;
+use lustre_beams::{Beam, BeamSet, Scatter, SplitPoint};
+use lustre_geometry::sampling::Frame;
+use lustre_geometry::{Bvh, Camera, Rgb, Scene};
+use wgpu::util::DeviceExt;
+
+use crate::material::{GlossyModel, scene_materials};
+use crate::passes::direct::cpu_brdf;
+use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
+use crate::scene_buffers::SceneBuffers;
+use crate::shaders::{with_materials, with_view};
+use crate::target::RenderTargets;
+use crate::view::{ViewBuffer, ViewSlot};
+use crate::{GpuContext, MprError, Result};
+
+/// The beam pass's own WGSL (`src/passes/beams.wgsl`); compiled after the material and view modules ([`beams_wgsl`]).
+pub const BEAMS_WGSL: &str = include_str!("beams.wgsl");
+
+/// The beam pass as compiled: [`BEAMS_WGSL`] after the view block and the material module.
+pub fn beams_wgsl() -> String {
+    with_materials(&with_view(BEAMS_WGSL))
+}
+
+/// How a fragment finds the beams that may hold it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Traversal {
+    /// Every beam, in order: the paper's linear traversal (section 4.3).
+    Linear,
+    /// The beams whose slab boxes in [`lustre_beams::BeamHierarchy`] hold the fragment (section 5.2, future work); fragments outside the scene's box fall back to the linear traversal.
+    #[default]
+    Hierarchy,
+}
+
+/// One beam as the shader reads it (`GpuBeam` in `beams.wgsl`), std430.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuBeam {
+    /// Ray origins `A_W, B_W, C_W` (w unused).
+    pub vertices: [[f32; 4]; 3],
+    /// Unit ray directions (w unused).
+    pub directions: [[f32; 4]; 3],
+    /// The directions bounding a glossy beam's support ([`Beam::support_directions`]).
+    pub support: [[f32; 4]; 3],
+    /// The scatterer's vertex normals on the light's side.
+    pub normals: [[f32; 4]; 3],
+    /// `Φ_s` (RGB, negative for shadow beams) and σ² (0 for a specular beam).
+    pub flux: [f32; 4],
+    /// Generator plane: unit normal and offset.
+    pub generator: [f32; 4],
+    /// Average wavefront normal and, for refracted beams, η.
+    pub wavefront: [f32; 4],
+    /// The light's position (w unused).
+    pub light: [f32; 4],
+    /// 0 reflect, 1 refract, 2 straight ([`Scatter`]).
+    pub scatter: u32,
+    /// 0 domain, 1 paper, 2 rescattered ([`SplitPoint`]).
+    pub split: u32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 2],
+}
+
+fn vec4(v: glam::Vec3) -> [f32; 4] {
+    [v.x, v.y, v.z, 0.0]
+}
+
+impl GpuBeam {
+    /// The GPU form of a beam.
+    pub fn new(beam: &Beam) -> Self {
+        let (scatter, eta) = match beam.scatter {
+            Scatter::Reflect => (0, 1.0),
+            Scatter::Refract { eta } => (1, eta),
+            Scatter::Straight => (2, 1.0),
+        };
+        Self {
+            vertices: beam.vertices.map(vec4),
+            directions: beam.directions.map(vec4),
+            support: beam.support_directions.map(vec4),
+            normals: beam.normals.map(vec4),
+            flux: [
+                beam.flux.x,
+                beam.flux.y,
+                beam.flux.z,
+                beam.distribution.map_or(0.0, |d| d.variance),
+            ],
+            generator: [
+                beam.generator_normal.x,
+                beam.generator_normal.y,
+                beam.generator_normal.z,
+                beam.generator_offset,
+            ],
+            wavefront: [
+                beam.wavefront_normal.x,
+                beam.wavefront_normal.y,
+                beam.wavefront_normal.z,
+                eta,
+            ],
+            light: vec4(beam.light_position),
+            scatter,
+            split: match beam.split_point {
+                SplitPoint::Domain => 0,
+                SplitPoint::Paper => 1,
+                SplitPoint::Rescattered => 2,
+            },
+            pad: [0; 2],
+        }
+    }
+}
+
+/// A node of the beam hierarchy (`BeamNode` in `beams.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuBeamNode {
+    /// Box minimum.
+    pub min: [f32; 3],
+    /// Leaf: first item; inner: right child.
+    pub link: u32,
+    /// Box maximum.
+    pub max: [f32; 3],
+    /// Items of a leaf, 0 for an inner node.
+    pub count: u32,
+}
+
+/// A slab box of a beam (`BeamItem` in `beams.wgsl`): its beam and its flux-plane range.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuBeamItem {
+    /// Index of the beam.
+    pub beam: u32,
+    /// Padding.
+    pub pad: u32,
+    /// Lower end of the range of `n_F · P` (`-f32::MAX` for the first slab).
+    pub lo: f32,
+    /// Upper end, exclusive (`f32::MAX` for the last slab).
+    pub hi: f32,
+}
+
+/// The pass's uniform block (`BeamSettings` in `beams.wgsl`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuBeamSettings {
+    bounds_min: [f32; 3],
+    hierarchy: u32,
+    bounds_max: [f32; 3],
+    beam_count: u32,
+    node_count: u32,
+    pad: [u32; 3],
+}
+
+/// A [`BeamSet`] flattened for the GPU: beams, hierarchy nodes and items.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GpuBeams {
+    /// The beams in [`BeamSet::beams`] order.
+    pub beams: Vec<GpuBeam>,
+    /// The hierarchy's nodes ([`lustre_beams::BeamHierarchy::nodes`]).
+    pub nodes: Vec<GpuBeamNode>,
+    /// The hierarchy's items, each its beam and slab range.
+    pub items: Vec<GpuBeamItem>,
+}
+
+impl GpuBeams {
+    /// Flattens `set`.
+    pub fn new(set: &BeamSet) -> Self {
+        let beams = set.beams().iter().map(GpuBeam::new).collect();
+        let nodes = set
+            .hierarchy()
+            .nodes()
+            .into_iter()
+            .map(|n| GpuBeamNode {
+                min: n.bounds.min.to_array(),
+                link: n.link,
+                max: n.bounds.max.to_array(),
+                count: n.count,
+            })
+            .collect();
+        let finite = |x: f32| x.clamp(-f32::MAX, f32::MAX);
+        let items = set
+            .hierarchy()
+            .items()
+            .iter()
+            .map(|&i| {
+                let (beam, [lo, hi]) = set.item(i);
+                GpuBeamItem {
+                    beam,
+                    pad: 0,
+                    lo: finite(lo),
+                    hi: finite(hi),
+                }
+            })
+            .collect();
+        Self {
+            beams,
+            nodes,
+            items,
+        }
+    }
+
+    /// Bytes the three buffers take.
+    pub fn byte_size(&self) -> usize {
+        self.beams.len() * size_of::<GpuBeam>()
+            + self.nodes.len() * size_of::<GpuBeamNode>()
+            + self.items.len() * size_of::<GpuBeamItem>()
+    }
+}
+
+/// A storage buffer of `data`, one zeroed element where `data` is empty (a zero-sized binding is invalid).
+fn storage<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
+    let zero = [T::zeroed()];
+    let contents: &[T] = if data.is_empty() { &zero } else { data };
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(contents),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+}
+
+/// The GPU beam pass (sections 3.1, 4.3) with its beams, materials and traversal.
+#[derive(Debug)]
+pub struct BeamPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    materials: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    beam_count: usize,
+    byte_size: usize,
+    traversal: Traversal,
+}
+
+impl BeamPass {
+    /// Builds the pipeline for HDR targets of `hdr_format` (blendable) and uploads `beams` with `scene`'s materials (flattened with `glossy`), drawn with `traversal`.
+    pub fn new(
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        scene: &Scene,
+        glossy: GlossyModel,
+        beams: &BeamSet,
+        traversal: Traversal,
+    ) -> Result<Self> {
+        if !ctx.is_blendable(hdr_format) {
+            return Err(MprError::UnsupportedFormat {
+                what: "beam pass HDR target (additive blending)",
+                format: hdr_format,
+            });
+        }
+        let mut materials = scene_materials(scene, glossy)?;
+        if materials.is_empty() {
+            materials.push(bytemuck::Zeroable::zeroed());
+        }
+        let (pipeline, layout, materials) = ctx.checked("beam pass creation", || {
+            let device = &ctx.device;
+            let module = scene_module(ctx, "beams", &beams_wgsl());
+            let read_only = |binding: u32| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("beams"),
+                entries: &[
+                    read_only(0),
+                    read_only(1),
+                    read_only(2),
+                    read_only(3),
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 4,
+                        visibility: wgpu::ShaderStages::FRAGMENT,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: wgpu::BufferSize::new(
+                                size_of::<GpuBeamSettings>() as u64
+                            ),
+                        },
+                        count: None,
+                    },
+                ],
+            });
+            let pipeline = scene_pipeline(
+                ctx,
+                &ScenePipeline {
+                    label: "beams",
+                    module: &module,
+                    layouts: &[&layout],
+                    extra_vertex_buffers: &[],
+                    target: additive_target(hdr_format),
+                    depth_compare: wgpu::CompareFunction::Equal,
+                    depth_write: false,
+                },
+            );
+            let materials = storage(ctx, "beam-materials", &materials);
+            (pipeline, layout, materials)
+        })?;
+        let (bind_group, byte_size) = Self::upload(ctx, &layout, &materials, beams, traversal)?;
+        Ok(Self {
+            pipeline,
+            layout,
+            materials,
+            bind_group,
+            beam_count: beams.beams().len(),
+            byte_size,
+            traversal,
+        })
+    }
+
+    fn upload(
+        ctx: &GpuContext,
+        layout: &wgpu::BindGroupLayout,
+        materials: &wgpu::Buffer,
+        beams: &BeamSet,
+        traversal: Traversal,
+    ) -> Result<(wgpu::BindGroup, usize)> {
+        let flat = GpuBeams::new(beams);
+        let count = |n: usize, what: &str| {
+            u32::try_from(n).map_err(|_| MprError::InvalidSetting {
+                what: "beam pass",
+                message: format!("{n} {what}: more than the GPU indexes"),
+            })
+        };
+        let bounds = beams.bounds();
+        let settings = GpuBeamSettings {
+            bounds_min: bounds.min.to_array(),
+            hierarchy: u32::from(traversal == Traversal::Hierarchy),
+            bounds_max: bounds.max.to_array(),
+            beam_count: count(flat.beams.len(), "beams")?,
+            node_count: count(flat.nodes.len(), "hierarchy nodes")?,
+            pad: [0; 3],
+        };
+        ctx.checked("beam upload", || {
+            let beam_buffer = storage(ctx, "beams", &flat.beams);
+            let node_buffer = storage(ctx, "beam-nodes", &flat.nodes);
+            let item_buffer = storage(ctx, "beam-items", &flat.items);
+            let uniforms = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("beam-settings"),
+                    contents: bytemuck::bytes_of(&settings),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("beams"),
+                layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: materials.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: beam_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: node_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: item_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: uniforms.as_entire_binding(),
+                    },
+                ],
+            });
+            (bind_group, flat.byte_size())
+        })
+    }
+
+    /// Replaces the beams (the scatterers or lights moved: beams are rebuilt on the CPU every frame, section 4.3), keeping the traversal.
+    pub fn set_beams(&mut self, ctx: &GpuContext, beams: &BeamSet) -> Result<()> {
+        let (bind_group, byte_size) =
+            Self::upload(ctx, &self.layout, &self.materials, beams, self.traversal)?;
+        self.bind_group = bind_group;
+        self.byte_size = byte_size;
+        self.beam_count = beams.beams().len();
+        Ok(())
+    }
+
+    /// Beams uploaded.
+    pub fn beam_count(&self) -> usize {
+        self.beam_count
+    }
+
+    /// Bytes of the beams, nodes and items on the GPU.
+    pub fn byte_size(&self) -> usize {
+        self.byte_size
+    }
+
+    /// The traversal the fragments use.
+    pub fn traversal(&self) -> Traversal {
+        self.traversal
+    }
+
+    /// Records the pass after the depth pre-pass: the beams' light added on every visible surface under the view of `slot`.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) {
+        let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "beams");
+        if scene.vertex_count == 0 || self.beam_count == 0 {
+            return;
+        }
+        pass.set_pipeline(&self.pipeline);
+        views.bind(&mut pass, 0, slot);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.draw(0..scene.vertex_count, 0..1);
+    }
+}
+
+/// The radiance the beams add at a surface point: `Σ f_r(-d, wo) E` over the beams that light it ([`BeamSet::for_each_arrival`]), in the frame of the shading normal `n` flipped to the viewer's side.
+pub fn beam_radiance_cpu(
+    beams: &BeamSet,
+    brdf: &dyn lustre_brdf::Brdf,
+    p: glam::Vec3,
+    n: glam::Vec3,
+    wo: glam::Vec3,
+    traversal: Traversal,
+) -> Rgb {
+    let frame = Frame::from_normal(n);
+    let wo_local = frame.to_local(wo);
+    let mut radiance = Rgb::ZERO;
+    beams.for_each_arrival(p, n, traversal == Traversal::Hierarchy, |_, e, d| {
+        radiance += brdf.eval(frame.to_local(-d), wo_local) * e;
+    });
+    radiance
+}
+
+/// CPU counterpart of [`BeamPass`]: through each pixel centre the closest hit, and there [`beam_radiance_cpu`] with the material's BRDF (row 0 at the top; zero on a miss).
+pub fn beam_pixels_cpu(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    glossy: GlossyModel,
+    beams: &BeamSet,
+    traversal: Traversal,
+) -> Result<Vec<[f32; 3]>> {
+    let brdfs = scene
+        .materials()
+        .iter()
+        .map(|m| {
+            cpu_brdf(&m.model, glossy).map_err(|e| MprError::UnsupportedMaterial {
+                material: m.name.clone(),
+                message: e.to_string(),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let rays: Vec<_> = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
+        .collect();
+    let hits = bvh.closest_hits(&rays);
+    Ok(rays
+        .iter()
+        .zip(hits)
+        .map(|(ray, hit)| {
+            let Some(hit) = hit else {
+                return [0.0; 3];
+            };
+            let wo = -ray.direction;
+            let n = if hit.shading_normal.dot(wo) < 0.0 {
+                -hit.shading_normal
+            } else {
+                hit.shading_normal
+            };
+            beam_radiance_cpu(
+                beams,
+                brdfs[hit.material as usize].as_ref(),
+                hit.position,
+                n,
+                wo,
+                traversal,
+            )
+            .to_array()
+        })
+        .collect())
+}
