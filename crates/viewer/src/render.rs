@@ -40,11 +40,14 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::ValueEnum;
+use lustre_beams::{BeamInput, BeamSet, BuildOptions, SplitPoint};
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
+use lustre_mpr::beam_paths::scatterer_surfaces;
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::beams::Traversal;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel, imaged_surfaces};
@@ -68,7 +71,7 @@ use crate::render_density::{
     DensitySettings, DetpAcceleration, Estimator, GlossyEstimate, PreTestArg, vertex_lit_scene,
     vertex_radiance,
 };
-use crate::render_stream::{StreamedPhotons, without_virtual_light_photons};
+use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
 use crate::scene_arg;
 use crate::trace::{PhotonBar, emission_of};
 
@@ -88,21 +91,70 @@ pub enum Technique {
     /// Multi-pass pipeline rendering (Diefenbach & Badler 1997): `splat-direct`'s
     /// light with the mirror faces' stencilled specular images to `--spec-depth`.
     Mpr,
+    /// `mpr` with the light that point lights send through mirrors, rough
+    /// conductors, water and glass panes onto the next surface drawn as
+    /// specular and glossy polygon beams (Duvenhage et al. 2010), in place of
+    /// those photons' splats.
+    Beams,
 }
 
 impl Technique {
     /// Whether the technique draws direct light from point lights (section 2.2.1) and splats only the indirect photons.
     fn direct_light(self) -> bool {
-        matches!(self, Self::SplatDirect | Self::Mpr)
+        matches!(self, Self::SplatDirect | Self::Mpr | Self::Beams)
+    }
+
+    /// Whether the technique draws the multi-pass pipeline's frame (Diefenbach & Badler 1997): specular images, shadow volumes, virtual lights.
+    fn multipass(self) -> bool {
+        matches!(self, Self::Mpr | Self::Beams)
     }
 
     /// The density estimator of a per-vertex technique, `None` for the splatting ones.
     fn estimator(self, radius: f32, k: usize) -> Option<Estimator> {
         match self {
-            Self::Splat | Self::SplatDirect | Self::Mpr => None,
+            Self::Splat | Self::SplatDirect | Self::Mpr | Self::Beams => None,
             Self::Detp => Some(Estimator::Detp { radius }),
             Self::Impact => Some(Estimator::ImpactCount),
             Self::Photonmap => Some(Estimator::PhotonMaps { k }),
+        }
+    }
+}
+
+/// How fragments find their beams (Duvenhage et al. 2010, sections 4.3, 5.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BeamTraversalArg {
+    /// Every beam for every fragment.
+    Linear,
+    /// The beams whose boxes in the beam hierarchy hold the fragment.
+    Hierarchy,
+}
+
+impl From<BeamTraversalArg> for Traversal {
+    fn from(t: BeamTraversalArg) -> Self {
+        match t {
+            BeamTraversalArg::Linear => Traversal::Linear,
+            BeamTraversalArg::Hierarchy => Traversal::Hierarchy,
+        }
+    }
+}
+
+/// The split point of a glossy beam's domain (Duvenhage et al. 2010, figure 12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SplitPointArg {
+    /// The paper's: re-scattered at the flux-plane parameter (steps at the beam's edges).
+    Paper,
+    /// Re-scattered from the edge point whose ray meets the split point (continuous).
+    Rescattered,
+    /// On the straight edge of the 2D domain (continuous, cheapest).
+    Domain,
+}
+
+impl From<SplitPointArg> for SplitPoint {
+    fn from(s: SplitPointArg) -> Self {
+        match s {
+            SplitPointArg::Paper => SplitPoint::Paper,
+            SplitPointArg::Rescattered => SplitPoint::Rescattered,
+            SplitPointArg::Domain => SplitPoint::Domain,
         }
     }
 }
@@ -328,12 +380,12 @@ pub struct RenderArgs {
     /// 1 keeps the paper's single point light of equal power for both phases.
     #[arg(long, default_value_t = DEFAULT_LIGHT_SAMPLES)]
     pub light_samples: u32,
-    /// `--technique mpr`: depth of the recursive specular images (Diefenbach &
+    /// `--technique mpr` and `beams`: depth of the recursive specular images (Diefenbach &
     /// Badler 1997, sections 3 and 8.2); at the limit a mirror shows its
     /// reflectance times the scene's mean radiance instead of a further image.
     #[arg(long, default_value_t = DEFAULT_SPEC_DEPTH)]
     pub spec_depth: u32,
-    /// `--technique mpr`: glossy images (Diefenbach & Badler 1997, section 3,
+    /// `--technique mpr` and `beams`: glossy images (Diefenbach & Badler 1997, section 3,
     /// "glossy marble"): N mirror images per planar glossy face, sheared
     /// about its normal by the lobe's roughness and averaged; the face's
     /// splats are dropped (its Lambertian lobe stays in the diffuse textures,
@@ -364,7 +416,7 @@ pub struct RenderArgs {
     /// dielectric material yet); 0 keeps the glass clear.
     #[arg(long, default_value_t = 0.0)]
     pub frosted_glass: f32,
-    /// `--technique mpr`: shadows of the direct light by silhouette shadow
+    /// `--technique mpr` and `beams`: shadows of the direct light by silhouette shadow
     /// volumes (Diefenbach & Badler 1997, section 4.1; with `--light-samples`
     /// K > 1 the K jittered lights share the volume of their area light's
     /// centre, section 4.4's pivot approximation) or by cube shadow maps.
@@ -374,10 +426,11 @@ pub struct RenderArgs {
     /// longest chain of mirrors, glass slabs and single interfaces a light passes
     /// as a virtual light with its light volume and bent shadows (Diefenbach
     /// & Badler 1997, sections 4.2, 4.3 and 8.1); 0 adds no virtual light.
-    /// Default 1, and 0 with `--shadows maps`, which has no virtual lights.
+    /// Default 1, and 0 with `--shadows maps`, which has no virtual lights,
+    /// and with `--technique beams`, whose beams draw that light.
     #[arg(long)]
     pub shadow_depth: Option<u32>,
-    /// `--technique mpr`: which shadows of virtual lights are drawn
+    /// `--technique mpr` and `beams`: which shadows of virtual lights are drawn
     /// (Diefenbach & Badler 1997, table 2: all, none through two or more
     /// faces, or none: light volumes only).
     #[arg(long, value_enum, default_value_t = SpecShadowsArg::All)]
@@ -397,6 +450,19 @@ pub struct RenderArgs {
     /// 4.4) instead of keeping the same K.
     #[arg(long)]
     pub paired_lights: bool,
+    /// `--technique beams`: how each fragment finds the beams that may hold
+    /// it: every beam (the paper's linear traversal, Duvenhage et al. 2010,
+    /// section 4.3) or a hierarchy over the beams' slab boxes (its section
+    /// 5.2's future work); the image is the same.
+    #[arg(long, value_enum, default_value_t = BeamTraversalArg::Hierarchy)]
+    pub beam_traversal: BeamTraversalArg,
+    /// `--technique beams`: where a glossy beam's domain is split outside
+    /// its flux triangle (section 4.2.2, figure 12): the paper's point,
+    /// re-scattered from the scatterer's edge at the flux-plane parameter;
+    /// the edge point whose ray meets the split point (continuous across the
+    /// beam's edges); or the point on the 2D domain's edge.
+    #[arg(long, value_enum, default_value_t = SplitPointArg::Rescattered)]
+    pub split_point: SplitPointArg,
     /// Use the software adapter even where a hardware one exists.
     #[arg(long)]
     pub software: bool,
@@ -548,11 +614,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
     }
     let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
+        // The beams draw the light that mirrors and glass send on.
+        _ if args.technique == Technique::Beams => 0,
         ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
         ShadowArg::Maps => 0,
     });
-    if args.shadow_depth.is_some() && args.technique != Technique::Mpr {
-        bail!("--shadow-depth: virtual lights belong to --technique mpr");
+    if args.technique == Technique::Beams && shadow_depth > 0 {
+        bail!(
+            "--shadow-depth {shadow_depth}: with --technique beams the beams draw the light that \
+             mirrors and glass send on; virtual lights would add it twice"
+        );
+    }
+    if args.shadow_depth.is_some() && !args.technique.multipass() {
+        bail!("--shadow-depth: virtual lights belong to --technique mpr and beams");
     }
     if shadow_depth > 0 && args.shadows == ShadowArg::Maps {
         bail!("--shadow-depth {shadow_depth}: virtual lights need --shadows volumes");
@@ -562,8 +636,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let glossy_images = GlossySettings {
         samples: match (args.technique, args.glossy_images) {
-            (Technique::Mpr, Some(n)) => n,
-            (Technique::Mpr, None)
+            (Technique::Mpr | Technique::Beams, Some(n)) => n,
+            (Technique::Mpr | Technique::Beams, None)
                 if args.diffuse == DiffuseArg::Texture && args.spec_depth > 0 =>
             {
                 DEFAULT_GLOSSY_IMAGES
@@ -580,8 +654,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         },
         frosted_alpha: args.frosted_glass,
     };
-    if args.glossy_images.is_some_and(|n| n > 0) && args.technique != Technique::Mpr {
-        bail!("--glossy-images: only --technique mpr draws glossy images");
+    if args.glossy_images.is_some_and(|n| n > 0) && !args.technique.multipass() {
+        bail!("--glossy-images: only --technique mpr and beams draw glossy images");
     }
     if glossy_images.samples > 0 && args.diffuse != DiffuseArg::Texture {
         bail!(
@@ -643,6 +717,44 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         };
         return crate::render_frames::run(args, scene, estimator, frames);
     }
+    // Beams start at point lights: each area light's cosine point light of
+    // equal power at its centre (Stürzlinger & Bastos 1997, section 3).
+    let (beams, beam_scatterers) = if args.technique == Technique::Beams {
+        let start = Instant::now();
+        let point_scene = if scene.lights().iter().any(|l| !l.is_delta()) {
+            scene.with_area_lights_as_points()?
+        } else {
+            scene.clone()
+        };
+        let options = BuildOptions {
+            // The direct pass's shadow maps or volumes already hold the
+            // scatterers' shadows (section 3.1's first-order shadows).
+            shadow_beams: false,
+            split_point: args.split_point.into(),
+            ..BuildOptions::default()
+        };
+        let input = BeamInput::from_scene(&point_scene)
+            .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
+        let set = BeamSet::build(&input.lights, &input.scatterers, scene.bounds(), &options)
+            .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
+        timings.insert("beams".into(), json!(ms(start)));
+        if input.scatterers.is_empty() {
+            eprintln!(
+                "warning: scene `{}` has no mirror, conductor or glass triangle: no beams",
+                scene.name
+            );
+        }
+        eprintln!(
+            "beams: {} scattered from {} scatterer triangles and {} point lights in {:.0} ms",
+            set.stats().scattered,
+            input.scatterers.len(),
+            input.lights.len(),
+            ms(start)
+        );
+        (Some(set), input.scatterers.len())
+    } else {
+        (None, 0)
+    };
     let bvh = Bvh::build(&scene);
     let kernel = match args.kernel {
         KernelArg::Silverman => Kernel::Silverman,
@@ -655,7 +767,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 &scene,
                 &bvh,
                 kernel,
-                (args.technique == Technique::Mpr).then_some(shadow_depth),
+                args.technique.multipass().then_some(shadow_depth),
+                beams.is_some(),
                 &mut timings,
             )?),
             None,
@@ -768,7 +881,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let shadow_volumes = args.technique == Technique::Mpr && args.shadows == ShadowArg::Volumes;
+    let shadow_volumes = args.technique.multipass() && args.shadows == ShadowArg::Volumes;
     let direct = if args.technique.direct_light() {
         graph = graph.with_direct(&ctx, targets.hdr_format())?;
         let pass = graph.direct.as_ref().context("direct pass")?;
@@ -798,7 +911,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     } else {
         None
     };
-    if args.technique == Technique::Mpr {
+    let beam_set = match &beams {
+        Some(set) => {
+            graph = graph.with_beams(
+                &ctx,
+                targets.hdr_format(),
+                &scene,
+                glossy,
+                set,
+                args.beam_traversal.into(),
+            )?;
+            Some(set)
+        }
+        None => None,
+    };
+    if args.technique.multipass() {
         graph = graph.with_glossy_images(
             &ctx,
             targets.hdr_format(),
@@ -950,7 +1077,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "scene_passes": scene_passes,
         "shadow_passes": graph.shadow_volumes.as_ref().map(|v| scene_passes * v.shadow_generations()),
         "virtual_light_volume_bytes": graph.shadow_volumes.as_ref().and_then(|v| v.virtual_lights()).map(|v| v.byte_size()),
-        "shadow_depth": (args.technique == Technique::Mpr).then_some(shadow_depth),
+        "shadow_depth": args.technique.multipass().then_some(shadow_depth),
         "spec_shadows": (shadow_depth > 0).then(|| format!("{:?}", args.spec_shadows)),
         "equation_8_scene_passes": graph.specular.as_ref().map(|s| {
             (s.faces().len() as f64).powi(args.spec_depth as i32) + 1.0
@@ -964,6 +1091,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }),
         "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
     });
+    let beam_photon_hits = splatting.as_ref().and_then(|s| s.beam_hits);
     let total: f64 = timings.values().filter_map(serde_json::Value::as_f64).sum();
     timings.insert("total".into(), json!(total));
 
@@ -988,7 +1116,25 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "triangles": scene.triangle_count(),
         "ray_segments": vertex.as_ref().map(|v| v.segments),
         "light_samples": args.technique.direct_light().then_some(args.light_samples),
-        "spec_depth": (args.technique == Technique::Mpr).then_some(args.spec_depth),
+        "spec_depth": args.technique.multipass().then_some(args.spec_depth),
+        "beams": beam_set.map(|set| {
+            let stats = set.stats();
+            json!({
+                "scattered": stats.scattered,
+                "shadow": stats.shadow,
+                "scatterers": beam_scatterers,
+                "light_scatterer_pairs": stats.pairs,
+                "back_facing": stats.back_facing,
+                "total_internal_reflection": stats.total_internal_reflection,
+                "too_wide": stats.too_wide,
+                "hierarchy_boxes": set.hierarchy().len(),
+                "gpu_bytes": graph.beams.as_ref().map(|b| b.byte_size()),
+                "traversal": format!("{:?}", args.beam_traversal),
+                "split_point": format!("{:?}", args.split_point),
+                "shadow_beams": false,
+                "photon_hits_left_to_beams": beam_photon_hits,
+            })
+        }),
         "glossy_images": (glossy_images.samples > 0).then(|| json!({
             "samples": glossy_images.samples,
             "depth": glossy_images.depth,
@@ -1030,6 +1176,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 
 /// What splatting produced before the GPU frame (Stürzlinger & Bastos 1997, sections 2.1 and 2.2).
 struct Splatting {
+    /// Hit records left out because the beams draw their light.
+    beam_hits: Option<u64>,
     /// Photons emitted.
     emitted: u64,
     /// Hit records of the photon map (after the virtual lights' filter).
@@ -1062,11 +1210,12 @@ fn splat_setup(
     bvh: &Bvh,
     kernel: Kernel,
     virtual_depth: Option<u32>,
+    beams: bool,
     timings: &mut serde_json::Map<String, serde_json::Value>,
 ) -> anyhow::Result<Splatting> {
     let selection = match args.technique {
         Technique::Splat => BounceSelection::All,
-        Technique::SplatDirect | Technique::Mpr => BounceSelection::Indirect,
+        Technique::SplatDirect | Technique::Mpr | Technique::Beams => BounceSelection::Indirect,
         Technique::Detp | Technique::Impact | Technique::Photonmap => {
             bail!("--technique {:?} does not splat", args.technique)
         }
@@ -1107,6 +1256,7 @@ fn splat_setup(
             args.batch_records
         );
         return Ok(Splatting {
+            beam_hits: None,
             emitted: streamed.emitted(),
             hit_records: streamed.kept_records,
             emission: streamed.emission(),
@@ -1125,6 +1275,14 @@ fn splat_setup(
     let mut map = trace_photons(scene, bvh, &trace_options, &bar)
         .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
     timings.insert("trace".into(), json!(ms(start)));
+    // Light that scatterers send onto the next surface is drawn by the
+    // beams (Duvenhage et al. 2010, section 3.1): the splats leave it out.
+    let mut beam_hits = None;
+    if beams {
+        let before = map.len();
+        map = without_beam_photons(map, &scatterer_surfaces(scene)?)?;
+        beam_hits = Some((before - map.len()) as u64);
+    }
     if let Some(depth) = virtual_depth {
         map = without_virtual_light_photons(map, &specular_faces(scene), depth)?;
     }
@@ -1145,6 +1303,7 @@ fn splat_setup(
         .context("cannot build the splats of the Lambertian lobes")?;
     timings.insert("splat_setup".into(), json!(ms(start)));
     Ok(Splatting {
+        beam_hits,
         emitted: map.emitted(),
         hit_records: map.len() as u64,
         emission: trace_options.emission,

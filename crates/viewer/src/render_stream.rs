@@ -10,6 +10,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use lustre_geometry::Scene;
+use lustre_mpr::beam_paths::drawn_by_beams;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::passes::specular::{SpecularFace, specular_faces};
 use lustre_mpr::virtual_light::drawn_by_virtual_lights;
@@ -36,6 +37,20 @@ pub fn without_virtual_light_photons(
         .collect();
     PhotonMap::from_parts(map.lights().to_vec(), kept)
         .context("cannot leave the virtual lights' photons out")
+}
+
+/// `map` without the records of light that a scatterer sent onto the next surface, which the beams draw (Duvenhage et al. 2010, section 3.1; [`drawn_by_beams`]); `scatterer` per surface, `map` whole photon paths.
+pub fn without_beam_photons(map: PhotonMap, scatterer: &[bool]) -> anyhow::Result<PhotonMap> {
+    let drawn = drawn_by_beams(map.records(), scatterer);
+    let kept = map
+        .records()
+        .iter()
+        .zip(&drawn)
+        .filter(|&(_, &d)| !d)
+        .map(|(r, _)| *r)
+        .collect();
+    PhotonMap::from_parts(map.lights().to_vec(), kept)
+        .context("cannot leave the beams' photons out")
 }
 
 /// A verified photon file and the tally of its selected photons.
