@@ -217,9 +217,14 @@ fn flatten(
             flatten(name, first, weight * (1.0 - w), glossy, out)?;
             flatten(name, second, weight * w, glossy, out)?;
         }
+        // A window pane: Dirac reflection and straight transmission, no
+        // lobe to evaluate (the beams carry the light it passes on).
+        MaterialModel::Named { model, .. } if model == lustre_geometry::material::THIN_DIELECTRIC => {
+            out.push(lobe(LOBE_DELTA, weight, Rgb::ZERO, Rgb::ZERO, [0.0; 4]));
+        }
         MaterialModel::Named { model, .. } => {
             return Err(unsupported(format!(
-                "model `{model}` has no GPU twin (GPU models: diffuse, phong, ward, rough-conductor with Beckmann, blend, mirror, dielectric)"
+                "model `{model}` has no GPU twin (GPU models: diffuse, phong, ward, rough-conductor with Beckmann, blend, mirror, dielectric, thin-dielectric)"
             )));
         }
     }
