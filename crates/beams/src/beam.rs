@@ -43,6 +43,16 @@ pub enum SplitPoint {
     Rescattered,
 }
 
+/// How a glossy beam's volume `P_E` over the domain ABC is found (section 4.2.2).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum GlossyVolume {
+    /// The paper's planar facets through the Gaussian's values at the corners (figures 11 and 12), clamped to one: they widen the beam by about σ at full strength, so the beam's light exceeds its flux.
+    #[default]
+    Facets,
+    /// The Gaussian integrated over ABC ([`ScatterDistribution::triangle_volume_integrated`]): the "better approximation" section 4.2.2 asks for; no split point.
+    Integrated,
+}
+
 /// The least cosine between a vertex ray and the beam's mean direction; beams wider than this (about 89.4°) are not built.
 const MIN_COS: f32 = 0.01;
 /// The widest angle from the mean direction a glossy beam's support reaches (85°).
@@ -81,6 +91,8 @@ pub struct Beam {
     pub scatter: Scatter,
     /// Which split point the glossy volume uses.
     pub split_point: SplitPoint,
+    /// How the glossy volume is found.
+    pub volume: GlossyVolume,
 }
 
 /// The flux triangle `A_F B_F C_F`: where the three rays cross the flux plane through a fragment, perpendicular to the average wavefront normal (section 3.1, figure 5).
@@ -151,6 +163,7 @@ impl Beam {
             normals: [generator_normal; 3],
             scatter: Scatter::Straight,
             split_point: SplitPoint::Domain,
+            volume: GlossyVolume::Facets,
         })
     }
 
@@ -166,6 +179,12 @@ impl Beam {
         self.normals = normals;
         self.scatter = scatter;
         self.split_point = split_point;
+        self
+    }
+
+    /// This beam with its glossy volume found by `volume`.
+    pub fn with_volume(mut self, volume: GlossyVolume) -> Self {
+        self.volume = volume;
         self
     }
 
@@ -249,6 +268,9 @@ impl Beam {
             Vec2::new(l.dot(u), l.dot(v)).normalize_or_zero() * phi
         };
         let corner = |i: usize| to_domain(self.vertices[i], self.directions[i], ft.vertices[i]);
+        if self.volume == GlossyVolume::Integrated {
+            return dist.triangle_volume_integrated(corner(0), corner(1), corner(2));
+        }
         let split = |k: usize, _s: f32, d: Vec2| -> Vec2 {
             match self.split_point {
                 SplitPoint::Domain => d,

@@ -6,7 +6,7 @@ use lustre_brdf::{fresnel_conductor, fresnel_dielectric};
 use lustre_geometry::Rgb;
 use rayon::prelude::*;
 
-use crate::beam::{Beam, BeamKind, Scatter, SplitPoint};
+use crate::beam::{Beam, BeamKind, GlossyVolume, Scatter, SplitPoint};
 use crate::error::Result;
 use crate::scatterer::{PointSource, ScatterMaterial, Scatterer};
 
@@ -21,6 +21,8 @@ pub struct BuildOptions {
     pub min_relative_area: f32,
     /// Where glossy beams split the domain outside the flux triangle (section 4.2.2, figure 12).
     pub split_point: SplitPoint,
+    /// How glossy beams find their volume `P_E` (section 4.2.2).
+    pub glossy_volume: GlossyVolume,
 }
 
 impl Default for BuildOptions {
@@ -30,6 +32,7 @@ impl Default for BuildOptions {
             glossy_epsilon: 1e-3,
             min_relative_area: 1e-7,
             split_point: SplitPoint::Rescattered,
+            glossy_volume: GlossyVolume::Facets,
         }
     }
 }
@@ -207,7 +210,10 @@ fn pair_beams(
         if beam.is_none() && flux != Rgb::ZERO {
             too_wide.set(too_wide.get() + 1);
         }
-        beam.map(|b| b.with_scatter(lp, normals, scatter, options.split_point))
+        beam.map(|b| {
+            b.with_scatter(lp, normals, scatter, options.split_point)
+                .with_volume(options.glossy_volume)
+        })
     };
     let reflected = || incident_map(incident, normals, reflect);
     match s.material {

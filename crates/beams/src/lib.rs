@@ -21,6 +21,7 @@
 //! | 4.2.1: the map from world space to the 2D triangular domain ABC, `A = φ_a l_a` | [`Beam::scatter_volume`] |
 //! | 4.2.2, figures 11 and 12: `P_E` from AOB, BOC, COA, the split point D outside | [`lustre_brdf::scatter_distribution::ScatterDistribution::triangle_volume_split`], [`SplitPoint`] |
 //! | 4.2, equation 5, figure 11 step 3: `E = Φ_s / A_⊥ cos θ min(P_E, 1)` | [`Beam::irradiance`] (glossy beams) |
+//! | 4.2.2's "better approximation" of the volume (beyond the paper): the Gaussian integrated over ABC | [`GlossyVolume::Integrated`] |
 //! | 1.2: σ from the micro-facet variance | [`ScatterMaterial`], `ScatterDistribution::from_beckmann_alpha{,_refracted,_thin_slab}` |
 //! | 3.1: negative shadow beams, first-order shadows | [`BeamKind::Shadow`], [`BeamSet::direct_irradiance`] |
 //! | 4.3: linear traversal of all beams per fragment | [`BeamSet::irradiance_at_linear`] |
@@ -97,7 +98,7 @@ mod error;
 mod hierarchy;
 mod scatterer;
 
-pub use beam::{Beam, BeamKind, BeamSlab, FluxTriangle, Scatter, SplitPoint};
+pub use beam::{Beam, BeamKind, BeamSlab, FluxTriangle, GlossyVolume, Scatter, SplitPoint};
 pub use beam_set::{BeamSet, direct_irradiance};
 pub use construction::{
     BuildOptions, BuildStats, build_beams, glossy_cutoff, reflect, refract, solid_angle,

@@ -304,3 +304,30 @@ fn refracted_and_thin_slab_relations_hold_for_sampled_normals_at_normal_incidenc
     assert!(ScatterDistribution::from_beckmann_alpha_refracted(0.1, 1.0).is_err());
     assert!(ScatterDistribution::from_beckmann_alpha_thin_slab(0.1, 1.0).is_err());
 }
+
+#[test]
+fn integrated_triangle_volume_is_within_1e_3_of_the_exact_one() {
+    // Random triangles of scatter angles around and beside the peak, from
+    // much narrower than σ to much wider, for the σ of Beckmann α 0.02 to 0.5.
+    let mut rng = Rng::new(11);
+    let mut worst = 0.0f64;
+    for variance in [0.0008f32, 0.02, 0.5] {
+        let g = ScatterDistribution::new(variance).unwrap();
+        let s = variance.sqrt();
+        for _ in 0..2000 {
+            let scale = s * 10f32.powf(3.0 * rng.f32() - 1.5);
+            let offset = Vec2::new(rng.f32() - 0.5, rng.f32() - 0.5) * 4.0 * scale;
+            let mut corner = || offset + Vec2::new(rng.f32() - 0.5, rng.f32() - 0.5) * 2.0 * scale;
+            let (a, b, c) = (corner(), corner(), corner());
+            let exact = g.triangle_volume_exact(a, b, c);
+            let integrated = f64::from(g.triangle_volume_integrated(a, b, c));
+            let err = (integrated - exact).abs();
+            worst = worst.max(err);
+            assert!(
+                err <= 1e-3,
+                "σ² {variance}: {a} {b} {c}: integrated {integrated}, exact {exact}"
+            );
+        }
+    }
+    eprintln!("integrated against exact: worst {worst:.2e}");
+}

@@ -9,7 +9,7 @@
 mod support;
 
 use glam::Vec3;
-use lustre_beams::{BeamSet, BuildOptions, SplitPoint};
+use lustre_beams::{BeamSet, BuildOptions, GlossyVolume, SplitPoint};
 use lustre_geometry::{Bvh, Camera, Scene, builtin};
 use lustre_mpr::FrameGraph;
 use lustre_mpr::material::GlossyModel;
@@ -200,25 +200,27 @@ fn specular_and_shadow_beams_of_the_cardioid_ring_match_the_cpu() {
 }
 
 #[test]
-fn glossy_beams_of_a_rough_conductor_match_the_cpu_for_every_split_point() {
+fn glossy_beams_of_a_rough_conductor_match_the_cpu_for_every_split_point_and_volume() {
     // glosbox's gold box (Beckmann α = 0.1) lit by the area light's cosine
     // point light: glossy reflected beams on the walls and the floor.
     let scene = builtin::glosbox().with_area_lights_as_points().unwrap();
     let camera = scene.camera().with_aspect(1.0);
-    for split_point in [
-        SplitPoint::Rescattered,
-        SplitPoint::Paper,
-        SplitPoint::Domain,
+    for (split_point, glossy_volume) in [
+        (SplitPoint::Rescattered, GlossyVolume::Facets),
+        (SplitPoint::Paper, GlossyVolume::Facets),
+        (SplitPoint::Domain, GlossyVolume::Facets),
+        (SplitPoint::Rescattered, GlossyVolume::Integrated),
     ] {
         let options = BuildOptions {
             split_point,
+            glossy_volume,
             shadow_beams: false,
             ..BuildOptions::default()
         };
         let beams = BeamSet::from_scene(&scene, &options).unwrap();
         assert!(beams.beams().iter().all(|b| b.distribution.is_some()));
         check(
-            &format!("glosbox {split_point:?}"),
+            &format!("glosbox {split_point:?} {glossy_volume:?}"),
             &scene,
             &camera,
             &beams,

@@ -14,7 +14,7 @@
 //! [`lustre_beams::Beam::arrival`] through the same BRDFs.
 
 use glam::Vec2;
-use lustre_beams::{Beam, BeamSet, Scatter, SplitPoint};
+use lustre_beams::{Beam, BeamSet, GlossyVolume, Scatter, SplitPoint};
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Rgb, Scene};
 use wgpu::util::DeviceExt;
@@ -70,8 +70,10 @@ pub struct GpuBeam {
     pub scatter: u32,
     /// 0 domain, 1 paper, 2 rescattered ([`SplitPoint`]).
     pub split: u32,
+    /// 0 the paper's facets, 1 the integrated Gaussian ([`GlossyVolume`]).
+    pub volume: u32,
     /// Padding to 16 bytes.
-    pub pad: [u32; 2],
+    pub pad: u32,
 }
 
 fn vec4(v: glam::Vec3) -> [f32; 4] {
@@ -116,7 +118,11 @@ impl GpuBeam {
                 SplitPoint::Paper => 1,
                 SplitPoint::Rescattered => 2,
             },
-            pad: [0; 2],
+            volume: match beam.volume {
+                GlossyVolume::Facets => 0,
+                GlossyVolume::Integrated => 1,
+            },
+            pad: 0,
         }
     }
 }

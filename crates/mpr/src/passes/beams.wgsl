@@ -29,7 +29,15 @@ const SCATTER_REFRACT: u32 = 1u;
 const SPLIT_DOMAIN: u32 = 0u;
 const SPLIT_PAPER: u32 = 1u;
 
+const VOLUME_FACETS: u32 = 0u;
+
 const PI: f32 = 3.14159265358979;
+
+// 8-point Gauss-Legendre nodes (positive half) and weights.
+const GL8_X = array<f32, 4>(0.18343464, 0.5255324, 0.7966665, 0.9602899);
+const GL8_W = array<f32, 4>(0.3626838, 0.31370665, 0.22238103, 0.10122854);
+// Panels per fan edge (lustre-brdf's INTEGRATED_PANELS).
+const INTEGRATED_PANELS: u32 = 4u;
 
 // One beam (GpuBeam in beams.rs; lustre-beams' Beam).
 struct GpuBeam {
@@ -51,8 +59,9 @@ struct GpuBeam {
     scatter: u32,
     // SPLIT_DOMAIN, SPLIT_PAPER or rescattered (2).
     split: u32,
-    pad0: u32,
-    pad1: u32,
+    // VOLUME_FACETS (the paper's) or the integrated Gaussian (1).
+    volume: u32,
+    pad: u32,
 }
 
 // A node of the beam hierarchy (lustre-beams' HierarchyNode): a leaf's items
@@ -320,6 +329,35 @@ fn facet(p: vec2f, q: vec2f, r: vec2f, variance: f32) -> f32 {
         * (scatter_density(p, variance) + scatter_density(q, variance) + scatter_density(r, variance)) / 3.0;
 }
 
+// One fan edge O P Q of ScatterDistribution::triangle_volume_integrated:
+// the integral of (1 - exp(-r(theta)²/(2 sigma²))) / (2 pi) over its angles.
+fn fan_edge(p: vec2f, q: vec2f, variance: f32) -> f32 {
+    let cross = perp_dot(p, q);
+    let e = q - p;
+    let len2 = dot(e, e);
+    if cross == 0.0 || len2 == 0.0 || all(p == vec2f(0.0)) || all(q == vec2f(0.0)) {
+        return 0.0;
+    }
+    let t0 = atan2(p.y, p.x);
+    let sweep = atan2(cross, dot(p, q));
+    let dist = abs(cross) / sqrt(len2);
+    let foot = p - e * (dot(p, e) / len2);
+    let tn = atan2(foot.y, foot.x);
+    let h = sweep / f32(INTEGRATED_PANELS);
+    var sum = 0.0;
+    for (var panel = 0u; panel < INTEGRATED_PANELS; panel++) {
+        let mid = t0 + (f32(panel) + 0.5) * h;
+        for (var k = 0u; k < 4u; k++) {
+            for (var side = 0u; side < 2u; side++) {
+                let t = mid + select(-0.5, 0.5, side == 1u) * h * GL8_X[k];
+                let r = dist / cos(t - tn);
+                sum += GL8_W[k] * (1.0 - exp(-r * r / (2.0 * variance)));
+            }
+        }
+    }
+    return sum * 0.5 * h / (2.0 * PI);
+}
+
 // Beam::scatter_volume through ScatterDistribution::triangle_volume_split
 // (section 4.2.2, figures 11 and 12): P_E over the domain ABC, clamped to one.
 fn scatter_volume(bi: u32, ft: FluxTriangle, p: vec3f) -> f32 {
@@ -331,6 +369,9 @@ fn scatter_volume(bi: u32, ft: FluxTriangle, p: vec3f) -> f32 {
     let a = v[0];
     let b = v[1];
     let c = v[2];
+    if beams[bi].volume != VOLUME_FACETS {
+        return min(abs(fan_edge(a, b, variance) + fan_edge(b, c, variance) + fan_edge(c, a, variance)), 1.0);
+    }
     let orient = perp_dot(b - a, c - a);
     if orient == 0.0 || !is_finite(orient) {
         return 0.0;
