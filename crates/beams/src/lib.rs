@@ -9,7 +9,8 @@
 //! `E = Φ_s / A_⊥ cos θ` (equation 1), from a glossy one
 //! `E = Φ_s / A_⊥ cos θ min(P_E, 1)` with `P_E` the volume under the
 //! scatter Gaussian over the triangular domain ABC (section 4.2). No GPU
-//! dependency.
+//! dependency; lustre-mpr's beam pass evaluates the same beams per fragment
+//! on the GPU (its WGSL mirrors [`Beam::arrival`]).
 //!
 //! | paper | item |
 //! |---|---|

@@ -17,6 +17,7 @@
 //! | [`passes::splat`]: photon splats, 64² kernel texture with mips, surface-id or stencil restriction | Stürzlinger & Bastos 1997, 2.2, 3.2, equation 2 | `SplatEstimator::radiance_splatted` |
 //! | [`passes::specular`]: mirror faces masked in the stencil, the scene redrawn from their virtual views, recursively | Diefenbach & Badler 1997, 3, 7.1, 7.3 | mirror ray tracer (`tests/specular.rs`) |
 //! | [`passes::glossy_image`] (lobes and shears in [`passes::glossy_lobe`]): planar glossy faces' images from N mirror views sheared about the face normal (`View::sheared_reflection`), fogged with distance from the face, averaged in a float target and added times R inside the face | Diefenbach & Badler 1997, 3 ("glossy marble", `shear_view`, `accbuf`) | analytic shear (`view.rs`), mirror path, fogged mirror ray trace and the lobe's erf integral (`tests/glossy_image.rs`); frosted glass slabs the same way through `View::sheared_through_slab` |
+//! | [`passes::beams`]: specular, glossy and shadow polygon beams of point lights evaluated per fragment, linear or hierarchical traversal | Duvenhage et al. 2010, 3.1, 4.2, 4.3, 5.2 | `lustre_beams::Beam::arrival` ([`passes::beams::beam_pixels_cpu`]) |
 //! | [`passes::tonemap`]: exposure, clamp or Reinhard, sRGB | — | per-pixel formula |
 //!
 //! Materials reach the GPU as weighted BRDF lobes ([`material`]) evaluated by

@@ -396,3 +396,80 @@ fn render_names_a_material_the_brdfs_refuse() {
     );
     assert!(!out_path.exists());
 }
+
+#[test]
+fn beams_render_the_stained_glass_window_and_record_their_beams() {
+    let dir = scratch("beams");
+    let out_path = dir.join("sg.exr");
+    let args = [
+        "render",
+        "stained-glass",
+        "--technique",
+        "beams",
+        "--photons",
+        "20000",
+        "--size",
+        "48x32",
+        "--aa",
+        "1",
+        "--out",
+        out_path.to_str().unwrap(),
+    ];
+    let Some(out) = render_or_skip("beams_render_the_stained_glass_window", &args) else {
+        return;
+    };
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_path.with_extension("json")).unwrap())
+            .unwrap();
+    let beams = &sidecar["beams"];
+    // One point light through every pane triangle: one transmitted and one
+    // reflected beam each, towards opposite sides of the window.
+    let scene = lustre_geometry::builtin::stained_glass();
+    let panes = lustre_beams::BeamInput::from_scene(&scene)
+        .unwrap()
+        .scatterers
+        .len();
+    assert_eq!(beams["scatterers"], panes, "{sidecar}");
+    assert_eq!(beams["scattered"], 2 * panes, "{sidecar}");
+    assert_eq!(beams["shadow"], 0, "{sidecar}");
+    assert!(
+        beams["photon_hits_left_to_beams"]
+            .as_u64()
+            .is_some_and(|n| n > 0),
+        "{sidecar}"
+    );
+    assert_eq!(sidecar["passes"]["shadow_depth"], 0, "{sidecar}");
+    let image = lustre_image::read_exr(&out_path).unwrap();
+    let mean = lustre_image::metrics::mean(&image);
+    assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+}
+
+#[test]
+fn beams_refuse_virtual_lights() {
+    let dir = scratch("beams-refusal");
+    let out_path = dir.join("c.png");
+    let out = lustre(&[
+        "render",
+        "cardioid",
+        "--technique",
+        "beams",
+        "--shadow-depth",
+        "1",
+        "--out",
+        out_path.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("the beams draw the light that mirrors and glass send on"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(!out_path.exists());
+}
