@@ -165,6 +165,35 @@ impl ScatterMaterial {
         })
     }
 
+    /// The same material with Beckmann roughness `alpha` (0 specular; the paper's glossy variance, figures 13 and 14).
+    pub fn with_roughness(self, alpha: f32) -> Self {
+        match self {
+            Self::Reflector {
+                reflectance,
+                conductor,
+                ..
+            } => Self::Reflector {
+                reflectance,
+                conductor,
+                roughness: alpha,
+            },
+            Self::Interface {
+                ior, transmittance, ..
+            } => Self::Interface {
+                ior,
+                transmittance,
+                roughness: alpha,
+            },
+            Self::ThinSlab {
+                ior, transmittance, ..
+            } => Self::ThinSlab {
+                ior,
+                transmittance,
+                roughness: alpha,
+            },
+        }
+    }
+
     /// The Beckmann roughness α.
     pub fn roughness(&self) -> f32 {
         match *self {

@@ -50,6 +50,11 @@ enum Command {
         /// part, with a warning, instead of failing.
         #[arg(long)]
         approximate: bool,
+        /// Export each isotropic point light as a sphere of this radius in
+        /// metres emitting the same power (radiance I / (π R²)), so the path
+        /// tracer finds caustics of point lights through mirrors and water.
+        #[arg(long, value_name = "R", allow_negative_numbers = true)]
+        point_light_radius: Option<f32>,
     },
     /// Render a scene to an EXR or PNG file (photon splatting, Stürzlinger & Bastos 1997).
     Render(render::RenderArgs),
@@ -162,13 +167,21 @@ fn export(
     size: (u32, u32),
     spp: u32,
     approximate: bool,
+    point_light_radius: Option<f32>,
 ) -> anyhow::Result<()> {
+    if let Some(r) = point_light_radius {
+        anyhow::ensure!(
+            r.is_finite() && r > 0.0,
+            "--point-light-radius must be a positive, finite radius in metres, not {r}"
+        );
+    }
     let loaded = scene_arg::load(arg)?;
     let options = ExportOptions {
         width: size.0,
         height: size.1,
         spp,
         approximate,
+        point_light_radius,
         ..ExportOptions::default()
     };
     let report = mitsuba::export(&loaded.scene, out, &options)
@@ -193,7 +206,8 @@ fn main() -> ExitCode {
             size,
             spp,
             approximate,
-        } => export(scene, out, *size, *spp, *approximate),
+            point_light_radius,
+        } => export(scene, out, *size, *spp, *approximate, *point_light_radius),
         Command::Render(args) => render::run(args),
         Command::Trace(args) => trace::run(args),
         Command::Merge { inputs, out } => trace::merge(inputs, out),

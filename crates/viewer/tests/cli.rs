@@ -269,6 +269,22 @@ fn render_refuses_bad_options_before_writing_anything() {
             "--aa 0",
         ),
         (
+            vec!["render", "glosbox", "--beam-roughness", "0.1", "--out", out],
+            "--beam-roughness: only --technique beams draws beams",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "beams",
+                "--beam-roughness=-1",
+                "--out",
+                out,
+            ],
+            "--beam-roughness -1: must be finite and not negative",
+        ),
+        (
             vec!["render", "mirrors", "--shadow-depth", "1", "--out", out],
             "virtual lights belong to --technique mpr",
         ),
