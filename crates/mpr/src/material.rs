@@ -219,7 +219,9 @@ fn flatten(
         }
         // A window pane: Dirac reflection and straight transmission, no
         // lobe to evaluate (the beams carry the light it passes on).
-        MaterialModel::Named { model, .. } if model == lustre_geometry::material::THIN_DIELECTRIC => {
+        MaterialModel::Named { model, .. }
+            if model == lustre_geometry::material::THIN_DIELECTRIC =>
+        {
             out.push(lobe(LOBE_DELTA, weight, Rgb::ZERO, Rgb::ZERO, [0.0; 4]));
         }
         MaterialModel::Named { model, .. } => {
