@@ -26,14 +26,11 @@
 // criterion's macros generate undocumented public items.
 #![allow(missing_docs)]
 
-use std::f32::consts::TAU;
 use std::time::Duration;
 
 use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
-use glam::{Affine3A, Vec3};
 use lustre_beams::{BeamSet, BuildOptions};
-use lustre_geometry::builtin::cardioid::{RING_HEIGHT, RING_RADIUS};
-use lustre_geometry::{Mesh, Object, Scene, builtin};
+use lustre_geometry::{Scene, builtin};
 use lustre_mpr::frame::FrameInputs;
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::beams::Traversal;
@@ -49,51 +46,9 @@ const SOFTWARE_SIZE: (u32, u32) = (320, 240);
 /// Scatterer triangles of each cardioid configuration.
 const COUNTS: [usize; 3] = [80, 800, 10_000];
 
-/// `cardioid` with its ring cut into `triangles` mirror triangles.
+/// `cardioid` with its ring cut into `triangles` mirror triangles, its camera's aspect that of `size`.
 fn ring_scene(triangles: usize, (width, height): (u32, u32)) -> Scene {
-    let base = builtin::cardioid();
-    let floor = base.meshes()[0].clone();
-    let ring_material = base.meshes()[1].material;
-    let segments = triangles / 2;
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..segments {
-        let at = |k: usize, y: f32| {
-            let a = TAU * k as f32 / segments as f32;
-            Vec3::new(RING_RADIUS * a.cos(), y, RING_RADIUS * a.sin())
-        };
-        let b = positions.len() as u32;
-        positions.extend([
-            at(i, 0.0),
-            at(i + 1, 0.0),
-            at(i + 1, RING_HEIGHT),
-            at(i, RING_HEIGHT),
-        ]);
-        indices.push([b, b + 1, b + 2]);
-        indices.push([b, b + 2, b + 3]);
-    }
-    let meshes = vec![
-        floor,
-        Mesh::flat("ring", &positions, &indices, ring_material),
-    ];
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
-    let mut scene = Scene::new(
-        format!("cardioid-{triangles}"),
-        meshes,
-        base.materials().to_vec(),
-        objects,
-        base.lights().to_vec(),
-        *base.camera(),
-    )
-    .unwrap();
+    let mut scene = builtin::cardioid::cardioid_with(triangles / 2);
     scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));
     scene
 }

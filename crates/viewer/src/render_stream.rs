@@ -28,29 +28,25 @@ pub fn without_virtual_light_photons(
     depth: u32,
 ) -> anyhow::Result<PhotonMap> {
     let drawn = drawn_by_virtual_lights(map.records(), faces, depth);
+    without(map, &drawn).context("cannot leave the virtual lights' photons out")
+}
+
+/// `map` without the records `drawn` marks.
+fn without(map: PhotonMap, drawn: &[bool]) -> lustre_photon::Result<PhotonMap> {
     let kept = map
         .records()
         .iter()
-        .zip(&drawn)
+        .zip(drawn)
         .filter(|&(_, &d)| !d)
         .map(|(r, _)| *r)
         .collect();
     PhotonMap::from_parts(map.lights().to_vec(), kept)
-        .context("cannot leave the virtual lights' photons out")
 }
 
 /// `map` without the records of light that a scatterer sent onto the next surface, which the beams draw (Duvenhage et al. 2010, section 3.1; [`drawn_by_beams`]); `scatterer` per surface, `map` whole photon paths.
 pub fn without_beam_photons(map: PhotonMap, scatterer: &[bool]) -> anyhow::Result<PhotonMap> {
     let drawn = drawn_by_beams(map.records(), scatterer);
-    let kept = map
-        .records()
-        .iter()
-        .zip(&drawn)
-        .filter(|&(_, &d)| !d)
-        .map(|(r, _)| *r)
-        .collect();
-    PhotonMap::from_parts(map.lights().to_vec(), kept)
-        .context("cannot leave the beams' photons out")
+    without(map, &drawn).context("cannot leave the beams' photons out")
 }
 
 /// A verified photon file and the tally of its selected photons.

@@ -40,6 +40,12 @@ pub const LIGHT_INTENSITY: Rgb = Rgb::new(2.0, 2.0, 2.0);
 
 /// `cardioid`: the ring of 80 specular triangles on a diffuse floor (Duvenhage et al. 2010, figure 2).
 pub fn cardioid() -> Scene {
+    cardioid_with(RING_SEGMENTS)
+}
+
+/// `cardioid` with its ring cut into `segments` quads (two mirror triangles each; at least 3), the same ring and caustic with more scatterers (the beam benchmarks' 80 to 10,000 triangles).
+pub fn cardioid_with(segments: usize) -> Scene {
+    let segments = segments.max(3);
     let (floor, ring) = (0, 1);
     let materials = vec![
         Material::diffuse("floor", FLOOR_REFLECTANCE),
@@ -60,9 +66,9 @@ pub fn cardioid() -> Scene {
     )];
     let mut positions = Vec::new();
     let mut indices = Vec::new();
-    for i in 0..RING_SEGMENTS {
+    for i in 0..segments {
         let at = |k: usize, y: f32| {
-            let a = TAU * k as f32 / RING_SEGMENTS as f32;
+            let a = TAU * k as f32 / segments as f32;
             Vec3::new(RING_RADIUS * a.cos(), y, RING_RADIUS * a.sin())
         };
         let base = positions.len() as u32;

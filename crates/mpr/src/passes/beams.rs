@@ -13,14 +13,13 @@
 //! de-duplicates. CPU twin: [`beam_pixels_cpu`], lustre-beams'
 //! [`lustre_beams::Beam::arrival`] through the same BRDFs.
 
-use glam::Vec2;
 use lustre_beams::{Beam, BeamSet, GlossyVolume, Scatter, SplitPoint};
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Rgb, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::material::{GlossyModel, scene_materials};
-use crate::passes::direct::cpu_brdf;
+use crate::passes::direct::{cpu_brdfs, primary_hits};
 use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::scene_buffers::SceneBuffers;
 use crate::shaders::{with_materials, with_view};
@@ -467,21 +466,8 @@ pub fn beam_pixels_cpu(
     beams: &BeamSet,
     traversal: Traversal,
 ) -> Result<Vec<[f32; 3]>> {
-    let brdfs = scene
-        .materials()
-        .iter()
-        .map(|m| {
-            cpu_brdf(&m.model, glossy).map_err(|e| MprError::UnsupportedMaterial {
-                material: m.name.clone(),
-                message: e.to_string(),
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let rays: Vec<_> = (0..height)
-        .flat_map(|y| (0..width).map(move |x| (x, y)))
-        .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
-        .collect();
-    let hits = bvh.closest_hits(&rays);
+    let brdfs = cpu_brdfs(scene, glossy)?;
+    let (rays, hits) = primary_hits(bvh, camera, width, height);
     Ok(rays
         .iter()
         .zip(hits)

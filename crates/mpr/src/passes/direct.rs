@@ -704,6 +704,35 @@ impl DirectPass {
     }
 }
 
+/// [`cpu_brdf`] of every material of `scene`, in `MaterialId` order; errors name the material.
+pub fn cpu_brdfs(scene: &Scene, glossy: GlossyModel) -> Result<Vec<BoxedBrdf>> {
+    scene
+        .materials()
+        .iter()
+        .map(|m| {
+            cpu_brdf(&m.model, glossy).map_err(|e| MprError::UnsupportedMaterial {
+                material: m.name.clone(),
+                message: e.to_string(),
+            })
+        })
+        .collect()
+}
+
+/// The ray through each pixel centre (row 0 at the top) and its closest hit: what the CPU twins shade.
+pub fn primary_hits(
+    bvh: &Bvh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> (Vec<Ray>, Vec<Option<lustre_geometry::Hit>>) {
+    let rays: Vec<Ray> = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
+        .collect();
+    let hits = bvh.closest_hits(&rays);
+    (rays, hits)
+}
+
 /// The CPU BRDF of a material model under `glossy`: `lustre_brdf::from_model`,
 /// or with Ward and Beckmann lobes replaced by Diefenbach's fitted Phong of the
 /// same α (equation 6; a conductor's Fresnel folded into `ks` at normal incidence).
@@ -823,21 +852,8 @@ pub fn direct_pixels_cpu_where(
     if let Some(i) = lights.iter().position(|l| !l.is_delta()) {
         return Err(area_light_error(i));
     }
-    let brdfs = scene
-        .materials()
-        .iter()
-        .map(|m| {
-            cpu_brdf(&m.model, glossy).map_err(|e| MprError::UnsupportedMaterial {
-                material: m.name.clone(),
-                message: e.to_string(),
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let rays: Vec<Ray> = (0..height)
-        .flat_map(|y| (0..width).map(move |x| (x, y)))
-        .map(|(x, y)| camera.primary_ray(Camera::pixel_ndc(x, y, width, height, Vec2::splat(0.5))))
-        .collect();
-    let hits = bvh.closest_hits(&rays);
+    let brdfs = cpu_brdfs(scene, glossy)?;
+    let (rays, hits) = primary_hits(bvh, camera, width, height);
     Ok(rays
         .iter()
         .zip(hits)
