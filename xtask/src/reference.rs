@@ -49,6 +49,11 @@ pub struct Args {
     /// Where the EXR and JSON files go (default: `tests/references` in the workspace).
     #[arg(long)]
     out_dir: Option<PathBuf>,
+    /// Export each isotropic point light as a sphere of this radius in metres
+    /// emitting the same power (`ExportOptions::point_light_radius`), so the
+    /// path tracer finds its caustics; default: [`default_point_light_radius`].
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    point_light_radius: Option<f64>,
     /// A note for the sidecar (e.g. why the spp is below the target).
     #[arg(long)]
     note: Option<String>,
@@ -87,6 +92,29 @@ enum Filter {
     Gaussian,
 }
 
+/// The radius of the spherical area light that stands for the point light of
+/// a scene whose light reaches diffuse surfaces through mirrors or water
+/// (delta-delta paths that a path tracer never finds from a point light):
+/// `cardioid` (light → ring mirror → floor) and `pool` (light → water →
+/// floor, and the floor seen through the water); `None` for the other
+/// scenes. A camera path finds the sphere by BSDF sampling with probability
+/// about `E r² / I` at a floor point of caustic irradiance `E`, so the noise
+/// falls as `1/r`, while a caustic edge cast from a scatterer at distance
+/// `d_ls` from the light onto a floor at `d_sf` from it blurs over about `2r
+/// d_sf / d_ls`. `cardioid`: 2 cm, a blur of 1–4 cm (1–4 pixels at 256 ×
+/// 256) where the far side of the ring (1.5–2 m from the light) throws the
+/// caustic 0.5–1.5 m onto the floor. `pool`: 10 cm: the light is 2 m above
+/// the water and the floor 0.5 m below it, so the sphere's image blurs the
+/// floor by a disc of radius about 0.1 / 2 · 0.5 / 1.33 ≈ 2 cm, while the
+/// waves' caustic is bands 20–50 cm wide (its contrast drops by about 1 %).
+pub fn default_point_light_radius(scene: &str) -> Option<f64> {
+    match scene {
+        "cardioid" => Some(0.02),
+        "pool" => Some(0.1),
+        _ => None,
+    }
+}
+
 /// The workspace root (the parent of `xtask/`).
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -112,6 +140,12 @@ pub fn run(args: Args) -> Result<()> {
         args.spp > 0 && args.size > 0 && args.spp_per_pass > 0,
         "--spp, --size and --spp-per-pass must be positive"
     );
+    if let Some(r) = args.point_light_radius {
+        ensure!(
+            r.is_finite() && r > 0.0,
+            "--point-light-radius must be a positive, finite radius in metres, not {r}"
+        );
+    }
     let scenes: Vec<&str> = match &args.scene {
         Some(name) => {
             builtin(name)?;
@@ -147,6 +181,9 @@ fn render_scene(
         Filter::Box => ReconstructionFilter::Box,
         Filter::Gaussian => ReconstructionFilter::Gaussian { stddev: 0.5 },
     };
+    let point_light_radius = args
+        .point_light_radius
+        .or_else(|| default_point_light_radius(name));
     let options = ExportOptions {
         width: args.size,
         height: args.size,
@@ -154,12 +191,16 @@ fn render_scene(
         seed: args.seed,
         max_depth: args.max_depth,
         filter,
+        point_light_radius: point_light_radius.map(|r| r as f32),
         ..ExportOptions::default()
     };
     let report = mitsuba::export(&scene, &xml, &options)
         .with_context(|| format!("exporting `{name}` to Mitsuba"))?;
     for warning in &report.warnings {
         eprintln!("reference: {name}: warning: {warning}");
+    }
+    if let Some(r) = point_light_radius {
+        eprintln!("reference: {name}: point lights exported as spheres of radius {r} m");
     }
     eprintln!(
         "reference: {name}: exported to {}; rendering {}x{} at {} spp with Mitsuba {} (path, max_depth {})",
@@ -204,7 +245,7 @@ fn render_scene(
     if args.spp < TARGET_SPP && note.is_empty() {
         note = format!("{} spp, below the {TARGET_SPP} spp target", args.spp);
     }
-    let sidecar = serde_json::json!({
+    let mut sidecar = serde_json::json!({
         "scene": name,
         "renderer": "Mitsuba 3",
         "mitsuba_version": info["mitsuba_version"],
@@ -227,15 +268,20 @@ fn render_scene(
         "export_warnings": report.warnings,
         "note": note,
         "command": format!(
-            "cargo xtask reference --scene {name} --spp {} --size {} --variant {} --max-depth {} --filter {} --seed {}",
+            "cargo xtask reference --scene {name} --spp {} --size {} --variant {} --max-depth {} --filter {} --seed {}{}",
             args.spp,
             args.size,
             args.variant.name(),
             args.max_depth,
             match args.filter { Filter::Box => "box", Filter::Gaussian => "gaussian" },
-            args.seed
+            args.seed,
+            point_light_radius.map_or(String::new(), |r| format!(" --point-light-radius {r}"))
         ),
     });
+    if let Some(r) = point_light_radius {
+        // The point light's stand-in (ExportOptions::point_light_radius): a sphere of equal power.
+        sidecar["point_light_radius"] = serde_json::json!(r);
+    }
     let json_path = out_dir.join(format!("{name}.json"));
     write_atomically(
         &json_path,

@@ -16,7 +16,7 @@
 //! | [`MaterialModel::Blend`] | `blendbsdf` with `weight` (the weight of the second nested BSDF in both) |
 //! | opacity < 1 (non-dielectric) | the BSDF nested in `mask` with `opacity` |
 //! | emissive mesh | its shape with an `area` emitter of the material's `radiance`, keeping the material's BSDF |
-//! | [`Light::Point`] | `point` emitter with `position` and `intensity` |
+//! | [`Light::Point`] | `point` emitter with `position` and `intensity`; with [`ExportOptions::point_light_radius`] a `sphere` with a `null` BSDF and an `area` emitter of the same power |
 //! | [`Light::Spot`] | `spot` emitter with `intensity`, `cutoff_angle` and `beam_width` in degrees |
 //! | [`Camera`] | `perspective` sensor with `fov_axis="y"`, a `lookat` `to_world`, `hdrfilm` and an `independent` sampler |
 //!
@@ -79,6 +79,23 @@ pub struct ExportOptions {
     pub two_sided: bool,
     /// Approximate what Mitsuba lacks instead of failing (each approximation is a warning in the report).
     pub approximate: bool,
+    /// Export every isotropic point light ([`Light::Point`]) as a small
+    /// spherical area light of this radius `r` in metres instead of Mitsuba's
+    /// `point` emitter, so that a path tracer finds the light along
+    /// delta-delta paths (light → mirror or water surface → diffuse floor →
+    /// camera: caustics, which no path from the camera reaches a point
+    /// light along). The sphere, centred on the light with a `null` BSDF (as
+    /// the other approximated lights: invisible to paths, seen as an
+    /// emitter), emits the uniform radiance `L = I / (π r²)`: a Lambertian
+    /// emitter of area `4π r²` emits `Φ = π L · 4π r² = 4π I`, the point
+    /// light's power, and its intensity seen from afar is `L · π r² = I` in
+    /// every direction (a fully visible uniform sphere lights every point
+    /// outside it exactly as the point light would). As a point light, the
+    /// spheres are hidden from camera rays (the `path` integrator's
+    /// `hide_emitters`) when nothing else in the scene emits. Spot lights and
+    /// oriented point lights are exported as without it (a warning each).
+    /// `None`: `point` emitters. The radius must be positive and finite.
+    pub point_light_radius: Option<f32>,
 }
 
 impl Default for ExportOptions {
@@ -92,6 +109,7 @@ impl Default for ExportOptions {
             filter: ReconstructionFilter::Box,
             two_sided: false,
             approximate: false,
+            point_light_radius: None,
         }
     }
 }
@@ -256,6 +274,14 @@ fn build(
             ),
         });
     }
+    if let Some(r) = options.point_light_radius
+        && !(r.is_finite() && r > 0.0)
+    {
+        return Err(GeometryError::Unsupported {
+            what: format!("scene `{}`", scene.name),
+            why: format!("point light radius {r}: it must be positive and finite"),
+        });
+    }
     let mut x = Xml::default();
     x.out
         .push_str("<?xml version=\"1.0\" encoding=\"utf-8\"?>\n");
@@ -266,6 +292,9 @@ fn build(
     x.open("scene", &[("version", "3.0.0")]);
     x.open("integrator", &[("type", "path")]);
     x.property("integer", "max_depth", options.max_depth);
+    if options.point_light_radius.is_some() && hides_point_light_spheres(scene, warnings) {
+        x.property("boolean", "hide_emitters", true);
+    }
     x.close();
     sensor_xml(&mut x, scene, options, warnings);
     for (i, material) in scene.materials().iter().enumerate() {
@@ -301,6 +330,29 @@ fn build(
     x.close();
     debug_assert!(x.open.is_empty());
     Ok((x.out, extra))
+}
+
+/// Whether the integrator should hide directly visible emitters when point
+/// lights are exported as spheres ([`ExportOptions::point_light_radius`]): a
+/// point light is invisible to camera rays, and Mitsuba's `hide_emitters`
+/// removes only what camera rays hit first (light from the spheres reflected,
+/// refracted or scattered stays), so it is set when the spheres are the only
+/// emitters that could be seen. With emissive meshes or area lights as well
+/// it would hide those too: the spheres stay visible, with a warning.
+fn hides_point_light_spheres(scene: &Scene, warnings: &mut Vec<String>) -> bool {
+    if !scene.lights().iter().any(|l| matches!(l, Light::Point(_))) {
+        return false;
+    }
+    let others = scene.lights().iter().any(|l| matches!(l, Light::Area(_)))
+        || scene.materials().iter().any(Material::is_emissive);
+    if others {
+        warnings.push(
+            "the spheres of the point lights are visible to the camera: hiding them \
+             (`hide_emitters`) would hide the scene's other emitters too"
+                .into(),
+        );
+    }
+    !others
 }
 
 /// The `perspective` sensor with film and sampler.
@@ -358,15 +410,39 @@ fn light_xml(
     extra: &mut Vec<ExtraMesh>,
 ) -> Result<()> {
     let id = format!("light-{index}");
+    if let (Some(r), Light::Spot(_) | Light::OrientedPoint(_)) = (options.point_light_radius, light)
+    {
+        warnings.push(format!(
+            "light #{index}: the point light radius {r} applies to isotropic point lights only; \
+             exported as without it"
+        ));
+    }
     match light {
         Light::Point(p) => {
-            x.open("emitter", &[("type", "point"), ("id", &id)]);
             let [px, py, pz] = p.position.to_array().map(|c| c.to_string());
-            x.leaf(
-                "point",
-                &[("name", "position"), ("x", &px), ("y", &py), ("z", &pz)],
-            );
-            x.rgb("intensity", p.intensity);
+            match options.point_light_radius {
+                Some(r) => {
+                    // L = I / (π r²): power π L · 4π r² = 4π I (ExportOptions::point_light_radius).
+                    x.open("shape", &[("type", "sphere"), ("id", &id)]);
+                    x.leaf(
+                        "point",
+                        &[("name", "center"), ("x", &px), ("y", &py), ("z", &pz)],
+                    );
+                    x.property("float", "radius", r);
+                    x.leaf("bsdf", &[("type", "null")]);
+                    x.open("emitter", &[("type", "area")]);
+                    x.rgb("radiance", p.intensity / (std::f32::consts::PI * r * r));
+                    x.close();
+                }
+                None => {
+                    x.open("emitter", &[("type", "point"), ("id", &id)]);
+                    x.leaf(
+                        "point",
+                        &[("name", "position"), ("x", &px), ("y", &py), ("z", &pz)],
+                    );
+                    x.rgb("intensity", p.intensity);
+                }
+            }
             x.close();
         }
         Light::Spot(s) => {
@@ -1380,5 +1456,133 @@ mod tests {
         check_well_formed(&xml).unwrap();
         assert_eq!(warnings.len(), 1);
         assert!(xml.contains("<shape type=\"ply\" id=\"light-0\">"), "{xml}");
+    }
+
+    /// The numbers of the `value` attribute (or of `x`, `y`, `z`) of the first element after `after` that starts with `prefix`.
+    fn numbers_after(xml: &str, after: &str, prefix: &str) -> Vec<f64> {
+        let from = xml.find(after).expect("anchor in the XML") + after.len();
+        let start = from + xml[from..].find(prefix).expect("element after the anchor");
+        let element = &xml[start..start + xml[start..].find("/>").expect("a leaf")];
+        let value = |name: &str| {
+            let key = format!(" {name}=\"");
+            element.find(&key).map(|i| {
+                let rest = &element[i + key.len()..];
+                rest[..rest.find('"').unwrap()].to_owned()
+            })
+        };
+        let text = value("value").unwrap_or_else(|| {
+            ["x", "y", "z"]
+                .map(|k| value(k).expect("x, y and z"))
+                .join(", ")
+        });
+        text.split(',').map(|v| v.trim().parse().unwrap()).collect()
+    }
+
+    #[test]
+    fn point_lights_become_spheres_of_equal_power() {
+        use crate::light::SpotLight;
+        for (name, r) in [("cardioid", 0.01), ("pool", 0.004), ("cardioid", 0.25)] {
+            let scene = builtin(name).unwrap();
+            let Light::Point(light) = scene.lights()[0] else {
+                panic!("{name} has a point light");
+            };
+            let options = ExportOptions {
+                point_light_radius: Some(r),
+                ..ExportOptions::default()
+            };
+            let mut warnings = Vec::new();
+            let xml = scene_xml(&scene, &options, &mut warnings).unwrap();
+            check_well_formed(&xml).unwrap();
+            assert!(warnings.is_empty(), "{warnings:?}");
+            assert!(!xml.contains("<emitter type=\"point\""), "{xml}");
+            assert!(xml.contains("<boolean name=\"hide_emitters\" value=\"true\"/>"));
+            let anchor = "<shape type=\"sphere\" id=\"light-0\">";
+            let center = numbers_after(&xml, anchor, "<point name=\"center\"");
+            let radius = numbers_after(&xml, anchor, "<float name=\"radius\"")[0];
+            let radiance = numbers_after(&xml, anchor, "<rgb name=\"radiance\"");
+            assert_eq!(radius as f32, r, "{name}");
+            for c in 0..3 {
+                assert_eq!(center[c] as f32, light.position[c], "{name}");
+                // A Lambertian emitter of area 4π r² and radiance L emits π L · 4π r².
+                let sphere = std::f64::consts::PI
+                    * radiance[c]
+                    * 4.0
+                    * std::f64::consts::PI
+                    * radius
+                    * radius;
+                let point = 4.0 * std::f64::consts::PI * f64::from(light.intensity[c]);
+                assert!(
+                    (sphere / point - 1.0).abs() < 1e-6,
+                    "{name}, channel {c}: sphere {sphere} W, point light {point} W"
+                );
+                assert!((f64::from(Light::Point(light).power()[c]) / point - 1.0).abs() < 1e-6);
+            }
+        }
+        let xml = scene_xml(
+            &builtin("pool").unwrap(),
+            &ExportOptions::default(),
+            &mut Vec::new(),
+        )
+        .unwrap();
+        assert!(!xml.contains("hide_emitters"), "{xml}");
+        // Invalid radii are refused; other lights are kept, with a warning.
+        for r in [0.0, -0.01, f32::NAN, f32::INFINITY] {
+            let options = ExportOptions {
+                point_light_radius: Some(r),
+                ..ExportOptions::default()
+            };
+            let err = scene_xml(&builtin("pool").unwrap(), &options, &mut Vec::new()).unwrap_err();
+            assert!(err.to_string().contains("radius"), "{err}");
+        }
+        let base = builtin("cornell").unwrap();
+        let spot = Light::Spot(SpotLight {
+            position: Vec3::new(0.0, 0.9, 0.0),
+            direction: Vec3::NEG_Y,
+            intensity: Rgb::splat(3.0),
+            cutoff_angle: 30f32.to_radians(),
+            beam_width: 20f32.to_radians(),
+        });
+        let scene = Scene::new(
+            "spot",
+            base.meshes().to_vec(),
+            base.materials().to_vec(),
+            base.objects().to_vec(),
+            vec![spot],
+            *base.camera(),
+        )
+        .unwrap();
+        let options = ExportOptions {
+            point_light_radius: Some(0.01),
+            ..ExportOptions::default()
+        };
+        let mut warnings = Vec::new();
+        let xml = scene_xml(&scene, &options, &mut warnings).unwrap();
+        assert!(
+            xml.contains("<emitter type=\"spot\" id=\"light-0\">"),
+            "{xml}"
+        );
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        // Beside an emissive mesh the sphere stays visible, with a warning.
+        let point = Light::Point(crate::light::PointLight {
+            position: Vec3::new(0.0, 0.5, 0.0),
+            intensity: Rgb::splat(2.0),
+        });
+        let mut lights = base.lights().to_vec();
+        lights.push(point);
+        let scene = Scene::new(
+            "both",
+            base.meshes().to_vec(),
+            base.materials().to_vec(),
+            base.objects().to_vec(),
+            lights,
+            *base.camera(),
+        )
+        .unwrap();
+        let mut warnings = Vec::new();
+        let xml = scene_xml(&scene, &options, &mut warnings).unwrap();
+        assert!(xml.contains("<shape type=\"sphere\""), "{xml}");
+        assert!(!xml.contains("hide_emitters"), "{xml}");
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(warnings[0].contains("visible"), "{warnings:?}");
     }
 }
