@@ -208,14 +208,18 @@ impl Beam {
         if self.distribution.is_none() {
             return self.contains(p);
         }
-        self.in_front(p)
-            && flux_triangle(
-                &self.vertices,
-                &self.support_directions,
-                self.wavefront_normal,
-                p,
-            )
-            .is_some_and(|t| t.contains_fragment())
+        self.in_front(p) && self.support_holds(p)
+    }
+
+    /// Whether `p` is inside the flux triangle of the support rays (a glossy beam's widened edges).
+    fn support_holds(&self, p: Vec3) -> bool {
+        flux_triangle(
+            &self.vertices,
+            &self.support_directions,
+            self.wavefront_normal,
+            p,
+        )
+        .is_some_and(|t| t.contains_fragment())
     }
 
     /// The irradiance the beam gives a fragment at `p` with unit normal `normal`: `E = Φ_s / A_⊥ cos θ` inside a specular beam (equation 1), `E = Φ_s / A_⊥ cos θ min(P_E, 1)` for a glossy one (section 4.2, figures 11 and 12), zero outside the support; negative for shadow beams.
@@ -223,12 +227,20 @@ impl Beam {
         self.arrival(p, normal).map_or(Rgb::ZERO, |(e, _)| e)
     }
 
-    /// [`Beam::irradiance`] with the unit direction the light travels at `p` (the vertex directions interpolated as in [`Beam::cos_theta`]), for a receiver's BRDF: `None` where the beam adds nothing.
+    /// [`Beam::irradiance`] with the unit direction `d` the light travels at `p`, for a receiver's BRDF: `None` where the beam adds nothing. `d` is the vertex directions interpolated with the fragment's barycentrics in the flux triangle (clamped to the triangle outside it, so that glossy beams stay continuous); `cos θ = max(-d · normal, 0)`.
     pub fn arrival(&self, p: Vec3, normal: Vec3) -> Option<(Rgb, Vec3)> {
-        if !self.support(p) {
+        if !self.in_front(p) {
             return None;
         }
         let ft = self.flux_triangle(p)?;
+        // [`Beam::support`], with a specular beam's flux triangle computed once.
+        let held = match self.distribution {
+            None => ft.contains_fragment(),
+            Some(_) => self.support_holds(p),
+        };
+        if !held {
+            return None;
+        }
         let d = self.interpolated_direction(&ft);
         let cos_theta = (-d.dot(normal)).max(0.0);
         if cos_theta <= 0.0 {
@@ -251,11 +263,6 @@ impl Beam {
         }
         (self.directions[0] * b[0] + self.directions[1] * b[1] + self.directions[2] * b[2])
             .normalize_or_zero()
-    }
-
-    /// `cos θ` of the incoming direction at the fragment: the vertex directions interpolated with the fragment's barycentrics in the flux triangle (clamped to the triangle outside it, so that glossy beams stay continuous), against `normal`; zero from behind.
-    pub fn cos_theta(&self, ft: &FluxTriangle, normal: Vec3) -> f32 {
-        (-self.interpolated_direction(ft).dot(normal)).max(0.0)
     }
 
     /// The volume `P_E` under the 2D Gaussian over the triangular domain ABC (section 4.2.1: `A = φ_a l_a` with φ_a the angle between `A_W F` and the specular direction at `A_W`, and `l_a` the unit direction from F to `A_F` in the flux plane; section 4.2.2 via [`ScatterDistribution::triangle_volume_split`], clamped to one there), with the beam's [`SplitPoint`].
@@ -333,15 +340,7 @@ impl Beam {
         ray(0.5 * (lo + hi))
     }
 
-    /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of equal slabs along the mean direction (about as long as the beam is wide, at most `pieces`): the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`.
-    pub fn bounds_within(&self, within: Aabb, pieces: usize) -> Vec<Aabb> {
-        self.slabs_within(within, pieces)
-            .into_iter()
-            .map(|s| s.bounds)
-            .collect()
-    }
-
-    /// [`Beam::bounds_within`] with each box's range of flux-plane offsets `n · p` (n the wavefront normal): the first slab's range open below, the last's open above, each half-open `[lo, hi)`, so that every point lies in exactly one slab's range and a traversal that counts a beam only in the box whose range holds `n · p` counts it once (the GPU pass's rule, `passes::beams` in lustre-mpr).
+    /// Boxes whose union holds every point of `within` where [`Beam::support`] holds (so every point the beam lights there), one per slab of equal slabs along the mean direction (about as long as the beam is wide, at most `pieces`): the three support rays, each over the range of ray parameters at which flux planes through the part of `within` in front of the generator plane cross it, clipped to that part's box (an infinite beam bounded by the scene, for [`crate::BeamHierarchy`]). Empty boxes where the beam misses `within`. Each box comes with its slab's range of flux-plane offsets `n · p` (n the wavefront normal): the first slab's range open below, the last's open above, each half-open `[lo, hi)`, so that every point lies in exactly one slab's range and a traversal that counts a beam only in the box whose range holds `n · p` counts it once (the GPU pass's rule, `passes::beams` in lustre-mpr).
     pub fn slabs_within(&self, within: Aabb, pieces: usize) -> Vec<BeamSlab> {
         // The corners of `within` cut by the generator plane: the box's
         // corners in front of it and where its edges cross it.

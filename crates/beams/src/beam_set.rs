@@ -103,9 +103,7 @@ impl BeamSet {
 
     /// The beam irradiance at a fragment: the sum over every beam of [`Beam::irradiance`] (caustics and glossy light added, shadow beams' blocked light subtracted), visiting all beams in order: the paper's linear traversal (section 4.3).
     pub fn irradiance_at_linear(&self, p: Vec3, normal: Vec3) -> Rgb {
-        self.beams
-            .iter()
-            .fold(Rgb::ZERO, |acc, b| acc + b.irradiance(p, normal))
+        self.irradiance_summed(p, normal, false)
     }
 
     /// The indices of the beams the hierarchy offers for `p` (a superset of those whose support holds `p`), ascending; every beam when `p` is outside [`BeamSet::bounds`].
@@ -123,9 +121,14 @@ impl BeamSet {
 
     /// The same sum as [`BeamSet::irradiance_at_linear`], over the beams the hierarchy offers, in the same order (so equal to it, not just close).
     pub fn irradiance_at(&self, p: Vec3, normal: Vec3) -> Rgb {
-        self.candidates(p).into_iter().fold(Rgb::ZERO, |acc, i| {
-            acc + self.beams[i as usize].irradiance(p, normal)
-        })
+        self.irradiance_summed(p, normal, true)
+    }
+
+    /// The sum of [`BeamSet::for_each_arrival`]'s irradiances.
+    fn irradiance_summed(&self, p: Vec3, normal: Vec3, hierarchy: bool) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        self.for_each_arrival(p, normal, hierarchy, |_, e, _| sum += e);
+        sum
     }
 
     /// The hierarchy over the beams' slab boxes.

@@ -160,9 +160,10 @@ impl ScatterDistribution {
             for panel in 0..INTEGRATED_PANELS {
                 let mid = t0 + (panel as f32 + 0.5) * h;
                 for k in 0..4 {
-                    for t in [mid - 0.5 * h * GL8_X[k], mid + 0.5 * h * GL8_X[k]] {
+                    let (x, w) = (GL8_X[k] as f32, GL8_W[k] as f32);
+                    for t in [mid - 0.5 * h * x, mid + 0.5 * h * x] {
                         let r = dist / (t - tn).cos();
-                        sum += GL8_W[k] * (1.0 - (-r * r / (2.0 * s2)).exp());
+                        sum += w * (1.0 - (-r * r / (2.0 * s2)).exp());
                     }
                 }
             }
@@ -204,32 +205,30 @@ impl ScatterDistribution {
 
 /// Panels per fan edge of [`ScatterDistribution::triangle_volume_integrated`].
 pub const INTEGRATED_PANELS: usize = 4;
-/// 8-point Gauss-Legendre nodes (positive half; Abramowitz & Stegun 25.4.30).
-const GL8_X: [f32; 4] = [0.183_434_64, 0.525_532_4, 0.796_666_5, 0.960_289_9];
+/// 8-point Gauss-Legendre nodes, the positive half (Abramowitz & Stegun 25.4.30).
+const GL8_X: [f64; 4] = [
+    0.183_434_642_495_649_8,
+    0.525_532_409_916_329,
+    0.796_666_477_413_626_7,
+    0.960_289_856_497_536_2,
+];
 /// Their weights.
-const GL8_W: [f32; 4] = [0.362_683_8, 0.313_706_65, 0.222_381_03, 0.101_228_54];
+const GL8_W: [f64; 4] = [
+    0.362_683_783_378_362,
+    0.313_706_645_877_887_3,
+    0.222_381_034_453_374_5,
+    0.101_228_536_290_376_3,
+];
 
-/// `∫ₐᵇ g` by composite 8-point Gauss-Legendre on `panels` equal panels (Abramowitz & Stegun 25.4.30 nodes and weights).
+/// `∫ₐᵇ g` by composite 8-point Gauss-Legendre on `panels` equal panels ([`GL8_X`], [`GL8_W`]).
 fn gauss_legendre(g: &dyn Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
-    const X: [f64; 4] = [
-        0.183_434_642_495_649_8,
-        0.525_532_409_916_329,
-        0.796_666_477_413_626_7,
-        0.960_289_856_497_536_2,
-    ];
-    const W: [f64; 4] = [
-        0.362_683_783_378_362,
-        0.313_706_645_877_887_3,
-        0.222_381_034_453_374_5,
-        0.101_228_536_290_376_3,
-    ];
     let h = (b - a) / panels as f64;
     let mut sum = 0.0;
     for p in 0..panels {
         let mid = a + (p as f64 + 0.5) * h;
         let half = 0.5 * h;
         for k in 0..4 {
-            sum += W[k] * (g(mid - half * X[k]) + g(mid + half * X[k]));
+            sum += GL8_W[k] * (g(mid - half * GL8_X[k]) + g(mid + half * GL8_X[k]));
         }
     }
     sum * 0.5 * h

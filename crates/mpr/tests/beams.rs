@@ -14,7 +14,8 @@ use lustre_geometry::{Bvh, Camera, Scene, builtin};
 use lustre_mpr::FrameGraph;
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::beams::{Traversal, beam_pixels_cpu};
-use support::gpu_or_skip;
+use lustre_mpr::passes::direct::primary_hits;
+use support::{gpu_or_skip, render_frame};
 
 const SIZE: u32 = 64;
 
@@ -39,54 +40,14 @@ fn gpu_frame(
             traversal,
         )
         .unwrap();
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("beam-frame-output"),
-        size: wgpu::Extent3d {
-            width: SIZE,
-            height: SIZE,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let view = output.create_view(&wgpu::TextureViewDescriptor::default());
-    graph
-        .render(
-            ctx,
-            &lustre_mpr::FrameInputs {
-                scene: &buffers,
-                camera,
-                tonemap: &lustre_mpr::passes::tonemap::Tonemap::default(),
-                targets: &targets,
-                output: &view,
-                splats: None,
-                direct: None,
-                diffuse: None,
-            },
-        )
-        .unwrap();
-    let radiance = lustre_mpr::readback::read_rgba_f32(ctx, &targets.hdr.texture)
-        .unwrap()
-        .into_iter()
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    let ids = lustre_mpr::readback::read_u32(ctx, &targets.surface_id.texture).unwrap();
-    (radiance, ids)
+    let (hdr, ids) = render_frame(ctx, &graph, &buffers, camera, &targets, None);
+    (hdr.into_iter().map(|p| [p[0], p[1], p[2]]).collect(), ids)
 }
 
 /// The surface the ray through each pixel centre hits first (`NO_SURFACE` on a miss), row 0 at the top.
 fn cpu_surfaces(bvh: &Bvh, camera: &Camera) -> Vec<u32> {
-    let rays: Vec<_> = (0..SIZE)
-        .flat_map(|y| (0..SIZE).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, glam::Vec2::splat(0.5)))
-        })
-        .collect();
-    bvh.closest_hits(&rays)
+    primary_hits(bvh, camera, SIZE, SIZE)
+        .1
         .iter()
         .map(|h| h.map_or(lustre_mpr::NO_SURFACE, |h| h.surface))
         .collect()

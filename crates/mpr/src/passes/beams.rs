@@ -262,10 +262,8 @@ impl BeamPass {
                 format: hdr_format,
             });
         }
-        let mut materials = scene_materials(scene, glossy)?;
-        if materials.is_empty() {
-            materials.push(bytemuck::Zeroable::zeroed());
-        }
+        // `storage` binds one zeroed material for a scene without any.
+        let materials = scene_materials(scene, glossy)?;
         let (pipeline, layout, materials) = ctx.checked("beam pass creation", || {
             let device = &ctx.device;
             let module = scene_module(ctx, "beams", &beams_wgsl());

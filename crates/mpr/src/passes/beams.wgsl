@@ -189,13 +189,10 @@ fn inside(ft: FluxTriangle) -> bool {
     return ft.ok && all(ft.b >= vec3f(0.0));
 }
 
-// Beam::support: in front of the generator plane and inside the (widened, for glossy beams) flux triangle.
-fn in_support(bi: u32, p: vec3f) -> bool {
+// Beam::in_front: strictly on the beam's side of the generator plane.
+fn in_front(bi: u32, p: vec3f) -> bool {
     let g = beams[bi].generator;
-    if !(dot(g.xyz, p) - g.w > 0.0) {
-        return false;
-    }
-    return inside(flux_triangle(bi, beams[bi].flux.w > 0.0, p));
+    return dot(g.xyz, p) - g.w > 0.0;
 }
 
 // construction::reflect.
@@ -425,11 +422,16 @@ struct Arrival {
 fn beam_arrival(bi: u32, p: vec3f, normal: vec3f) -> Arrival {
     var out: Arrival;
     out.ok = false;
-    if !in_support(bi, p) {
+    if !in_front(bi, p) {
         return out;
     }
     let ft = flux_triangle(bi, false, p);
     if !ft.ok {
+        return out;
+    }
+    // Beam::support, with a specular beam's flux triangle computed once.
+    let glossy = beams[bi].flux.w > 0.0;
+    if (!glossy && !inside(ft)) || (glossy && !inside(flux_triangle(bi, true, p))) {
         return out;
     }
     let b = max(ft.b, vec3f(0.0));

@@ -55,11 +55,26 @@ pub fn direct_frame(
     if graph.shadow_volumes.is_none() {
         graph.update_shadows(ctx, &buffers, &direct).unwrap();
     }
+    render_frame(ctx, graph, &buffers, camera, &targets, Some(&direct))
+}
+
+/// One frame of `graph` over `targets` (the tone map into a throwaway
+/// texture), with `direct`'s point lights if any and nothing else: the HDR
+/// radiance and the surface ids.
+#[allow(dead_code)]
+pub fn render_frame(
+    ctx: &GpuContext,
+    graph: &lustre_mpr::FrameGraph,
+    buffers: &lustre_mpr::SceneBuffers,
+    camera: &lustre_geometry::Camera,
+    targets: &lustre_mpr::RenderTargets,
+    direct: Option<&lustre_mpr::passes::direct::DirectLights>,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("direct-frame-output"),
+        label: Some("test-frame-output"),
         size: wgpu::Extent3d {
-            width: size,
-            height: size,
+            width: targets.width,
+            height: targets.height,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
@@ -74,13 +89,13 @@ pub fn direct_frame(
         .render(
             ctx,
             &lustre_mpr::FrameInputs {
-                scene: &buffers,
+                scene: buffers,
                 camera,
                 tonemap: &lustre_mpr::passes::tonemap::Tonemap::default(),
-                targets: &targets,
+                targets,
                 output: &view,
                 splats: None,
-                direct: Some(&direct),
+                direct,
                 diffuse: None,
             },
         )
