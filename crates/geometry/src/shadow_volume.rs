@@ -31,8 +31,12 @@
 //! handled like indexed ones; the caps keep each triangle's own positions so
 //! they coincide with what the depth pass drew.
 //!
-//! Only triangles facing the light cast: an open surface whose triangles face
-//! away from the light casts no shadow (a one-sided caster).
+//! In a closed object only the triangles facing the light cast (its back
+//! faces bound the same shadow). An open object (some welded edge not used
+//! once each way, such as a single-quad wall) casts from both sides, as a
+//! ray cast is blocked by it from either side: a triangle facing away is
+//! taken with the opposite winding. Were it one-sided, a wall turned away
+//! from a light outside the room would let that light in.
 //!
 //! # Storage and the pivot approximation
 //!
@@ -318,6 +322,8 @@ struct ObjectTopology {
     weld: Vec<Vec<u32>>,
     /// For each welded id, the (mesh slot, vertex) whose position stands for it.
     representative: Vec<(usize, u32)>,
+    /// Whether every welded edge is used once each way (a closed surface).
+    closed: bool,
 }
 
 impl ObjectTopology {
@@ -373,11 +379,27 @@ impl ObjectTopology {
             }
             weld.push(ids);
         }
+        // Per undirected welded edge: uses a → b (a < b) and b → a.
+        let mut uses: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+        for (slot, &m) in meshes.iter().enumerate() {
+            for tri in &scene.meshes()[m as usize].indices {
+                let w = tri.map(|i| weld[slot][i as usize]);
+                for (a, b) in [(w[0], w[1]), (w[1], w[2]), (w[2], w[0])] {
+                    if a < b {
+                        uses.entry((a, b)).or_default().0 += 1;
+                    } else if b < a {
+                        uses.entry((b, a)).or_default().1 += 1;
+                    }
+                }
+            }
+        }
+        let closed = !uses.is_empty() && uses.values().all(|&u| u == (1, 1));
         Self {
             meshes,
             vertex_counts,
             weld,
             representative,
+            closed,
         }
     }
 
@@ -458,9 +480,15 @@ fn build_selected(
             let n = (p1 - p0).cross(p2 - p0);
             let to_light = l - p0;
             let scale = n.length() * to_light.length();
-            if !(n.dot(to_light) > LIT_SINE * scale) {
+            let facing = n.dot(to_light);
+            let (tri, p) = if facing > LIT_SINE * scale {
+                (tri, p)
+            } else if !topology.closed && -facing > LIT_SINE * scale {
+                // An open surface seen from behind casts as if turned round.
+                ([tri[0], tri[2], tri[1]], [p[0], p[2], p[1]])
+            } else {
                 continue;
-            }
+            };
             front.extend(p.map(|position| VolumeVertex {
                 position,
                 extruded: false,

@@ -20,6 +20,12 @@
 //!   (light volumes only), `t2e-shadow-d1` (shadow depth 1). Table 2's (d),
 //!   the door made a non-refracting surface, has no counterpart.
 //!
+//! `mpr_stained_glass`: `stained-glass` at 640×480 from its camera, direct
+//! light under shadow volumes with virtual lights of depth 1, its window of
+//! 16 panes drawn as one light volume with a projective texture
+//! (`projective`, section 4.5), as one light volume per pane (`per-pane`,
+//! section 4.2's uniform faces), or not at all (`off`).
+//!
 //! Criterion times at least 10 frames per configuration. Without an adapter
 //! the bench prints why and measures nothing.
 
@@ -36,6 +42,7 @@ use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::projective_texture::PaneLight;
 use lustre_mpr::virtual_light::{SpecularShadows, VirtualLightSettings};
 use lustre_mpr::{
     AdapterPreference, FrameGraph, GpuContext, MprError, RenderTargets, SceneBuffers,
@@ -142,32 +149,13 @@ fn mpr(c: &mut Criterion) {
     scene.set_camera(scene.camera().with_aspect(WIDTH as f32 / HEIGHT as f32));
     let targets = RenderTargets::new(&ctx, WIDTH, HEIGHT).unwrap();
     let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
-    let format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("mpr-bench-output"),
-        size: wgpu::Extent3d {
-            width: WIDTH,
-            height: HEIGHT,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    });
-    let output_view = output.create_view(&Default::default());
+    let output_view = output(&ctx);
     let camera = *scene.camera();
     let mut group = c.benchmark_group("mpr_bathroom");
-    group
-        .sample_size(10)
-        .sampling_mode(SamplingMode::Flat)
-        .warm_up_time(Duration::from_millis(500))
-        .measurement_time(Duration::from_secs(5));
+    configure(&mut group);
     for config in CONFIGS {
         let hdr = targets.hdr_format();
-        let mut graph = FrameGraph::new(&ctx, format)
+        let mut graph = FrameGraph::new(&ctx, FORMAT)
             .unwrap()
             .with_emission(&ctx, hdr, &scene)
             .unwrap()
@@ -202,6 +190,7 @@ fn mpr(c: &mut Criterion) {
                         VirtualLightSettings {
                             depth: config.shadow_depth,
                             shadows: config.spec_shadows,
+                            panes: PaneLight::default(),
                         },
                     )
                     .unwrap();
@@ -236,6 +225,105 @@ fn mpr(c: &mut Criterion) {
         group.bench_function(config.name, |b| {
             b.iter(|| {
                 graph.render(&ctx, &frame).unwrap();
+                ctx.wait().unwrap();
+            })
+        });
+    }
+    group.finish();
+    stained_glass(c, &ctx);
+}
+
+/// The output format of the frames.
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// A `WIDTH × HEIGHT` output view.
+fn output(ctx: &GpuContext) -> wgpu::TextureView {
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("mpr-bench-output"),
+        size: wgpu::Extent3d {
+            width: WIDTH,
+            height: HEIGHT,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    output.create_view(&Default::default())
+}
+
+/// At least 10 frames, 5 s, flat sampling.
+fn configure(group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
+    group
+        .sample_size(10)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(5));
+}
+
+/// `mpr_stained_glass`: the window's light as a projective texture, per pane, or not drawn.
+fn stained_glass(c: &mut Criterion, ctx: &GpuContext) {
+    let mut scene = builtin::stained_glass::stained_glass();
+    scene.set_camera(scene.camera().with_aspect(WIDTH as f32 / HEIGHT as f32));
+    let targets = RenderTargets::new(ctx, WIDTH, HEIGHT).unwrap();
+    let buffers = SceneBuffers::upload(ctx, &scene).unwrap();
+    let output_view = output(ctx);
+    let camera = *scene.camera();
+    let mut group = c.benchmark_group("mpr_stained_glass");
+    configure(&mut group);
+    for (name, panes) in [
+        ("projective", PaneLight::default()),
+        ("per-pane", PaneLight::PerPane),
+        ("off", PaneLight::Off),
+    ] {
+        let hdr = targets.hdr_format();
+        let graph = FrameGraph::new(ctx, FORMAT)
+            .unwrap()
+            .with_direct(ctx, hdr)
+            .unwrap();
+        let lights = DirectLights::jittered(
+            ctx,
+            graph.direct.as_ref().unwrap(),
+            &scene,
+            GlossyModel::Exact,
+            1,
+        )
+        .unwrap();
+        let graph = graph
+            .with_shadow_volumes(ctx, hdr, &scene, &pivot_point_lights(scene.lights(), 1))
+            .unwrap()
+            .with_virtual_lights(
+                ctx,
+                &scene,
+                VirtualLightSettings {
+                    panes,
+                    ..VirtualLightSettings::default()
+                },
+            )
+            .unwrap();
+        let frame = FrameInputs {
+            scene: &buffers,
+            camera: &camera,
+            tonemap: &Tonemap::default(),
+            targets: &targets,
+            output: &output_view,
+            splats: None,
+            direct: Some(&lights),
+            diffuse: None,
+        };
+        graph.render(ctx, &frame).unwrap();
+        let volumes = graph.shadow_volumes.as_ref().unwrap();
+        eprintln!(
+            "stained-glass {name}: {} shadow generations, virtual volumes {} bytes",
+            volumes.shadow_generations(),
+            volumes.virtual_lights().map_or(0, |v| v.byte_size())
+        );
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                graph.render(ctx, &frame).unwrap();
                 ctx.wait().unwrap();
             })
         });

@@ -337,8 +337,14 @@ impl FrameGraph {
                 message: "they need shadow volumes (with_shadow_volumes first)".into(),
             });
         };
-        let faces = crate::passes::specular::specular_faces(scene);
-        self.shadow_volumes = Some(volumes.with_virtual_lights(ctx, scene, &faces, settings)?);
+        let passed = crate::virtual_light::PassedFaces::new(scene, settings.panes)?;
+        self.shadow_volumes = Some(volumes.with_virtual_lights(
+            ctx,
+            scene,
+            &passed.faces,
+            &passed.windows,
+            settings,
+        )?);
         Ok(self)
     }
 

@@ -40,6 +40,7 @@ pub mod frame;
 pub mod kernel_texture;
 pub mod material;
 pub mod passes;
+pub mod projective_texture;
 pub mod readback;
 pub mod scene_buffers;
 pub mod shaders;

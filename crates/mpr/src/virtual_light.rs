@@ -36,6 +36,7 @@ use glam::{Affine3A, Vec3};
 use lustre_geometry::{Bvh, Light, Ray};
 
 use crate::passes::specular::{SpecularFace, SpecularKind};
+use crate::projective_texture::Window;
 use crate::view::face_frame;
 
 /// How much of the shadowing of virtual lights is drawn (Diefenbach &
@@ -60,6 +61,8 @@ pub struct VirtualLightSettings {
     pub depth: u32,
     /// Which of their shadows are drawn.
     pub shadows: SpecularShadows,
+    /// How light through stained-glass panes is drawn (section 4.5).
+    pub panes: crate::projective_texture::PaneLight,
 }
 
 impl Default for VirtualLightSettings {
@@ -67,6 +70,7 @@ impl Default for VirtualLightSettings {
         Self {
             depth: 1,
             shadows: SpecularShadows::All,
+            panes: crate::projective_texture::PaneLight::default(),
         }
     }
 }
@@ -86,6 +90,8 @@ pub fn face_transform(face: &SpecularFace) -> Affine3A {
         SpecularKind::Interface { ratio } => {
             Affine3A::from_mat4(crate::view::interface_scaling(&face.plane, ratio))
         }
+        // A thin pane passes light straight on (section 4.5).
+        SpecularKind::Pane { .. } => Affine3A::IDENTITY,
     }
 }
 
@@ -142,7 +148,7 @@ pub fn incoming(face: &SpecularFace) -> HalfSpace {
             normal: -face.plane.normal,
             offset: -face.plane.offset + thickness,
         },
-        SpecularKind::Interface { .. } => HalfSpace {
+        SpecularKind::Interface { .. } | SpecularKind::Pane { .. } => HalfSpace {
             normal: -face.plane.normal,
             offset: -face.plane.offset,
         },
@@ -357,6 +363,16 @@ fn grow(
         {
             continue;
         }
+        // One projective texture per virtual light: a chain passes at most
+        // one window (light through two is left to the splats).
+        if matches!(face.kind, SpecularKind::Pane { .. })
+            && path
+                .faces
+                .iter()
+                .any(|&g| matches!(faces[g].kind, SpecularKind::Pane { .. }))
+        {
+            continue;
+        }
         let mut next = path.clone();
         next.faces.push(f);
         next.prefix.push(face_transform(face) * path.transform());
@@ -364,6 +380,59 @@ fn grow(
         out.push(next.clone());
         grow(faces, light, depth, &next, out);
     }
+}
+
+/// The faces virtual lights pass in a scene: its specular faces
+/// ([`specular_faces`](crate::passes::specular::specular_faces)) and, as
+/// [`PaneLight`](crate::projective_texture::PaneLight) says, its windows of
+/// stained glass with their faces ([`window_faces`], section 4.5). The
+/// frame's virtual lights and the photon filter
+/// ([`drawn_by_virtual_lights`]) must take the same.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PassedFaces {
+    /// Specular faces, then two per window.
+    pub faces: Vec<SpecularFace>,
+    /// The windows the faces' [`SpecularKind::Pane`]s index.
+    pub windows: Vec<Window>,
+}
+
+impl PassedFaces {
+    /// The faces of `scene` with its windows drawn as `panes` says.
+    pub fn new(
+        scene: &lustre_geometry::Scene,
+        panes: crate::projective_texture::PaneLight,
+    ) -> crate::Result<Self> {
+        let mut faces = crate::passes::specular::specular_faces(scene);
+        let windows = crate::projective_texture::windows(scene, panes)?;
+        faces.extend(window_faces(&windows));
+        Ok(Self { faces, windows })
+    }
+}
+
+/// The faces a window gives the virtual lights (section 4.5): one
+/// [`SpecularKind::Pane`] per side, its normal on the side light leaves
+/// to, passing the texture's light (factor 1: the projective texture and
+/// the slab's Fresnel transmittance are applied per fragment).
+pub fn window_faces(windows: &[Window]) -> Vec<SpecularFace> {
+    windows
+        .iter()
+        .enumerate()
+        .flat_map(|(i, w)| {
+            let corners = w.corners();
+            let face = |plane: lustre_geometry::Plane| SpecularFace {
+                surface: w.surfaces[0],
+                plane,
+                kind: SpecularKind::Pane { window: i as u32 },
+                factor: Vec3::ONE,
+                corners: corners.clone(),
+            };
+            let flipped = lustre_geometry::Plane {
+                normal: -w.plane.normal,
+                offset: -w.plane.offset,
+            };
+            [face(w.plane), face(flipped)]
+        })
+        .collect()
 }
 
 /// Shadow-volume generations per light and image (section 8.1): one for
@@ -447,6 +516,22 @@ pub fn path_visible(
     p: Vec3,
     epsilon: f32,
 ) -> bool {
+    path_arrival(bvh, faces, path, light, p, epsilon).is_some()
+}
+
+/// [`path_visible`] with where the path crosses each face: `None` where the
+/// light does not reach `p`, else per face of the chain (in chain order)
+/// the crossing point `X` on it and the direction the light travels there
+/// (from `L_{j−1}` unfolded, not normalised).
+pub fn path_arrival(
+    bvh: &Bvh,
+    faces: &[SpecularFace],
+    path: &SpecularPath,
+    light: Vec3,
+    p: Vec3,
+    epsilon: f32,
+) -> Option<Vec<(Vec3, Vec3)>> {
+    let mut crossings = vec![(Vec3::ZERO, Vec3::ZERO); path.len()];
     let free = |a: Vec3, b: Vec3| {
         let d = b - a;
         let len = d.length();
@@ -459,14 +544,21 @@ pub fn path_visible(
         let out = outgoing(face);
         let (ds, dp) = (out.depth(source), out.depth(point));
         if !(ds < 0.0 && dp > 0.0) {
-            return false;
+            return None;
         }
         let x = source + (point - source) * (ds / (ds - dp));
         if !in_face(face, x) || !free(x, point) {
-            return false;
+            return None;
         }
+        // The direction the light had before the face: the segment from the
+        // virtual light before it (a mirror's and interface's change it).
+        let before = path.prefix[j - 1].transform_point3(light);
+        crossings[j - 1] = (x, x - before);
         point = match plain_kind(face) {
-            SpecularKind::Mirror | SpecularKind::Interface { .. } | SpecularKind::Glossy(_) => x,
+            SpecularKind::Mirror
+            | SpecularKind::Interface { .. }
+            | SpecularKind::Glossy(_)
+            | SpecularKind::Pane { .. } => x,
             SpecularKind::Slab { thickness, .. } => {
                 let previous = path.prefix[j - 1].transform_point3(light);
                 let dir = point - source;
@@ -476,13 +568,13 @@ pub fn path_visible(
                 };
                 let (d0, slope) = (far.depth(previous), far.normal.dot(dir));
                 if slope <= 0.0 || d0 >= 0.0 {
-                    return false;
+                    return None;
                 }
                 previous + dir * (-d0 / slope)
             }
         };
     }
-    free(light, point)
+    free(light, point).then_some(crossings)
 }
 
 /// CPU twin of the virtual lights (sections 4.2, 4.3, every shadow drawn):
@@ -497,6 +589,7 @@ pub fn virtual_direct_pixels_cpu(
     scene: &lustre_geometry::Scene,
     lights: &[Light],
     faces: &[SpecularFace],
+    windows: &[Window],
     depth: u32,
     bvh: &Bvh,
     camera: &lustre_geometry::Camera,
@@ -518,7 +611,16 @@ pub fn virtual_direct_pixels_cpu(
     let epsilon = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
     let reaches = |v: usize, p: Vec3, _: Vec3, _: f32| {
         let (position, path) = &origins[v];
-        path_visible(bvh, faces, path, *position, p, epsilon)
+        let crossings = path_arrival(bvh, faces, path, *position, p, epsilon)?;
+        let mut factor = Vec3::ONE;
+        for (&f, (x, direction)) in path.faces.iter().zip(crossings) {
+            if let SpecularKind::Pane { window } = faces[f].kind {
+                let window = windows.get(window as usize)?;
+                let cos = direction.normalize_or_zero().dot(window.plane.normal);
+                factor *= window.transmission_at(x, cos);
+            }
+        }
+        Some(lustre_geometry::Rgb::new(factor.x, factor.y, factor.z))
     };
     crate::passes::direct::direct_pixels_cpu_where(
         scene,
@@ -544,9 +646,13 @@ pub fn virtual_direct_pixels_cpu(
 /// glass, or scattered by any other surface, leaves the chain. (A photon
 /// reflected inside a slab back and forth twice passes for two
 /// transmissions: light of the order `F⁴`, left to the virtual lights.)
+/// A hit on a pane of a window that `faces` holds (its [`SpecularKind::Pane`]
+/// faces index `windows`) followed by a hit on its other side is a link
+/// too, once per chain (section 4.5: a virtual light passes one window).
 pub fn drawn_by_virtual_lights(
     records: &[lustre_photon::HitRecord],
     faces: &[SpecularFace],
+    windows: &[Window],
     depth: u32,
 ) -> Vec<bool> {
     let mirrors: std::collections::HashSet<u32> = faces
@@ -576,15 +682,27 @@ pub fn drawn_by_virtual_lights(
         .filter(|f| matches!(f.kind, SpecularKind::Interface { .. }))
         .map(|f| (f.surface, f.plane.normal))
         .collect();
+    // Pane surface → its window's normal.
+    let panes: std::collections::HashMap<u32, Vec3> = faces
+        .iter()
+        .filter_map(|f| match f.kind {
+            SpecularKind::Pane { window } => windows.get(window as usize),
+            _ => None,
+        })
+        .flat_map(|w| w.surfaces.iter().map(|&s| (s, w.plane.normal)))
+        .collect();
     let mut out = Vec::with_capacity(records.len());
-    // The chain so far: links, a slab entered but not left, still a chain.
+    // The chain so far: links, a slab entered but not left, still a chain,
+    // a window passed.
     let (mut links, mut entered, mut chain) = (0u32, None::<u32>, false);
+    let mut passed_window = false;
     let mut previous_bounce = 0u8;
     // The interface hit whose side the next record decides: its normal and `n · wᵢ`.
     let mut crossing: Option<(Vec3, f32)> = None;
     for r in records {
         if r.bounce == 1 || r.bounce != previous_bounce.wrapping_add(1) {
             (links, entered, chain, crossing) = (0, None, r.bounce == 1, None);
+            passed_window = false;
         }
         previous_bounce = r.bounce;
         if let Some((n, before)) = crossing.take() {
@@ -610,7 +728,13 @@ pub fn drawn_by_virtual_lights(
             None => match (slabs.get(&r.surface), interfaces.get(&r.surface)) {
                 (Some(&exit), _) => entered = Some(exit),
                 (None, Some(&n)) => crossing = Some((n, n.dot(r.direction))),
-                (None, None) => chain = false,
+                (None, None) => match panes.get(&r.surface) {
+                    Some(&n) if !passed_window => {
+                        passed_window = true;
+                        crossing = Some((n, n.dot(r.direction)));
+                    }
+                    _ => chain = false,
+                },
             },
         }
         chain &= links <= depth;
@@ -767,7 +891,7 @@ mod tests {
                 }
                 last.push(records.len() - 1);
             }
-            let drawn = drawn_by_virtual_lights(&records, &faces, depth);
+            let drawn = drawn_by_virtual_lights(&records, &faces, &[], depth);
             let got: Vec<bool> = last.iter().map(|&i| drawn[i]).collect();
             let mut want: Vec<bool> = paths.iter().map(|p| p.1[0]).collect();
             if depth == 2 {
@@ -801,15 +925,70 @@ mod tests {
         let refracted = [hit(5, 1, Vec3::Y), hit(9, 2, Vec3::Y)];
         let reflected = [hit(5, 1, Vec3::Y), hit(8, 2, -Vec3::Y)];
         assert_eq!(
-            drawn_by_virtual_lights(&refracted, &faces, 1),
+            drawn_by_virtual_lights(&refracted, &faces, &[], 1),
             [false, true]
         );
         assert_eq!(
-            drawn_by_virtual_lights(&reflected, &faces, 1),
+            drawn_by_virtual_lights(&reflected, &faces, &[], 1),
             [false, false]
         );
         assert_eq!(
-            drawn_by_virtual_lights(&refracted, &faces, 0),
+            drawn_by_virtual_lights(&refracted, &faces, &[], 0),
+            [false, false]
+        );
+    }
+
+    /// The stained-glass window as virtual-light faces (section 4.5): a
+    /// light outside passes it once, a mirror then may extend the chain but
+    /// a second window may not; photons through its panes to the floor are
+    /// drawn by the virtual light, photons reflected off them are not.
+    #[test]
+    fn windows_pass_light_once_and_take_their_photons() {
+        let scene = lustre_geometry::builtin::stained_glass::stained_glass();
+        let windows = crate::projective_texture::windows(
+            &scene,
+            crate::projective_texture::PaneLight::default(),
+        )
+        .unwrap();
+        let mut faces = window_faces(&windows);
+        assert_eq!(faces.len(), 2);
+        let light = lustre_geometry::builtin::stained_glass::LIGHT_POSITION;
+        let paths = specular_paths(&faces, light, 2);
+        // Only the side facing the room passes the light from outside.
+        assert_eq!(paths.len(), 1);
+        assert_eq!(paths[0].transform(), Affine3A::IDENTITY);
+        // A second window behind the first is not chained after it.
+        let mut second = windows[0].clone();
+        second.plane.offset -= 1.0;
+        second.origin -= second.plane.normal;
+        let mut both = windows.clone();
+        both.push(second);
+        faces = window_faces(&both);
+        let deep = specular_paths(&faces, light, 3);
+        assert!(deep.iter().all(|p| p.len() == 1), "{:?}", deep);
+        // Photons: through pane 5 to the floor (surface 0), and reflected back.
+        let pane = windows[0].surfaces[5];
+        let n = windows[0].plane.normal;
+        let inward = Vec3::new(0.0, -0.5, 1.0).normalize();
+        let hit = |surface: u32, bounce: u8, direction: Vec3| lustre_photon::HitRecord {
+            direction,
+            ..record(surface, bounce)
+        };
+        let faces = window_faces(&windows);
+        let through = [hit(pane, 1, -inward), hit(0, 2, -inward)];
+        let back = [hit(pane, 1, -inward), hit(1, 2, inward)];
+        assert!(n.dot(inward).abs() > 0.1);
+        assert_eq!(
+            drawn_by_virtual_lights(&through, &faces, &windows, 1),
+            [false, true]
+        );
+        assert_eq!(
+            drawn_by_virtual_lights(&back, &faces, &windows, 1),
+            [false, false]
+        );
+        // Without the windows' faces the splats keep them.
+        assert_eq!(
+            drawn_by_virtual_lights(&through, &[], &windows, 1),
             [false, false]
         );
     }

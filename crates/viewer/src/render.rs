@@ -51,11 +51,14 @@ use lustre_mpr::passes::beams::Traversal;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel, imaged_surfaces};
-use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance, specular_faces};
+use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::projective_texture::{
+    DEFAULT_TEXTURE_SIZE, MAX_TEXTURE_SIZE, PaneLight, texture_bytes,
+};
 use lustre_mpr::virtual_light::{
-    MAX_SHADOW_DEPTH, SpecularShadows, VirtualLightSettings, equation_7,
+    MAX_SHADOW_DEPTH, PassedFaces, SpecularShadows, VirtualLightSettings, equation_7,
 };
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
@@ -205,6 +208,17 @@ impl SpecShadowsArg {
             Self::Off => SpecularShadows::Off,
         }
     }
+}
+
+/// How light through stained-glass windows is drawn (Diefenbach & Badler 1997, section 4.5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PaneLightArg {
+    /// Coplanar panes as one light volume modulated by a projective texture of the window.
+    Projective,
+    /// One light volume per pane.
+    PerPane,
+    /// Not by virtual lights: left to the photon splats.
+    Off,
 }
 
 /// Restriction of splats to their visible surface.
@@ -453,6 +467,15 @@ pub struct RenderArgs {
     /// faces, or none: light volumes only).
     #[arg(long, value_enum, default_value_t = SpecShadowsArg::All)]
     pub spec_shadows: SpecShadowsArg,
+    /// `--technique mpr` with virtual lights: light through windows of
+    /// smooth thin-dielectric panes as one light volume per window modulated
+    /// by a projective texture of the panes (Diefenbach & Badler 1997,
+    /// section 4.5), one light volume per pane, or left to the splats.
+    #[arg(long, value_enum, default_value_t = PaneLightArg::Projective)]
+    pub pane_light: PaneLightArg,
+    /// Texels along each side of a window's projective texture.
+    #[arg(long, default_value_t = DEFAULT_TEXTURE_SIZE)]
+    pub window_texture: u32,
     /// Antialiasing: frames rendered with sub-pixel jittered projections and
     /// averaged, a box filter over each pixel (Diefenbach & Badler 1997,
     /// section 7); 1 renders once through the pixel centres.
@@ -509,6 +532,16 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// How light through stained-glass windows is drawn, from `--pane-light` and `--window-texture`.
+    pub fn pane_light(&self) -> PaneLight {
+        match self.pane_light {
+            PaneLightArg::Projective => PaneLight::Projective {
+                size: self.window_texture,
+            },
+            PaneLightArg::PerPane => PaneLight::PerPane,
+            PaneLightArg::Off => PaneLight::Off,
+        }
+    }
     /// Whether the photons and the direct light leave point lights that replace the area lights (section 3; one light sample of a direct-light technique).
     pub fn point_lights(&self) -> bool {
         self.technique.direct_light() && self.light_samples == 1
@@ -653,6 +686,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
         ShadowArg::Maps => 0,
     });
+    if args.window_texture == 0 || args.window_texture > MAX_TEXTURE_SIZE {
+        bail!(
+            "--window-texture {}: expected 1 to {MAX_TEXTURE_SIZE} texels",
+            args.window_texture
+        );
+    }
     if let Some(alpha) = args.beam_roughness {
         if args.technique != Technique::Beams {
             bail!("--beam-roughness: only --technique beams draws beams");
@@ -949,6 +988,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     VirtualLightSettings {
                         depth: shadow_depth,
                         shadows: args.spec_shadows.setting(),
+                        panes: args.pane_light(),
                     },
                 )?;
             }
@@ -1125,6 +1165,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "scene_passes": scene_passes,
         "shadow_passes": graph.shadow_volumes.as_ref().map(|v| scene_passes * v.shadow_generations()),
         "virtual_light_volume_bytes": graph.shadow_volumes.as_ref().and_then(|v| v.virtual_lights()).map(|v| v.byte_size()),
+        // Section 4.5: stained-glass windows as projective textures.
+        "windows": graph.shadow_volumes.as_ref().and_then(|v| v.virtual_lights()).map(|v| json!({
+            "pane_light": format!("{:?}", args.pane_light),
+            "count": v.windows().len(),
+            "panes": v.windows().iter().map(|w| w.surfaces.len()).sum::<usize>(),
+            "texture_size": v.windows().first().map(|w| w.texture.width),
+            "texture_bytes": texture_bytes(v.windows()),
+        })),
         "shadow_depth": args.technique.multipass().then_some(shadow_depth),
         "spec_shadows": (shadow_depth > 0).then(|| format!("{:?}", args.spec_shadows)),
         "equation_8_scene_passes": graph.specular.as_ref().map(|s| {
@@ -1134,8 +1182,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             let (_, of) = v.positions();
             of.iter().map(|&c| v.virtual_lights().map_or(1, |l| l.shadow_generations(c))).collect::<Vec<_>>()
         }),
+        // n: the faces a light may pass, the windows' too (section 4.5).
         "equation_7_shadow_generations_per_light": graph.specular.as_ref().map(|s| {
-            equation_7(s.faces().len(), shadow_depth)
+            let windows = graph.shadow_volumes.as_ref().and_then(|v| v.virtual_lights()).map_or(0, |v| v.windows().len());
+            equation_7(s.faces().len() + 2 * windows, shadow_depth)
         }),
         "clip_method": graph.specular.as_ref().map(|_| format!("{:?}", ctx.clip_method())),
     });
@@ -1295,6 +1345,7 @@ fn splat_setup(
             args.batch_records,
             &options,
             virtual_depth,
+            args.pane_light(),
         )?;
         timings.insert("tally".into(), json!(ms(start)));
         eprintln!(
@@ -1334,7 +1385,8 @@ fn splat_setup(
         beam_hits = Some((before - map.len()) as u64);
     }
     if let Some(depth) = virtual_depth {
-        map = without_virtual_light_photons(map, &specular_faces(scene), depth)?;
+        let passed = PassedFaces::new(scene, args.pane_light())?;
+        map = without_virtual_light_photons(map, &passed, depth)?;
     }
     eprintln!(
         "traced {} photons: {} hit records ({} indirect)",

@@ -12,8 +12,8 @@ use anyhow::{Context, bail};
 use lustre_geometry::Scene;
 use lustre_mpr::beam_paths::drawn_by_beams;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
-use lustre_mpr::passes::specular::{SpecularFace, specular_faces};
-use lustre_mpr::virtual_light::drawn_by_virtual_lights;
+use lustre_mpr::projective_texture::PaneLight;
+use lustre_mpr::virtual_light::{PassedFaces, drawn_by_virtual_lights};
 use lustre_photon::{
     EmissionSampling, EstimatorOptions, PhotonFileReader, PhotonMap, SplatEstimator, SplatTally,
     SurfaceParams, scene_fingerprint,
@@ -21,13 +21,13 @@ use lustre_photon::{
 
 use crate::trace::PhotonBar;
 
-/// `map` without the records of light that reached them through mirrors and slabs only, which the virtual lights draw (Diefenbach & Badler 1997, sections 4.2, 6; [`drawn_by_virtual_lights`]); `map` must hold whole photon paths.
+/// `map` without the records of light that reached them through mirrors, slabs and stained-glass windows only, which the virtual lights draw (Diefenbach & Badler 1997, sections 4.2, 4.5, 6; [`drawn_by_virtual_lights`]); `map` must hold whole photon paths.
 pub fn without_virtual_light_photons(
     map: PhotonMap,
-    faces: &[SpecularFace],
+    passed: &PassedFaces,
     depth: u32,
 ) -> anyhow::Result<PhotonMap> {
-    let drawn = drawn_by_virtual_lights(map.records(), faces, depth);
+    let drawn = drawn_by_virtual_lights(map.records(), &passed.faces, &passed.windows, depth);
     without(map, &drawn).context("cannot leave the virtual lights' photons out")
 }
 
@@ -60,7 +60,7 @@ pub struct StreamedPhotons {
     /// Equation 3's counts and the lit sides over the whole file.
     tally: SplatTally,
     /// The specular faces and depth of the virtual lights whose photons the splats leave out (Diefenbach & Badler 1997, sections 4.2, 6), if any.
-    virtual_lights: Option<(Vec<SpecularFace>, u32)>,
+    virtual_lights: Option<(PassedFaces, u32)>,
     /// Hit records kept after the virtual lights' filter.
     pub kept_records: u64,
     /// Indirect records kept.
@@ -76,6 +76,7 @@ impl StreamedPhotons {
         batch_records: usize,
         options: &EstimatorOptions,
         virtual_depth: Option<u32>,
+        panes: PaneLight,
     ) -> anyhow::Result<Self> {
         let params = SurfaceParams::new(scene);
         let reader = PhotonFileReader::open_for(path, &params).with_context(|| {
@@ -116,9 +117,10 @@ impl StreamedPhotons {
                 scene.name
             );
         }
-        let virtual_lights = virtual_depth
-            .filter(|&d| d > 0)
-            .map(|d| (specular_faces(scene), d));
+        let virtual_lights = match virtual_depth.filter(|&d| d > 0) {
+            Some(d) => Some((PassedFaces::new(scene, panes)?, d)),
+            None => None,
+        };
         let bar = PhotonBar::new("reading photons", reader.header().records)?;
         let mut tally = SplatTally::new(&params, options.selection);
         let (mut kept, mut indirect) = (0u64, 0u64);
@@ -215,7 +217,7 @@ impl StreamedPhotons {
 fn read_batches(
     reader: &PhotonFileReader,
     batch_records: usize,
-    virtual_lights: Option<&(Vec<SpecularFace>, u32)>,
+    virtual_lights: Option<&(PassedFaces, u32)>,
     f: &mut dyn FnMut(&PhotonMap) -> anyhow::Result<()>,
     bar: &PhotonBar,
 ) -> anyhow::Result<()> {

@@ -248,6 +248,43 @@ fn open_quad_shadows_its_prism_and_keeps_only_its_border() {
     assert!(shadowed > 100, "the test must see the shadow ({shadowed})");
 }
 
+/// An open quad wound away from the light still blocks it (a ray cast does
+/// from either side): it casts as if turned round, the same prism as the
+/// quad facing the light; a closed cube's back faces add nothing.
+#[test]
+fn open_quad_turned_away_casts_from_behind() {
+    let light = Vec3::new(-0.3, 2.5, 0.2);
+    let caster = Mesh::flat(
+        "quad-turned",
+        &[
+            Vec3::new(-0.5, 1.0, -0.5),
+            Vec3::new(-0.5, 1.0, 0.5),
+            Vec3::new(0.5, 1.0, 0.5),
+            Vec3::new(0.5, 1.0, -0.5),
+        ],
+        &[[0, 2, 1], [2, 0, 3]],
+        0,
+    );
+    let scene = scene_of(vec![caster.clone(), floor()], light);
+    let set = ShadowVolumeSet::new(&scene, &[light]).unwrap();
+    let quad = set.volume(0, 0).unwrap();
+    assert_eq!((quad.silhouette_edges, quad.side_quads), (4, 4));
+    assert_eq!(quad.cap_triangles, 2);
+    let shadowed = check_horizontal(
+        caster,
+        light,
+        &[Vec3::new(1.0, 3.0, 4.0), Vec3::new(-0.1, 0.4, 0.1)],
+    );
+    assert!(shadowed > 100, "the test must see the shadow ({shadowed})");
+    let cube = flat_cube(Vec3::splat(-0.3), Vec3::splat(0.3));
+    let light = Vec3::new(0.5, 3.0, 0.4);
+    let scene = scene_of(vec![cube], light);
+    let set = ShadowVolumeSet::new(&scene, &[light]).unwrap();
+    // Lit: the top and two sides, two triangles each; the three faces
+    // turned away (all 12 triangles would be caps were it taken as open).
+    assert_eq!(set.volume(0, 0).unwrap().cap_triangles, 6);
+}
+
 /// Whether the segment from `p` to `l` meets the axis-aligned box (slab test).
 fn segment_meets_box(p: Vec3, l: Vec3, lo: Vec3, hi: Vec3) -> bool {
     let d = l - p;

@@ -80,6 +80,41 @@ pub struct GpuLight {
     pub max_slope: f32,
     /// Padding to 16 bytes.
     pub pad: f32,
+    /// The window this light passes, if any (Diefenbach & Badler 1997,
+    /// section 4.5): its slide projector and the window's frame.
+    pub window: GpuWindow,
+}
+
+/// A virtual light's projective texture (section 4.5, `WindowProjector` in
+/// `direct.wgsl`): texture coordinates `(s q, t q, ·, q) = projector · P`
+/// for a shaded point `P`, and the window's frame in the space where it
+/// lies, where the light crossing it at `X = origin + s u + t v` came from
+/// `source` (for the slab's Fresnel transmittance at that angle).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuWindow {
+    /// [`crate::projective_texture::Projector::matrix`] after the later
+    /// faces' transforms are undone, column major.
+    pub projector: [[f32; 4]; 4],
+    /// The rectangle's corner; `w` the panes' index of refraction.
+    pub origin: [f32; 4],
+    /// The edge along `s`; `w` the texture layer, negative without a window.
+    pub u: [f32; 4],
+    /// The edge along `t`.
+    pub v: [f32; 4],
+    /// The (virtual) light the window is lit from.
+    pub source: [f32; 4],
+}
+
+impl GpuWindow {
+    /// No window: the light is not modulated.
+    pub const NONE: Self = Self {
+        projector: [[0.0; 4]; 4],
+        origin: [0.0; 4],
+        u: [0.0, 0.0, 0.0, -1.0],
+        v: [0.0; 4],
+        source: [0.0; 4],
+    };
 }
 
 /// The error for an area light handed to a point-light pass.
@@ -101,6 +136,7 @@ impl GpuLight {
             constant_bias: settings.constant_bias,
             slope_bias: settings.slope_bias * settings.texel_angle(),
             max_slope: settings.max_slope,
+            window: GpuWindow::NONE,
             ..Self::zeroed()
         };
         match light {
@@ -234,7 +270,7 @@ impl DirectLights {
         })?;
         let slots = gpu_lights
             .into_iter()
-            .map(|light| Self::slot(ctx, pass, &materials_buffer, light, &settings))
+            .map(|light| Self::slot(ctx, pass, &materials_buffer, light, &settings, None))
             .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             slots,
@@ -248,12 +284,15 @@ impl DirectLights {
     /// no shadow map (a one-texel cube that no pass draws): the virtual
     /// lights of Diefenbach & Badler 1997, section 4.2, drawn only under the
     /// stencil of their light and shadow volumes
-    /// ([`DirectPass::record_light_under_stencil`]).
+    /// ([`DirectPass::record_light_under_stencil`]). Lights with a
+    /// [`GpuWindow`] read their layer of `windows` (a 2-D array texture of
+    /// the windows' transmittance, section 4.5).
     pub fn unshadowed_like(
         &self,
         ctx: &GpuContext,
         pass: &DirectPass,
         lights: &[GpuLight],
+        windows: Option<&wgpu::TextureView>,
     ) -> Result<Self> {
         let settings = ShadowSettings {
             size: 1,
@@ -261,7 +300,7 @@ impl DirectLights {
         };
         let slots = lights
             .iter()
-            .map(|&light| Self::slot(ctx, pass, &self.materials, light, &settings))
+            .map(|&light| Self::slot(ctx, pass, &self.materials, light, &settings, windows))
             .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             slots,
@@ -304,6 +343,7 @@ impl DirectLights {
         materials_buffer: &wgpu::Buffer,
         light: GpuLight,
         settings: &ShadowSettings,
+        windows: Option<&wgpu::TextureView>,
     ) -> Result<LightSlot> {
         let cube = pass.shadow.create_cube(ctx, settings.size)?;
         let (uniforms, bind_group) = ctx.checked("direct light creation", || {
@@ -334,6 +374,16 @@ impl DirectLights {
                     wgpu::BindGroupEntry {
                         binding: 3,
                         resource: wgpu::BindingResource::Sampler(&pass.shadow_sampler),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(
+                            windows.unwrap_or(&pass.no_windows),
+                        ),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::Sampler(&pass.window_sampler),
                     },
                 ],
             });
@@ -452,6 +502,10 @@ pub struct DirectPass {
     lit_under_stencil: wgpu::RenderPipeline,
     light_layout: wgpu::BindGroupLayout,
     shadow_sampler: wgpu::Sampler,
+    /// A one-texel white array texture bound where no light has a window.
+    no_windows: wgpu::TextureView,
+    /// Bilinear, clamped: the windows' projective textures.
+    window_sampler: wgpu::Sampler,
     shadow: ShadowPass,
 }
 
@@ -515,6 +569,22 @@ impl DirectPass {
                             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
                             count: None,
                         },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 4,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Texture {
+                                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                                view_dimension: wgpu::TextureViewDimension::D2Array,
+                                multisampled: false,
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 5,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                            count: None,
+                        },
                     ],
                 });
             let pipeline = scene_pipeline(
@@ -547,11 +617,26 @@ impl DirectPass {
                 label: Some("shadow-nearest"),
                 ..Default::default()
             });
+            let window_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("window-bilinear"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            });
+            let no_windows = crate::projective_texture::upload_layers(
+                device,
+                &ctx.queue,
+                1,
+                1,
+                &[vec![[1.0; 4]]],
+            );
             Self {
                 pipeline,
                 lit_under_stencil,
                 light_layout,
                 shadow_sampler,
+                no_windows,
+                window_sampler,
                 shadow,
             }
         })
@@ -819,7 +904,7 @@ pub fn direct_pixels_cpu_with_lights(
 ) -> Result<Vec<DirectPixel>> {
     let eps = 1e-4 * scene.bounds().extent().max_element().max(1e-6);
     let shadow_ray = |_: usize, p: Vec3, direction: Vec3, distance: f32| {
-        !bvh.any_hit(&Ray::segment(p, direction, eps, distance - eps))
+        (!bvh.any_hit(&Ray::segment(p, direction, eps, distance - eps))).then_some(Rgb::ONE)
     };
     direct_pixels_cpu_where(
         scene,
@@ -835,9 +920,11 @@ pub fn direct_pixels_cpu_with_lights(
 
 /// [`direct_pixels_cpu_with_lights`] with the visibility of light `j` from
 /// a hit point decided by `reaches(j, point, direction, distance)` (unit
-/// direction and distance to the light) instead of a BVH shadow ray: the
-/// CPU twin of lights that reach a point along other paths, such as the
-/// virtual lights of specular faces ([`crate::virtual_light::path_visible`]).
+/// direction and distance to the light) instead of a BVH shadow ray: `None`
+/// where it is blocked, else the factor its light arrives with. The CPU
+/// twin of lights that reach a point along other paths, such as the
+/// virtual lights of specular faces ([`crate::virtual_light::path_visible`])
+/// and those through stained glass ([`crate::virtual_light::path_arrival`]).
 #[allow(clippy::too_many_arguments)]
 pub fn direct_pixels_cpu_where(
     scene: &Scene,
@@ -847,7 +934,7 @@ pub fn direct_pixels_cpu_where(
     width: u32,
     height: u32,
     glossy: GlossyModel,
-    reaches: &dyn Fn(usize, Vec3, Vec3, f32) -> bool,
+    reaches: &dyn Fn(usize, Vec3, Vec3, f32) -> Option<Rgb>,
 ) -> Result<Vec<DirectPixel>> {
     if let Some(i) = lights.iter().position(|l| !l.is_delta()) {
         return Err(area_light_error(i));
@@ -884,13 +971,14 @@ pub fn direct_pixels_cpu_where(
                 if wi_local.z <= 0.0 {
                     continue;
                 }
-                if !reaches(j, hit.position, sample.direction, sample.distance) {
+                let Some(factor) = reaches(j, hit.position, sample.direction, sample.distance)
+                else {
                     continue;
-                }
+                };
                 if j < 64 {
                     visible |= 1 << j;
                 }
-                radiance += brdf.eval(wi_local, wo_local) * sample.weight * wi_local.z;
+                radiance += brdf.eval(wi_local, wo_local) * sample.weight * factor * wi_local.z;
             }
             DirectPixel {
                 radiance: radiance.to_array(),

@@ -46,12 +46,30 @@ struct DirectLight {
     // t_max: the largest tan(theta_i) the slope term follows.
     max_slope: f32,
     pad: f32,
+    window: WindowProjector,
+}
+
+// A virtual light through a stained-glass window (Diefenbach & Badler 1997,
+// section 4.5; GpuWindow in direct.rs): the slide projector M = M33^-1 P_L
+// taking P (in the space the light arrives in) to homogeneous texture
+// coordinates (s q, t q, _, q), the window's rectangle X = origin + s u + t v
+// and the light it is lit from, in the window's own space.
+struct WindowProjector {
+    projector: mat4x4f,
+    // w: the panes' index of refraction.
+    origin: vec4f,
+    // w: the texture layer; negative without a window.
+    u: vec4f,
+    v: vec4f,
+    source: vec4f,
 }
 
 @group(1) @binding(0) var<storage, read> materials: array<GpuMaterial>;
 @group(1) @binding(1) var<uniform> light: DirectLight;
 @group(1) @binding(2) var shadow_cube: texture_cube<f32>;
 @group(1) @binding(3) var shadow_sampler: sampler;
+@group(1) @binding(4) var window_textures: texture_2d_array<f32>;
+@group(1) @binding(5) var window_sampler: sampler;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -114,6 +132,38 @@ fn shadow_visibility(to_point: vec3f, d: f32, cos_i: f32) -> f32 {
     return select(0.0, 1.0, d - bias <= stored);
 }
 
+// Fresnel reflectance of a smooth dielectric interface of relative index
+// eta at |cos theta_i| (lustre-brdf's fresnel_dielectric).
+fn window_fresnel(cos_i: f32, eta: f32) -> f32 {
+    let c = clamp(abs(cos_i), 0.0, 1.0);
+    let sin_t2 = (1.0 - c * c) / (eta * eta);
+    if sin_t2 >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = sqrt(1.0 - sin_t2);
+    let rs = (c - eta * cos_t) / (c + eta * cos_t);
+    let rp = (eta * c - cos_t) / (eta * c + cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// What the window passes of the light reaching P (section 4.5): its
+// transmittance texture at the texture coordinates P projects to, times the
+// thin slab's T = (1 - F)/(1 + F) at the angle the light crossed it.
+fn window_transmission(p: vec3f) -> vec3f {
+    let w = light.window;
+    let h = w.projector * vec4f(p, 1.0);
+    if !(h.w > 0.0) {
+        return vec3f(0.0);
+    }
+    let st = h.xy / h.w;
+    let texel = textureSampleLevel(window_textures, window_sampler, st, i32(w.u.w), 0.0);
+    let x = w.origin.xyz + st.x * w.u.xyz + st.y * w.v.xyz;
+    let n = normalize(cross(w.u.xyz, w.v.xyz));
+    let cos_i = dot(normalize(x - w.source.xyz), n);
+    let f = window_fresnel(cos_i, w.origin.w);
+    return texel.rgb * ((1.0 - f) / (1.0 + f));
+}
+
 // material_brdf of materials[mi], reading one lobe at a time from storage
 // instead of copying the whole material (lavapipe copies it per invocation).
 fn direct_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
@@ -141,7 +191,10 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     if !(cos_i > 0.0) {
         return vec4f(0.0);
     }
-    let intensity = light_intensity(-wi_world);
+    var intensity = light_intensity(-wi_world);
+    if light.window.u.w >= 0.0 {
+        intensity *= window_transmission(in.world);
+    }
     if all(intensity == vec3f(0.0)) {
         return vec4f(0.0);
     }

@@ -26,16 +26,17 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use lustre_geometry::Scene;
 use lustre_geometry::shadow_volume::{ShadowVolume, ShadowVolumeSet};
 
 use crate::frame::FrameInputs;
-use crate::passes::direct::{DirectLights, DirectPass, GpuLight};
+use crate::passes::direct::{DirectLights, DirectPass, GpuLight, GpuWindow};
 use crate::passes::shadow_volume::{
     SHAD_ZERO, ShadowVolumeBuffers, ShadowVolumePass, VolumeLight, VolumeLights,
 };
-use crate::passes::specular::SpecularFace;
+use crate::passes::specular::{SpecularFace, SpecularKind};
+use crate::projective_texture::{Projector, Window, upload_layers};
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::virtual_light::{
     MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, cone_planes, outgoing,
@@ -89,6 +90,10 @@ struct FrameState {
 pub struct VirtualLights {
     settings: VirtualLightSettings,
     faces: Vec<SpecularFace>,
+    /// The windows the faces' [`SpecularKind::Pane`]s index (section 4.5).
+    windows: Vec<Window>,
+    /// Their transmittance textures, one layer each.
+    window_textures: Option<wgpu::TextureView>,
     /// Per distinct central light position.
     chains: Vec<Chains>,
     buffers: Vec<ShadowVolumeBuffers>,
@@ -118,16 +123,40 @@ fn face_triangles(face: &SpecularFace) -> Vec<[u32; 9]> {
 impl VirtualLights {
     /// Builds the chains of `faces` (at most `settings.depth` long) for
     /// each of `positions` (the distinct central light positions of `set`)
-    /// and uploads their light and shadow volumes, cast by `set`'s casters.
+    /// and uploads their light and shadow volumes, cast by `set`'s casters,
+    /// and the transmittance textures of `windows`, which the faces'
+    /// [`SpecularKind::Pane`]s index.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &GpuContext,
         pass: &ShadowVolumePass,
         scene: &Scene,
         set: &ShadowVolumeSet,
         faces: &[SpecularFace],
+        windows: &[Window],
         positions: &[Vec3],
         settings: VirtualLightSettings,
     ) -> Result<Self> {
+        let window_textures = match windows.first() {
+            None => None,
+            Some(first) => {
+                let (width, height) = (first.texture.width, first.texture.height);
+                if windows
+                    .iter()
+                    .any(|w| (w.texture.width, w.texture.height) != (width, height))
+                {
+                    return Err(MprError::InvalidSetting {
+                        what: "projective textures",
+                        message: "every window's texture must have the same size".into(),
+                    });
+                }
+                let layers: Vec<Vec<[f32; 4]>> =
+                    windows.iter().map(|w| w.texture.texels.clone()).collect();
+                Some(ctx.checked("window texture upload", || {
+                    upload_layers(&ctx.device, &ctx.queue, width, height, &layers)
+                })?)
+            }
+        };
         if settings.depth > MAX_SHADOW_DEPTH {
             return Err(MprError::InvalidSetting {
                 what: "shadow recursion depth",
@@ -233,6 +262,8 @@ impl VirtualLights {
         Ok(Self {
             settings,
             faces: faces.to_vec(),
+            windows: windows.to_vec(),
+            window_textures,
             chains,
             buffers,
             bytes,
@@ -255,6 +286,47 @@ impl VirtualLights {
     /// The specular faces they pass.
     pub fn faces(&self) -> &[SpecularFace] {
         &self.faces
+    }
+
+    /// The windows whose light they draw (section 4.5).
+    pub fn windows(&self) -> &[Window] {
+        &self.windows
+    }
+
+    /// The slide projector of the window `path` passes, for a light at
+    /// `light` (section 4.5): the projector from the virtual light before
+    /// the window, applied after the later faces' transforms are undone.
+    fn window_of(&self, path: &SpecularPath, light: Vec3) -> GpuWindow {
+        let Some((j, window)) =
+            path.faces
+                .iter()
+                .enumerate()
+                .find_map(|(j, &f)| match self.faces[f].kind {
+                    SpecularKind::Pane { window } => Some((j + 1, window)),
+                    _ => None,
+                })
+        else {
+            return GpuWindow::NONE;
+        };
+        let Some(w) = self.windows.get(window as usize) else {
+            return GpuWindow::NONE;
+        };
+        let source = path.prefix[j - 1].transform_point3(light);
+        let Some(projector) = Projector::new(w, source) else {
+            // The light lies in the window's plane: no light passes.
+            return GpuWindow {
+                u: [0.0, 0.0, 0.0, window as f32],
+                ..GpuWindow::NONE
+            };
+        };
+        let undo = Mat4::from(path.suffix(j).inverse());
+        GpuWindow {
+            projector: (projector.matrix * undo).to_cols_array_2d(),
+            origin: w.origin.extend(w.ior).to_array(),
+            u: w.u.extend(window as f32).to_array(),
+            v: w.v.extend(0.0).to_array(),
+            source: source.extend(1.0).to_array(),
+        }
     }
 
     /// The chains of the `i`-th central light position.
@@ -301,7 +373,8 @@ impl VirtualLights {
             let mut starts = Vec::with_capacity(chains.paths.len());
             let mut reached = Vec::with_capacity(chains.paths.len());
             for (path, draws) in chains.paths.iter().zip(&chains.draws) {
-                let virtual_light = light.through(path.transform(), path.factor);
+                let mut virtual_light = light.through(path.transform(), path.factor);
+                virtual_light.window = self.window_of(path, light.position());
                 reached.push(self.receivers(path, virtual_light.position()));
                 lights.push(virtual_light);
                 starts.push(blocks.len());
@@ -323,7 +396,12 @@ impl VirtualLights {
                 d.set_gpu_lights(&ctx.queue, &lights)?;
             }
         } else {
-            frame.direct = Some(direct.unshadowed_like(ctx, direct_pass, &lights)?);
+            frame.direct = Some(direct.unshadowed_like(
+                ctx,
+                direct_pass,
+                &lights,
+                self.window_textures.as_ref(),
+            )?);
         }
         frame.first = first;
         frame.first_block = first_block;

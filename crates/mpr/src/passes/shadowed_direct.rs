@@ -29,6 +29,7 @@ use crate::passes::direct::{DirectLights, DirectPass};
 use crate::passes::light_volume::VirtualLights;
 use crate::passes::shadow_volume::{ShadowVolumeBuffers, ShadowVolumePass, VolumeLights};
 use crate::passes::specular::SpecularFace;
+use crate::projective_texture::Window;
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::virtual_light::VirtualLightSettings;
 use crate::{GpuContext, MprError, Result};
@@ -107,14 +108,16 @@ impl ShadowVolumes {
         })
     }
 
-    /// Adds the virtual lights of `faces` (the specular pass's faces) for
-    /// these lights, with their light and shadow volumes (sections 4.2, 4.3);
-    /// `settings.depth == 0` removes them.
+    /// Adds the virtual lights of `faces` (the specular pass's faces, and
+    /// the faces of `windows`, section 4.5) for these lights, with their
+    /// light and shadow volumes (sections 4.2, 4.3); `settings.depth == 0`
+    /// removes them.
     pub fn with_virtual_lights(
         mut self,
         ctx: &GpuContext,
         scene: &Scene,
         faces: &[SpecularFace],
+        windows: &[Window],
         settings: VirtualLightSettings,
     ) -> Result<Self> {
         self.virtual_lights = if settings.depth == 0 || faces.is_empty() {
@@ -126,6 +129,7 @@ impl ShadowVolumes {
                 scene,
                 &self.set,
                 faces,
+                windows,
                 &self.positions,
                 settings,
             )?)
@@ -176,9 +180,10 @@ impl ShadowVolumes {
         self.positions = positions.clone();
         if let Some(v) = self.virtual_lights.take() {
             // Virtual lights depend on every caster and light: rebuilt whole.
-            let (faces, settings) = (v.faces().to_vec(), v.settings());
+            let (faces, windows, settings) =
+                (v.faces().to_vec(), v.windows().to_vec(), v.settings());
             self.virtual_lights = Some(VirtualLights::new(
-                ctx, &self.pass, scene, &self.set, &faces, &positions, settings,
+                ctx, &self.pass, scene, &self.set, &faces, &windows, &positions, settings,
             )?);
         }
         let moved: Vec<usize> = (0..positions.len())

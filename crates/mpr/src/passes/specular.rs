@@ -104,6 +104,14 @@ pub enum SpecularKind {
     /// A planar glossy face (section 3, "glossy marble"): `samples` mirror
     /// views sheared about its normal, averaged ([`crate::passes::glossy_image`]).
     Glossy(GlossyImage),
+    /// A stained-glass window of thin panes seen from one side (section
+    /// 4.5): light passes straight through, modulated by the projective
+    /// texture of window `window` of [`crate::projective_texture::windows`].
+    /// Only virtual lights pass it; it makes no image of its own.
+    Pane {
+        /// Index of its window.
+        window: u32,
+    },
 }
 
 /// How a glossy face makes its image (section 3, `shear_view` and `accbuf`).
@@ -377,6 +385,8 @@ impl ViewTree {
                 SpecularKind::Interface { ratio } => {
                     vec![(view.through_interface(&face.plane, ratio, clip), None, path)]
                 }
+                // Windows light through their texture only (section 4.5).
+                SpecularKind::Pane { .. } => Vec::new(),
             };
             for (child_view, sample, child_path) in children {
                 if self.views.len() >= MAX_VIEWS {
