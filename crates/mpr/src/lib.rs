@@ -20,6 +20,12 @@
 //! | [`passes::beams`]: specular, glossy and shadow polygon beams of point lights evaluated per fragment, linear or hierarchical traversal | Duvenhage et al. 2010, 3.1, 4.2, 4.3, 5.2 | `lustre_beams::Beam::arrival` ([`passes::beams::beam_pixels_cpu`]) |
 //! | [`passes::tonemap`]: exposure, clamp or Reinhard, sRGB | — | per-pixel formula |
 //!
+//! Virtual lights through mirrors, slabs and interfaces ([`virtual_light`],
+//! sections 4.2, 4.3) and through stained-glass windows as projective
+//! textures ([`projective_texture`], section 4.5) are drawn by
+//! [`passes::light_volume`] under every view; their CPU twin unfolds each
+//! light path with BVH ray casts.
+//!
 //! Materials reach the GPU as weighted BRDF lobes ([`material`]) evaluated by
 //! the WGSL twins of `lustre-brdf`.
 //!

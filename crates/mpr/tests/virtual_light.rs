@@ -542,27 +542,6 @@ fn stained_glass_light_matches_the_panes_it_passes() {
         let graph = graph_with(&ctx, &scene, &lights, 1, panes);
         let (gpu, ids) = render_with(&ctx, &graph, &scene, &camera, &lights);
         let (agree, compared, lit) = agreement(&gpu, &ids, &real_m, &virt_m);
-        if std::env::var("DEBUG_SG").is_ok() {
-            let mut out = String::new();
-            for i in 0..gpu.len() {
-                let e: Vec<f32> = (0..3)
-                    .map(|k| real[i].radiance[k] + virt[i].radiance[k])
-                    .collect();
-                out += &format!(
-                    "{} {} {} {} {} {} {} {} {}\n",
-                    i as u32 % SIZE,
-                    i as u32 / SIZE,
-                    gpu[i][0],
-                    gpu[i][1],
-                    gpu[i][2],
-                    e[0],
-                    e[1],
-                    e[2],
-                    u8::from(virt_m[i].surface != NO_SURFACE)
-                );
-            }
-            std::fs::write(format!("/tmp/sg-{}.txt", panes_name(panes)), out).unwrap();
-        }
         eprintln!(
             "stained glass, {name}: {agree}/{compared} pixels agree, {lit} of them lit through \
              the window, {} colours",
@@ -579,34 +558,9 @@ fn stained_glass_light_matches_the_panes_it_passes() {
     // Without virtual lights the window's light is missing.
     let plain = graph_with(&ctx, &scene, &lights, 1, PaneLight::Off);
     let (gpu, ids) = render_with(&ctx, &plain, &scene, &camera, &lights);
-    if std::env::var("DEBUG_SG").is_ok() {
-        let mut out = String::new();
-        for i in 0..gpu.len() {
-            out += &format!(
-                "{} {} {} {} {} {} {} {} 1\n",
-                i as u32 % SIZE,
-                i as u32 / SIZE,
-                gpu[i][0],
-                gpu[i][1],
-                gpu[i][2],
-                real[i].radiance[0],
-                real[i].radiance[1],
-                real[i].radiance[2]
-            );
-        }
-        std::fs::write("/tmp/sg-off.txt", out).unwrap();
-    }
     let (agree, compared, _) = agreement(&gpu, &ids, &real_m, &virt_m);
     assert!(
         (agree as f64) < 0.9 * compared as f64,
         "{agree}/{compared} agree without the window's light"
     );
-}
-
-fn panes_name(p: PaneLight) -> &'static str {
-    match p {
-        PaneLight::PerPane => "perpane",
-        PaneLight::Off => "off",
-        _ => "projective",
-    }
 }

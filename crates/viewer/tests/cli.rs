@@ -291,6 +291,17 @@ fn render_refuses_bad_options_before_writing_anything() {
         (
             vec![
                 "render",
+                "stained-glass",
+                "--window-texture",
+                "0",
+                "--out",
+                out,
+            ],
+            "--window-texture 0: expected 1 to 4096 texels",
+        ),
+        (
+            vec![
+                "render",
                 "mirrors",
                 "--technique",
                 "mpr",
@@ -463,6 +474,57 @@ fn beams_render_the_stained_glass_window_and_record_their_beams() {
     let image = lustre_image::read_exr(&out_path).unwrap();
     let mean = lustre_image::metrics::mean(&image);
     assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
+}
+
+/// `mpr` draws the stained-glass window's light as one virtual light
+/// through a projective texture of its 16 panes (section 4.5), or one per
+/// pane, and records it in the sidecar.
+#[test]
+fn mpr_draws_the_stained_glass_window_through_its_projective_texture() {
+    let dir = scratch("windows");
+    for (pane_light, windows) in [("projective", 1), ("per-pane", 16)] {
+        let out_path = dir.join(format!("sg-{pane_light}.exr"));
+        let args = [
+            "render",
+            "stained-glass",
+            "--technique",
+            "mpr",
+            "--pane-light",
+            pane_light,
+            "--window-texture",
+            "64",
+            "--photons",
+            "20000",
+            "--size",
+            "48x32",
+            "--aa",
+            "1",
+            "--out",
+            out_path.to_str().unwrap(),
+        ];
+        let Some(out) = render_or_skip("mpr_draws_the_stained_glass_window", &args) else {
+            return;
+        };
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let sidecar: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out_path.with_extension("json")).unwrap(),
+        )
+        .unwrap();
+        let w = &sidecar["passes"]["windows"];
+        assert_eq!(w["count"], windows, "{sidecar}");
+        assert_eq!(w["panes"], 16, "{sidecar}");
+        let size = if windows == 1 { 64 } else { 1 };
+        assert_eq!(w["texture_size"], size, "{sidecar}");
+        assert_eq!(w["texture_bytes"], windows * size * size * 8, "{sidecar}");
+        let image = lustre_image::read_exr(&out_path).unwrap();
+        let mean = lustre_image::metrics::mean(&image);
+        assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
+    }
     assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
 }
 
