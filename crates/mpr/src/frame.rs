@@ -436,7 +436,7 @@ impl FrameGraph {
         let passes = self.resolve(frame)?;
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
         let tree = self.view_tree(ctx, frame.camera)?;
-        let slots = views.write(ctx, &tree.views)?;
+        let slots = self.write_views(ctx, &mut views, &tree, frame.targets)?;
         if let Some((inputs, pass)) = passes.splat {
             pass.prepare(&ctx.queue, inputs.filtering);
         }
@@ -532,7 +532,7 @@ impl FrameGraph {
                     .camera
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
             let tree = self.view_tree_interleaved(ctx, &camera, s, samples)?;
-            let slots = views.write(ctx, &tree.views)?;
+            let slots = self.write_views(ctx, &mut views, &tree, frame.targets)?;
             if let Some((inputs, pass)) = passes.splat {
                 pass.prepare(&ctx.queue, inputs.filtering);
             }
@@ -636,6 +636,25 @@ impl FrameGraph {
         })
     }
 
+    /// Writes the tree's views and gives each slot its region
+    /// ([`ViewTree::regions`]) in `targets`.
+    fn write_views(
+        &self,
+        ctx: &GpuContext,
+        views: &mut ViewBuffer,
+        tree: &ViewTree,
+        targets: &RenderTargets,
+    ) -> Result<Vec<ViewSlot>> {
+        let mut slots = views.write(ctx, &tree.views)?;
+        if let Some(specular) = &self.specular {
+            let regions = tree.regions(specular.faces(), targets.width, targets.height);
+            for (slot, region) in slots.iter_mut().zip(regions) {
+                slot.scissor = region;
+            }
+        }
+        Ok(slots)
+    }
+
     /// The splats alone, through the pixel centres at every level of the
     /// specular recursion, into a cleared HDR target that is then added to
     /// [`RenderTargets::accumulation`] (the limit faces' light is in the
@@ -650,7 +669,7 @@ impl FrameGraph {
         accumulate: &AccumulatePass,
     ) -> Result<()> {
         let tree = self.view_tree(ctx, frame.camera)?;
-        let slots = views.write(ctx, &tree.views)?;
+        let slots = self.write_views(ctx, views, &tree, frame.targets)?;
         let splat_light: [&dyn LightPass; 1] = [pass];
         self.encode_light(
             ctx,

@@ -384,7 +384,7 @@ pub fn view_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 }
 
 /// Where one view's block lies in a [`ViewBuffer`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewSlot {
     /// Byte offset of the block (a multiple of the device's uniform offset alignment).
     pub offset: u32,
@@ -393,6 +393,23 @@ pub struct ViewSlot {
     /// [`View::is_mirrored`]: front faces wind clockwise in this view (the
     /// shadow-volume count of Diefenbach & Badler 1997, section 4.1, needs it).
     pub mirrored: bool,
+    /// [`View::view_projection`], for bounds on the CPU (the scissor of a
+    /// virtual light's passes).
+    pub view_projection: Mat4,
+    /// `[x, y, width, height]` in pixels holding every pixel of the view's
+    /// stencil area (its faces' projections through the views above it,
+    /// [`crate::passes::specular::ViewTree::regions`]); `u32::MAX` sizes
+    /// for the whole target ([`ViewSlot::scissor_in`]).
+    pub scissor: [u32; 4],
+}
+
+impl ViewSlot {
+    /// [`ViewSlot::scissor`] clamped to a `width × height` target.
+    pub fn scissor_in(&self, width: u32, height: u32) -> [u32; 4] {
+        let [x, y, w, h] = self.scissor;
+        let (x, y) = (x.min(width), y.min(height));
+        [x, y, w.min(width - x), h.min(height - y)]
+    }
 }
 
 /// The views of a frame in one uniform buffer with one bind group read at dynamic offsets.
@@ -471,6 +488,8 @@ impl ViewBuffer {
                 })?,
                 stencil_reference: view.stencil_reference,
                 mirrored: view.is_mirrored(),
+                view_projection: view.view_projection(),
+                scissor: [0, 0, u32::MAX, u32::MAX],
             });
         }
         if !bytes.is_empty() {

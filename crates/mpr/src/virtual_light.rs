@@ -435,6 +435,88 @@ pub fn window_faces(windows: &[Window]) -> Vec<SpecularFace> {
         .collect()
 }
 
+/// The pixels of a `width × height` target, seen with `view_projection`
+/// (reverse Z), where a virtual light at `apex` shining through `face` may
+/// fall inside the box `bounds`: the bounding rectangle `[x, y, w, h]` of
+/// the polytope that the cone from `apex` through the face ([`cone_planes`]),
+/// the face's outgoing side, the box and the view's near side bound, or
+/// `None` when it is empty. Vertices by brute force over triples of planes
+/// (at most 15 planes); a pixel is added all round. Conservative: the
+/// scissor of the virtual light's stencil and lit passes, which only skips
+/// pixels its light cannot reach.
+pub fn light_scissor(
+    view_projection: glam::Mat4,
+    apex: Vec3,
+    face: &SpecularFace,
+    bounds: [Vec3; 2],
+    width: u32,
+    height: u32,
+) -> Option<[u32; 4]> {
+    use glam::{DMat3, DVec3, DVec4};
+    let full = Some([0, 0, width, height]);
+    let cone = cone_planes(apex, face);
+    if cone.is_empty() || !bounds[0].is_finite() || !bounds[1].is_finite() {
+        return full;
+    }
+    // Half-spaces n · p ≥ d.
+    let mut planes: Vec<(DVec3, f64)> = cone
+        .iter()
+        .chain(std::iter::once(&outgoing(face)))
+        .map(|h| (h.normal.as_dvec3(), h.offset as f64))
+        .collect();
+    let (lo, hi) = (bounds[0].as_dvec3(), bounds[1].as_dvec3());
+    for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+        planes.push((axis, axis.dot(lo)));
+        planes.push((-axis, -axis.dot(hi)));
+    }
+    let m = view_projection.as_dmat4();
+    let (row2, row3) = (m.row(2), m.row(3));
+    // Reverse Z: 0 ≤ z ≤ w in front of the near plane.
+    for row in [row2, row3 - row2] {
+        planes.push((row.truncate(), -row.w));
+    }
+    let scale = (hi - lo).length().max(1e-9);
+    let tolerance = 1e-7 * scale;
+    let (mut min, mut max) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    let mut any = false;
+    for i in 0..planes.len() {
+        for j in i + 1..planes.len() {
+            for k in j + 1..planes.len() {
+                let a = DMat3::from_cols(planes[i].0, planes[j].0, planes[k].0).transpose();
+                let det = a.determinant();
+                if det.abs() < 1e-12 {
+                    continue;
+                }
+                let p = a.inverse() * DVec3::new(planes[i].1, planes[j].1, planes[k].1);
+                if planes.iter().any(|&(n, d)| n.dot(p) < d - tolerance) {
+                    continue;
+                }
+                let c = m * DVec4::new(p.x, p.y, p.z, 1.0);
+                if c.w <= 0.0 {
+                    return full;
+                }
+                let ndc = glam::DVec2::new(c.x / c.w, c.y / c.w);
+                min = min.min(ndc);
+                max = max.max(ndc);
+                any = true;
+            }
+        }
+    }
+    if !any {
+        return None;
+    }
+    // NDC to pixels, row 0 at the top; one pixel of margin.
+    let (w, h) = (width as f64, height as f64);
+    let x0 = (((min.x + 1.0) * 0.5 * w).floor() - 1.0).clamp(0.0, w);
+    let x1 = (((max.x + 1.0) * 0.5 * w).ceil() + 1.0).clamp(0.0, w);
+    let y0 = (((1.0 - max.y) * 0.5 * h).floor() - 1.0).clamp(0.0, h);
+    let y1 = (((1.0 - min.y) * 0.5 * h).ceil() + 1.0).clamp(0.0, h);
+    if x1 <= x0 || y1 <= y0 {
+        return None;
+    }
+    Some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
+}
+
 /// Shadow-volume generations per light and image (section 8.1): one for
 /// the light itself, and per path one for each stretch drawn under
 /// `shadows` (`k + 1` for a chain of `k` faces with every shadow).
@@ -990,6 +1072,70 @@ mod tests {
         assert_eq!(
             drawn_by_virtual_lights(&through, &[], &windows, 1),
             [false, false]
+        );
+    }
+
+    /// The scissor of a virtual light holds the pixel of every point its
+    /// light may reach in the box (points sampled in the box, kept where
+    /// inside the cone beyond the face and in front of the camera), and is
+    /// empty when the camera looks away.
+    #[test]
+    fn light_scissors_hold_every_lit_point() {
+        let face = mirror(Vec3::ZERO, Vec3::Z, 0.5);
+        let camera = lustre_geometry::Camera::look_at(
+            Vec3::new(1.5, 1.0, 3.0),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::Y,
+            60.0,
+        )
+        .with_aspect(4.0 / 3.0);
+        let m = camera.projection_matrix() * camera.view_matrix();
+        let (width, height) = (640, 480);
+        let bounds = [Vec3::new(-3.0, -2.0, -1.0), Vec3::new(3.0, 2.0, 4.0)];
+        let mut rng = 7u64;
+        let mut next = move || {
+            rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (rng >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for apex in [Vec3::new(0.3, 0.2, -1.0), Vec3::new(-0.8, 0.5, -0.4)] {
+            let [x, y, w, h] = light_scissor(m, apex, &face, bounds, width, height).unwrap();
+            assert!(w < width || h < height, "{x} {y} {w} {h}: no bound");
+            let cone = cone_planes(apex, &face);
+            let mut inside = 0;
+            for _ in 0..20_000 {
+                let p = bounds[0] + (bounds[1] - bounds[0]) * Vec3::new(next(), next(), next());
+                if cone.iter().any(|h| h.depth(p) < 0.0) || outgoing(&face).depth(p) < 0.0 {
+                    continue;
+                }
+                let c = m * p.extend(1.0);
+                if c.w <= 0.0 || c.z > c.w {
+                    continue;
+                }
+                let px = (c.x / c.w + 1.0) * 0.5 * width as f32;
+                let py = (1.0 - c.y / c.w) * 0.5 * height as f32;
+                if !(0.0..width as f32).contains(&px) || !(0.0..height as f32).contains(&py) {
+                    continue;
+                }
+                inside += 1;
+                assert!(
+                    px >= x as f32 && px <= (x + w) as f32 && py >= y as f32 && py <= (y + h) as f32,
+                    "({px}, {py}) outside [{x}, {y}, {w}, {h}]"
+                );
+            }
+            assert!(inside > 100, "{inside} points tested");
+        }
+        // Looking away from the lit part of a box that ends at z = 1: nothing to draw.
+        let away = lustre_geometry::Camera::look_at(
+            Vec3::new(0.0, 0.0, 3.0),
+            Vec3::new(0.0, 0.0, 6.0),
+            Vec3::Y,
+            60.0,
+        );
+        let m = away.projection_matrix() * away.view_matrix();
+        let near_box = [bounds[0], Vec3::new(3.0, 2.0, 1.0)];
+        assert_eq!(
+            light_scissor(m, Vec3::new(0.3, 0.2, -1.0), &face, near_box, width, height),
+            None
         );
     }
 

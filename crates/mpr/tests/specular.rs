@@ -13,7 +13,9 @@ use glam::{Affine3A, Vec2, Vec3};
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Ray, Rgb, Scene};
 use lustre_mpr::frame::FrameInputs;
-use lustre_mpr::passes::specular::{SpecularFace, SpecularKind, SpecularSettings, specular_faces};
+use lustre_mpr::passes::specular::{
+    SpecularFace, SpecularKind, SpecularSettings, ViewTree, specular_faces,
+};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::readback::read_rgba_f32;
 use lustre_mpr::{ClipMethod, FrameGraph, RenderTargets, SceneBuffers};
@@ -774,4 +776,65 @@ fn a_single_interface_shows_the_paraxially_scaled_scene_as_its_cpu_twin_does() {
             );
         }
     }
+}
+
+/// Each view's region ([`ViewTree::regions`], the scissor of its shadow and
+/// virtual-light passes) holds every pixel whose camera ray reaches it: the
+/// facing mirrors traced on the CPU to depth 4, each pixel's chain of
+/// mirror faces followed down the tree to its view.
+#[test]
+fn view_regions_hold_every_pixel_their_mirror_chains_reach() {
+    let scene = facing_mirrors();
+    let camera = scene.camera().with_aspect(1.0);
+    let faces = specular_faces(&scene);
+    let tree = ViewTree::build(
+        lustre_mpr::View::from_camera(&camera),
+        &faces,
+        4,
+        ClipMethod::Hardware,
+    )
+    .unwrap();
+    assert_eq!(tree.views.len(), 5);
+    let regions = tree.regions(&faces, SIZE, SIZE);
+    assert_eq!(regions[0], [0, 0, SIZE, SIZE]);
+    // Nested images shrink: every region lies in its parent's and is smaller.
+    for (parent, children) in tree.children.iter().enumerate() {
+        for &(_, child) in children {
+            let (c, p) = (regions[child], regions[parent]);
+            assert!(c[0] >= p[0] && c[1] >= p[1], "{c:?} in {p:?}");
+            assert!(c[0] + c[2] <= p[0] + p[2] && c[1] + c[3] <= p[1] + p[3], "{c:?} in {p:?}");
+            assert!(c[2] * c[3] < p[2] * p[3], "{c:?} smaller than {p:?}");
+        }
+    }
+    let bvh = Bvh::build(&scene);
+    let mut seen = vec![0usize; tree.views.len()];
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let mut ray = camera.primary_ray(Camera::pixel_ndc(x, y, SIZE, SIZE, Vec2::splat(0.5)));
+            let mut view = 0;
+            for _ in 0..4 {
+                let Some(hit) = bvh.closest_hit(&ray) else {
+                    break;
+                };
+                let Some(f) = faces.iter().position(|f| f.surface == hit.surface) else {
+                    break;
+                };
+                let Some(&(_, child)) = tree.children[view].iter().find(|&&(g, _)| g == f) else {
+                    break;
+                };
+                view = child;
+                seen[view] += 1;
+                let [rx, ry, rw, rh] = regions[view];
+                assert!(
+                    x >= rx && x < rx + rw && y >= ry && y < ry + rh,
+                    "pixel ({x}, {y}) of view {view} outside {:?}",
+                    regions[view]
+                );
+                let n = hit.geometric_normal;
+                let d = ray.direction - 2.0 * ray.direction.dot(n) * n;
+                ray = Ray::new(hit.position + 1e-4 * n, d);
+            }
+        }
+    }
+    assert!(seen[1..].iter().all(|&n| n > 20), "{seen:?}");
 }

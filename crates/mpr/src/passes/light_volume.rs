@@ -35,11 +35,11 @@ use crate::passes::direct::{DirectLights, DirectPass, GpuLight, GpuWindow};
 use crate::passes::shadow_volume::{
     SHAD_ZERO, ShadowVolumeBuffers, ShadowVolumePass, VolumeLight, VolumeLights,
 };
-use crate::passes::specular::{SpecularFace, SpecularKind};
+use crate::passes::specular::{SpecularFace, SpecularKind, intersect_rects};
 use crate::projective_texture::{Projector, Window, upload_layers};
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::virtual_light::{
-    MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, cone_planes, outgoing,
+    MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, cone_planes, light_scissor, outgoing,
     shadow_generations, specular_paths,
 };
 use crate::{GpuContext, MprError, Result};
@@ -82,6 +82,9 @@ struct FrameState {
     first_block: Vec<Vec<usize>>,
     /// Per real light and chain: the surfaces its light may reach.
     receivers: Vec<Vec<Vec<u32>>>,
+    /// Per real light and chain: the virtual light and the box of its
+    /// receivers, for the scissor of its passes in each view.
+    reach: Vec<Vec<(Vec3, [Vec3; 2])>>,
 }
 
 /// The virtual lights of a scene's specular faces for the real point
@@ -274,6 +277,7 @@ impl VirtualLights {
                 direct: None,
                 first_block: Vec::new(),
                 receivers: Vec::new(),
+                reach: Vec::new(),
             }),
         })
     }
@@ -367,15 +371,26 @@ impl VirtualLights {
         let mut first = Vec::with_capacity(chain_of.len());
         let mut first_block = Vec::with_capacity(chain_of.len());
         let mut receivers = Vec::with_capacity(chain_of.len());
+        let mut reach = Vec::with_capacity(chain_of.len());
         for (light, &c) in direct.lights().zip(chain_of) {
             first.push(lights.len());
             let chains = &self.chains[c];
             let mut starts = Vec::with_capacity(chains.paths.len());
             let mut reached = Vec::with_capacity(chains.paths.len());
+            let mut boxes = Vec::with_capacity(chains.paths.len());
             for (path, draws) in chains.paths.iter().zip(&chains.draws) {
                 let mut virtual_light = light.through(path.transform(), path.factor);
                 virtual_light.window = self.window_of(path, light.position());
-                reached.push(self.receivers(path, virtual_light.position()));
+                let surfaces = self.receivers(path, virtual_light.position());
+                let bound = surfaces.iter().fold(
+                    [Vec3::INFINITY, Vec3::NEG_INFINITY],
+                    |[lo, hi], &s| {
+                        let [a, b] = self.surface_boxes[s as usize];
+                        [lo.min(a), hi.max(b)]
+                    },
+                );
+                boxes.push((virtual_light.position(), bound));
+                reached.push(surfaces);
                 lights.push(virtual_light);
                 starts.push(blocks.len());
                 for draw in draws {
@@ -385,6 +400,7 @@ impl VirtualLights {
             }
             first_block.push(starts);
             receivers.push(reached);
+            reach.push(boxes);
         }
         frame.blocks.write_blocks(ctx, pass, &blocks)?;
         let reusable = frame
@@ -406,6 +422,7 @@ impl VirtualLights {
         frame.first = first;
         frame.first_block = first_block;
         frame.receivers = receivers;
+        frame.reach = reach;
         Ok(())
     }
 
@@ -475,7 +492,35 @@ impl VirtualLights {
             });
         };
         let chains = &self.chains[chain];
+        let (width, height) = (frame.targets.width, frame.targets.height);
+        let region = slot.scissor_in(width, height);
         for (p, (path, draws)) in chains.paths.iter().zip(&chains.draws).enumerate() {
+            // Every stencil step and the lit redraw of this chain stay inside
+            // the pixels its light may reach in this view; a chain whose
+            // light reaches none of them is left out of the view.
+            let (Some(&last), Some(&(apex, bound))) =
+                (path.faces.last(), state.reach.get(light).and_then(|r| r.get(p)))
+            else {
+                continue;
+            };
+            if state.receivers[light][p].is_empty() {
+                continue;
+            }
+            let Some(rect) = light_scissor(
+                slot.view_projection,
+                apex,
+                &self.faces[last],
+                bound,
+                width,
+                height,
+            ) else {
+                continue;
+            };
+            let [x, y, w, h] = intersect_rects(rect, region);
+            if w == 0 || h == 0 {
+                continue;
+            }
+            render.set_scissor_rect(x, y, w, h);
             pass.record_begin_at(
                 render,
                 slot.stencil_reference,
@@ -504,6 +549,8 @@ impl VirtualLights {
             )?;
             pass.record_end(render, slot.stencil_reference)?;
         }
+        let [x, y, w, h] = region;
+        render.set_scissor_rect(x, y, w, h);
         Ok(())
     }
 }

@@ -284,6 +284,12 @@ impl ShadowVolumes {
             &frame.targets.hdr.view,
             "shadowed-direct",
         );
+        // Every step stays inside the view's region (its stencil area's bound).
+        let [x, y, w, h] = slot.scissor_in(frame.targets.width, frame.targets.height);
+        if w == 0 || h == 0 {
+            return Ok(());
+        }
+        render.set_scissor_rect(x, y, w, h);
         for (i, &volume) in self.volume_of.iter().enumerate() {
             let buffers = &self.buffers[volume];
             self.pass

@@ -235,6 +235,15 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
         .collect()
 }
 
+/// The intersection of two pixel rectangles `[x, y, w, h]` (empty: zero size).
+pub fn intersect_rects(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
+    let x0 = a[0].max(b[0]);
+    let y0 = a[1].max(b[1]);
+    let x1 = (a[0].saturating_add(a[2])).min(b[0].saturating_add(b[2]));
+    let y1 = (a[1].saturating_add(a[3])).min(b[1].saturating_add(b[3]));
+    [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]
+}
+
 /// The views of one frame in depth-first order and, per view, the faces
 /// recursed into with the index of the child view (section 7.1,
 /// `draw_spec_objects`), or the faces at the recursion limit.
@@ -253,6 +262,50 @@ pub struct ViewTree {
 }
 
 impl ViewTree {
+    /// Per view, the pixels of a `width × height` target its stencil area
+    /// can hold, `[x, y, w, h]`: the whole target for the camera, and for a
+    /// face's view the bounding rectangle of the face's corners projected
+    /// through the view that sees it (a pixel added all round), within that
+    /// view's own rectangle; that view's rectangle where a corner lies
+    /// behind its eye. Views follow their parents, so one pass suffices.
+    pub fn regions(&self, faces: &[SpecularFace], width: u32, height: u32) -> Vec<[u32; 4]> {
+        let full = [0, 0, width, height];
+        let mut out = vec![full; self.views.len()];
+        for (index, children) in self.children.iter().enumerate() {
+            let m = self.views[index].view_projection();
+            let parent = out[index];
+            for &(f, child) in children {
+                let Some(face) = faces.get(f) else {
+                    continue;
+                };
+                let mut lo = glam::Vec2::splat(f32::INFINITY);
+                let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
+                let mut behind = face.corners.is_empty();
+                for c in &face.corners {
+                    let p = m * c.extend(1.0);
+                    if p.w <= 1e-6 {
+                        behind = true;
+                        break;
+                    }
+                    let ndc = glam::Vec2::new(p.x / p.w, p.y / p.w);
+                    lo = lo.min(ndc);
+                    hi = hi.max(ndc);
+                }
+                out[child] = if behind {
+                    parent
+                } else {
+                    let (w, h) = (width as f32, height as f32);
+                    let x0 = (((lo.x + 1.0) * 0.5 * w).floor() - 1.0).clamp(0.0, w) as u32;
+                    let x1 = (((hi.x + 1.0) * 0.5 * w).ceil() + 1.0).clamp(0.0, w) as u32;
+                    let y0 = (((1.0 - hi.y) * 0.5 * h).floor() - 1.0).clamp(0.0, h) as u32;
+                    let y1 = (((1.0 - lo.y) * 0.5 * h).ceil() + 1.0).clamp(0.0, h) as u32;
+                    intersect_rects([x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)], parent)
+                };
+            }
+        }
+        out
+    }
+
     /// The tree of a frame without specular faces: the camera alone.
     pub fn single(root: View) -> Self {
         Self {
