@@ -503,6 +503,26 @@ impl ViewBuffer {
         pass.set_bind_group(group, &self.bind_group, &[slot.offset]);
         pass.set_stencil_reference(slot.stencil_reference);
     }
+
+    /// [`ViewBuffer::bind`] in a render pass over `targets`, with the
+    /// scissor set to the view's region ([`ViewSlot::scissor_in`]: the
+    /// rasteriser skips pixels the view's stencil area cannot hold). Returns
+    /// false, binding nothing, when the region is empty.
+    pub fn bind_in(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        group: u32,
+        slot: ViewSlot,
+        targets: &crate::RenderTargets,
+    ) -> bool {
+        let [x, y, w, h] = slot.scissor_in(targets.width, targets.height);
+        if w == 0 || h == 0 {
+            return false;
+        }
+        pass.set_scissor_rect(x, y, w, h);
+        self.bind(pass, group, slot);
+        true
+    }
 }
 
 #[cfg(test)]

@@ -477,7 +477,10 @@ pub fn light_scissor(
     }
     let scale = (hi - lo).length().max(1e-9);
     let tolerance = 1e-7 * scale;
-    let (mut min, mut max) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    let (mut min, mut max) = (
+        glam::DVec2::splat(f64::INFINITY),
+        glam::DVec2::splat(f64::NEG_INFINITY),
+    );
     let mut any = false;
     for i in 0..planes.len() {
         for j in i + 1..planes.len() {
@@ -1094,7 +1097,9 @@ mod tests {
         let bounds = [Vec3::new(-3.0, -2.0, -1.0), Vec3::new(3.0, 2.0, 4.0)];
         let mut rng = 7u64;
         let mut next = move || {
-            rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (rng >> 40) as f32 / (1u64 << 24) as f32
         };
         for apex in [Vec3::new(0.3, 0.2, -1.0), Vec3::new(-0.8, 0.5, -0.4)] {
@@ -1118,7 +1123,10 @@ mod tests {
                 }
                 inside += 1;
                 assert!(
-                    px >= x as f32 && px <= (x + w) as f32 && py >= y as f32 && py <= (y + h) as f32,
+                    px >= x as f32
+                        && px <= (x + w) as f32
+                        && py >= y as f32
+                        && py <= (y + h) as f32,
                     "({px}, {py}) outside [{x}, {y}, {w}, {h}]"
                 );
             }

@@ -802,7 +802,10 @@ fn view_regions_hold_every_pixel_their_mirror_chains_reach() {
         for &(_, child) in children {
             let (c, p) = (regions[child], regions[parent]);
             assert!(c[0] >= p[0] && c[1] >= p[1], "{c:?} in {p:?}");
-            assert!(c[0] + c[2] <= p[0] + p[2] && c[1] + c[3] <= p[1] + p[3], "{c:?} in {p:?}");
+            assert!(
+                c[0] + c[2] <= p[0] + p[2] && c[1] + c[3] <= p[1] + p[3],
+                "{c:?} in {p:?}"
+            );
             assert!(c[2] * c[3] < p[2] * p[3], "{c:?} smaller than {p:?}");
         }
     }

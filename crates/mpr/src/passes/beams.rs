@@ -428,7 +428,9 @@ impl BeamPass {
             return;
         }
         pass.set_pipeline(&self.pipeline);
-        views.bind(&mut pass, 0, slot);
+        if !views.bind_in(&mut pass, 0, slot, targets) {
+            return;
+        }
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.draw(0..scene.vertex_count, 0..1);

@@ -102,7 +102,9 @@ impl DepthPass {
         });
         if scene.vertex_count > 0 {
             pass.set_pipeline(&self.pipeline);
-            views.bind(&mut pass, 0, slot);
+            if !views.bind_in(&mut pass, 0, slot, targets) {
+                return;
+            }
             pass.set_vertex_buffer(0, scene.vertices.slice(..));
             pass.draw(0..scene.vertex_count, 0..1);
         }

@@ -766,7 +766,9 @@ impl DiffuseTexturePass {
             return;
         }
         pass.set_pipeline(&self.pipeline);
-        views.bind(&mut pass, 0, slot);
+        if !views.bind_in(&mut pass, 0, slot, targets) {
+            return;
+        }
         pass.set_bind_group(1, &textures.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);

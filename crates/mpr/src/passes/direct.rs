@@ -678,7 +678,9 @@ impl DirectPass {
             return;
         }
         pass.set_pipeline(&self.pipeline);
-        views.bind(&mut pass, 0, slot);
+        if !views.bind_in(&mut pass, 0, slot, targets) {
+            return;
+        }
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         for slot in &lights.slots {
             pass.set_bind_group(1, &slot.bind_group, &[]);

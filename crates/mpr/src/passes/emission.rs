@@ -101,7 +101,9 @@ impl EmissionPass {
         }
         let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "emission");
         pass.set_pipeline(&self.pipeline);
-        views.bind(&mut pass, 0, slot);
+        if !views.bind_in(&mut pass, 0, slot, targets) {
+            return;
+        }
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.draw(0..scene.vertex_count, 0..1);

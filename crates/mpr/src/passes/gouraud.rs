@@ -124,7 +124,9 @@ impl GouraudPass {
         }
         let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "gouraud");
         pass.set_pipeline(&self.pipeline);
-        views.bind(&mut pass, 0, slot);
+        if !views.bind_in(&mut pass, 0, slot, targets) {
+            return Ok(());
+        }
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_vertex_buffer(1, self.radiance.slice(..));
         pass.draw(0..scene.vertex_count, 0..1);

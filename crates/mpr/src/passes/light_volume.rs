@@ -382,13 +382,13 @@ impl VirtualLights {
                 let mut virtual_light = light.through(path.transform(), path.factor);
                 virtual_light.window = self.window_of(path, light.position());
                 let surfaces = self.receivers(path, virtual_light.position());
-                let bound = surfaces.iter().fold(
-                    [Vec3::INFINITY, Vec3::NEG_INFINITY],
-                    |[lo, hi], &s| {
-                        let [a, b] = self.surface_boxes[s as usize];
-                        [lo.min(a), hi.max(b)]
-                    },
-                );
+                let bound =
+                    surfaces
+                        .iter()
+                        .fold([Vec3::INFINITY, Vec3::NEG_INFINITY], |[lo, hi], &s| {
+                            let [a, b] = self.surface_boxes[s as usize];
+                            [lo.min(a), hi.max(b)]
+                        });
                 boxes.push((virtual_light.position(), bound));
                 reached.push(surfaces);
                 lights.push(virtual_light);
@@ -498,9 +498,10 @@ impl VirtualLights {
             // Every stencil step and the lit redraw of this chain stay inside
             // the pixels its light may reach in this view; a chain whose
             // light reaches none of them is left out of the view.
-            let (Some(&last), Some(&(apex, bound))) =
-                (path.faces.last(), state.reach.get(light).and_then(|r| r.get(p)))
-            else {
+            let (Some(&last), Some(&(apex, bound))) = (
+                path.faces.last(),
+                state.reach.get(light).and_then(|r| r.get(p)),
+            ) else {
                 continue;
             };
             if state.receivers[light][p].is_empty() {

@@ -299,7 +299,10 @@ impl ViewTree {
                     let x1 = (((hi.x + 1.0) * 0.5 * w).ceil() + 1.0).clamp(0.0, w) as u32;
                     let y0 = (((1.0 - hi.y) * 0.5 * h).floor() - 1.0).clamp(0.0, h) as u32;
                     let y1 = (((1.0 - lo.y) * 0.5 * h).ceil() + 1.0).clamp(0.0, h) as u32;
-                    intersect_rects([x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)], parent)
+                    intersect_rects(
+                        [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)],
+                        parent,
+                    )
                 };
             }
         }
