@@ -383,6 +383,66 @@ pub fn view_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// The world bounding box of each surface of `scene` in its current pose,
+/// in `SurfaceId` order (`[+∞, −∞]` for a surface without triangles).
+pub fn surface_boxes(scene: &lustre_geometry::Scene) -> Vec<[Vec3; 2]> {
+    let mut boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; scene.surfaces().len()];
+    for t in &scene.world_triangles() {
+        if let Some(b) = boxes.get_mut(t.surface as usize) {
+            for p in t.positions {
+                b[0] = b[0].min(p);
+                b[1] = b[1].max(p);
+            }
+        }
+    }
+    boxes
+}
+
+/// The surfaces whose boxes may show in the pixels `region` (`[x, y, w,
+/// h]`) of a `width × height` target seen with `view_projection` (reverse
+/// Z): every box not wholly outside one side of the region's frustum or
+/// wholly before the near plane (section 8's viewpoint culling, per view).
+pub fn surfaces_in_region(
+    boxes: &[[Vec3; 2]],
+    view_projection: Mat4,
+    region: [u32; 4],
+    width: u32,
+    height: u32,
+) -> Vec<u32> {
+    let [x, y, w, h] = region;
+    let ndc = |px: u32, size: u32| 2.0 * px as f32 / size.max(1) as f32 - 1.0;
+    let (x0, x1) = (ndc(x, width), ndc(x + w, width));
+    // Pixel rows grow downwards, NDC y upwards.
+    let (y1, y0) = (-ndc(y, height), -ndc(y + h, height));
+    let [r0, r1, r2, r3] = [0, 1, 2, 3].map(|i| view_projection.row(i));
+    // Half-spaces `plane · (p, 1) ≥ 0` of the region's frustum.
+    let planes = [
+        r0 - x0 * r3,
+        x1 * r3 - r0,
+        r1 - y0 * r3,
+        y1 * r3 - r1,
+        r3 - r2,
+    ];
+    boxes
+        .iter()
+        .enumerate()
+        .filter(|(_, [lo, hi])| {
+            lo.is_finite()
+                && !planes.iter().any(|plane| {
+                    (0..8).all(|i| {
+                        let c = Vec3::new(
+                            if i & 1 == 0 { lo.x } else { hi.x },
+                            if i & 2 == 0 { lo.y } else { hi.y },
+                            if i & 4 == 0 { lo.z } else { hi.z },
+                        );
+                        plane.dot(c.extend(1.0)) < 0.0
+                    })
+                })
+        })
+        .map(|(i, _)| i as u32)
+        .collect()
+}
+
 /// Where one view's block lies in a [`ViewBuffer`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewSlot {
@@ -536,6 +596,57 @@ mod tests {
             Vec3::Y,
             50.0,
         )
+    }
+
+    /// A box is kept when any point of it projects into the region in front
+    /// of the eye (brute force over points sampled in the box), and culled
+    /// when none does and it lies wholly outside one side of the region.
+    #[test]
+    fn surfaces_in_region_keep_what_projects_into_it() {
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 60.0);
+        let m = cam.projection_matrix() * cam.view_matrix();
+        let (width, height) = (200, 100);
+        let boxes = vec![
+            [Vec3::splat(-0.1), Vec3::splat(0.1)],
+            [Vec3::new(-1.5, -0.1, -0.1), Vec3::new(-1.2, 0.1, 0.1)],
+            [Vec3::new(1.2, -0.1, -0.1), Vec3::new(1.5, 0.1, 0.1)],
+            [Vec3::new(-0.1, -0.1, 3.5), Vec3::new(0.1, 0.1, 4.0)],
+            [Vec3::new(-0.1, 0.5, -0.1), Vec3::new(0.1, 0.7, 0.1)],
+            [Vec3::INFINITY, Vec3::NEG_INFINITY],
+        ];
+        for region in [[0, 0, width, height], [100, 0, 100, 100], [0, 60, 200, 40]] {
+            let kept = surfaces_in_region(&boxes, m, region, width, height);
+            for (i, [lo, hi]) in boxes.iter().enumerate().take(5) {
+                let inside = (0..1000).any(|k| {
+                    let f = |a: u32| ((k * a) % 997) as f32 / 996.0;
+                    let p = *lo + (*hi - *lo) * Vec3::new(f(13), f(71), f(389));
+                    let c = m * p.extend(1.0);
+                    if c.w <= 0.0 || c.z > c.w {
+                        return false;
+                    }
+                    let px = (c.x / c.w + 1.0) * 0.5 * width as f32;
+                    let py = (1.0 - c.y / c.w) * 0.5 * height as f32;
+                    px >= region[0] as f32
+                        && px <= (region[0] + region[2]) as f32
+                        && py >= region[1] as f32
+                        && py <= (region[1] + region[3]) as f32
+                });
+                if inside {
+                    assert!(
+                        kept.contains(&(i as u32)),
+                        "box {i} in {region:?}: {kept:?}"
+                    );
+                }
+            }
+            assert!(!kept.contains(&3), "behind the eye: {kept:?}");
+            assert!(!kept.contains(&5), "empty: {kept:?}");
+        }
+        // The right half holds the box at +x, not the one at -x.
+        let right = surfaces_in_region(&boxes, m, [100, 0, 100, 100], width, height);
+        assert!(right.contains(&2) && !right.contains(&1), "{right:?}");
+        // The bottom strip does not hold the box above the centre.
+        let bottom = surfaces_in_region(&boxes, m, [0, 60, 200, 40], width, height);
+        assert!(!bottom.contains(&4), "{bottom:?}");
     }
 
     /// The paraxial interface scaling keeps the plane, scales depths by the

@@ -253,15 +253,7 @@ impl VirtualLights {
             .iter()
             .map(|v| ShadowVolumeBuffers::upload(ctx, v))
             .collect::<Result<Vec<_>>>()?;
-        let mut surface_boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; scene.surfaces().len()];
-        for t in &scene.world_triangles() {
-            if let Some(b) = surface_boxes.get_mut(t.surface as usize) {
-                for p in t.positions {
-                    b[0] = b[0].min(p);
-                    b[1] = b[1].max(p);
-                }
-            }
-        }
+        let surface_boxes = crate::view::surface_boxes(scene);
         Ok(Self {
             settings,
             faces: faces.to_vec(),
@@ -466,7 +458,9 @@ impl VirtualLights {
     /// virtual lights of real light `light`, whose chains are those of
     /// central position `chain` (sections 4.2, 4.3, 7.1): per chain the area
     /// raised, the light volumes, the shadow volumes, the light under the
-    /// stencil and the restore. Run after [`VirtualLights::prepare`] in the
+    /// stencil and the restore, its lit redraw over the receivers among
+    /// `visible` (the surfaces that may show in the view, ascending). Run
+    /// after [`VirtualLights::prepare`] in the
     /// same submission.
     #[allow(clippy::too_many_arguments)]
     pub fn record_view(
@@ -479,6 +473,7 @@ impl VirtualLights {
         slot: ViewSlot,
         light: usize,
         chain: usize,
+        visible: &[u32],
     ) -> Result<()> {
         let state = self.frame.lock().unwrap_or_else(|e| e.into_inner());
         let (Some(direct), Some(&first), Some(starts)) = (
@@ -504,7 +499,9 @@ impl VirtualLights {
             ) else {
                 continue;
             };
-            if state.receivers[light][p].is_empty() {
+            // Its receivers that may show in this view (both lists ascend).
+            let receivers = sorted_intersection(&state.receivers[light][p], visible);
+            if receivers.is_empty() {
                 continue;
             }
             let Some(rect) = light_scissor(
@@ -546,7 +543,7 @@ impl VirtualLights {
                 first + p,
                 views,
                 slot,
-                &state.receivers[light][p],
+                &receivers,
             )?;
             pass.record_end(render, slot.stencil_reference)?;
         }
@@ -554,6 +551,23 @@ impl VirtualLights {
         render.set_scissor_rect(x, y, w, h);
         Ok(())
     }
+}
+
+/// The values in both ascending lists.
+fn sorted_intersection(a: &[u32], b: &[u32]) -> Vec<u32> {
+    let (mut i, mut j, mut out) = (0, 0, Vec::new());
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                out.push(a[i]);
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    out
 }
 
 fn geometry_error(e: lustre_geometry::GeometryError) -> MprError {

@@ -51,6 +51,9 @@ pub struct ShadowVolumes {
     positions: Vec<Vec3>,
     /// The lights reflected and refracted by specular faces (sections 4.2, 4.3).
     virtual_lights: Option<VirtualLights>,
+    /// Per surface, its world box: each view's lit redraws draw the
+    /// surfaces that may show in its region.
+    surface_boxes: Vec<[Vec3; 2]>,
 }
 
 /// The distinct positions of `positions` in first-seen order and, per
@@ -105,6 +108,7 @@ impl ShadowVolumes {
             lights: Mutex::new(volume_lights),
             positions: unique,
             virtual_lights: None,
+            surface_boxes: crate::view::surface_boxes(scene),
         })
     }
 
@@ -177,6 +181,7 @@ impl ShadowVolumes {
         if rebuilt == 0 {
             return Ok(0);
         }
+        self.surface_boxes = crate::view::surface_boxes(scene);
         self.positions = positions.clone();
         if let Some(v) = self.virtual_lights.take() {
             // Virtual lights depend on every caster and light: rebuilt whole.
@@ -285,21 +290,48 @@ impl ShadowVolumes {
             "shadowed-direct",
         );
         // Every step stays inside the view's region (its stencil area's bound).
-        let [x, y, w, h] = slot.scissor_in(frame.targets.width, frame.targets.height);
+        let (width, height) = (frame.targets.width, frame.targets.height);
+        let region = slot.scissor_in(width, height);
+        let [x, y, w, h] = region;
         if w == 0 || h == 0 {
             return Ok(());
         }
         render.set_scissor_rect(x, y, w, h);
+        let visible = crate::view::surfaces_in_region(
+            &self.surface_boxes,
+            slot.view_projection,
+            region,
+            width,
+            height,
+        );
         for (i, &volume) in self.volume_of.iter().enumerate() {
             let buffers = &self.buffers[volume];
             self.pass
                 .record_begin(&mut render, slot.stencil_reference)?;
             self.pass
                 .record_volumes(&mut render, views, slot, &lights, i, buffers)?;
-            pass.record_light_under_stencil(&mut render, frame.scene, direct, i, views, slot)?;
+            pass.record_light_on_surfaces_under_stencil(
+                &mut render,
+                frame.scene,
+                direct,
+                i,
+                views,
+                slot,
+                &visible,
+            )?;
             self.pass.record_end(&mut render, slot.stencil_reference)?;
             if let Some(v) = &self.virtual_lights {
-                v.record_view(&mut render, &self.pass, pass, frame, views, slot, i, volume)?;
+                v.record_view(
+                    &mut render,
+                    &self.pass,
+                    pass,
+                    frame,
+                    views,
+                    slot,
+                    i,
+                    volume,
+                    &visible,
+                )?;
             }
         }
         Ok(())
