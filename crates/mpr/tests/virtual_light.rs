@@ -14,7 +14,7 @@ mod support;
 
 use glam::Vec2;
 use lustre_geometry::light::jittered_point_lights;
-use lustre_geometry::{Bvh, Camera, Light, Scene, builtin};
+use lustre_geometry::{Bvh, Camera, Light, Mesh, Scene, builtin};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::direct::{DirectPixel, direct_pixels_cpu_with_lights};
 use lustre_mpr::passes::specular::specular_faces;
@@ -562,5 +562,193 @@ fn stained_glass_light_matches_the_panes_it_passes() {
     assert!(
         (agree as f64) < 0.9 * compared as f64,
         "{agree}/{compared} agree without the window's light"
+    );
+}
+
+/// A quad `corner + s u + t v` facing `u × v`, two triangles.
+fn quad(name: &str, corner: glam::Vec3, u: glam::Vec3, v: glam::Vec3, material: u32) -> Mesh {
+    Mesh::flat(
+        name,
+        &[corner, corner + u, corner + u + v, corner + v],
+        &[[0, 1, 2], [2, 3, 0]],
+        material,
+    )
+}
+
+/// Stained glass on chains with mirrors (section 4.5 with 4.2, figure
+/// 10's real and virtual sources through one window): `stained-glass` with
+/// a mirror behind the light outside (its virtual light shines through the
+/// window: the projector from the mirrored light) and a mirror on the floor
+/// inside (the window's coloured light reflected onto a back wall: the
+/// projector taken back through the floor mirror), at shadow depth 3,
+/// against the CPU twin's unfolded paths.
+#[test]
+fn stained_glass_through_mirrors_matches_the_unfolded_paths() {
+    let Some(ctx) = gpu_or_skip("stained_glass_through_mirrors_matches_the_unfolded_paths") else {
+        return;
+    };
+    use glam::Vec3;
+    let base = builtin::stained_glass::stained_glass();
+    let mut meshes = base.meshes().to_vec();
+    let mut materials = base.materials().to_vec();
+    let mirror = materials.len() as u32;
+    materials.push(lustre_geometry::Material::new(
+        "mirror",
+        lustre_geometry::material::MaterialModel::Mirror {
+            reflectance: lustre_geometry::Rgb::splat(0.9),
+        },
+    ));
+    let wall = 1;
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    // Outside, behind the light (z = -2), facing the window.
+    meshes.push(quad(
+        "mirror-outside",
+        Vec3::new(-1.5, 0.5, -3.0),
+        3.0 * x,
+        4.0 * y,
+        mirror,
+    ));
+    // On the floor under the window's light, facing up (a hair above it).
+    meshes.push(quad(
+        "mirror-floor",
+        Vec3::new(-0.5, 0.002, 1.1),
+        1.0 * z,
+        1.0 * x,
+        mirror,
+    ));
+    // A back wall at z = 4 facing the window, to receive the reflection.
+    meshes.push(quad(
+        "back-wall",
+        Vec3::new(2.0, 0.0, 4.0),
+        -4.0 * x,
+        4.0 * y,
+        wall,
+    ));
+    let objects = meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| lustre_geometry::Object {
+            name: m.name.clone(),
+            meshes: vec![i as u32],
+            transform: glam::Affine3A::IDENTITY,
+        })
+        .collect();
+    let camera = Camera::look_at(
+        Vec3::new(0.0, 1.2, 0.6),
+        Vec3::new(0.0, 1.0, 4.0),
+        Vec3::Y,
+        80.0,
+    )
+    .with_aspect(1.0);
+    let scene = Scene::new(
+        "stained-glass-mirrors",
+        meshes,
+        materials,
+        objects,
+        base.lights().to_vec(),
+        camera,
+    )
+    .unwrap();
+    let bvh = Bvh::build(&scene);
+    let lights = jittered_point_lights(scene.lights(), 1, Vec2::ZERO);
+    let windows = windows(&scene, PaneLight::default()).unwrap();
+    let mut faces = specular_faces(&scene);
+    faces.extend(window_faces(&windows));
+    let depth = 3;
+    let paths = specular_paths(
+        &faces,
+        lustre_geometry::shadow_volume::light_position(&lights[0]),
+        depth,
+    );
+    let chains: Vec<Vec<&str>> = paths
+        .iter()
+        .map(|p| {
+            p.faces
+                .iter()
+                .map(|&f| match faces[f].kind {
+                    lustre_mpr::passes::specular::SpecularKind::Pane { .. } => "window",
+                    _ => scene.meshes()[scene.surfaces()[faces[f].surface as usize].mesh as usize]
+                        .name
+                        .as_str(),
+                })
+                .collect()
+        })
+        .collect();
+    for want in [
+        vec!["mirror-outside", "window"],
+        vec!["window", "mirror-floor"],
+        vec!["mirror-outside", "window", "mirror-floor"],
+    ] {
+        assert!(chains.contains(&want), "{want:?} not in {chains:?}");
+    }
+    let (real, virt) = cpu_twin(&scene, &lights, &faces, &windows, depth, &bvh, &camera);
+    // Compare where one chain's colour fills the neighbourhood (as above).
+    let s = SIZE as i32;
+    let steady_colour = |i: usize| {
+        let (px, py) = (i as i32 % s, i as i32 / s);
+        let c = virt[i].radiance;
+        let sum: f32 = c.iter().sum();
+        (-2..=2).all(|dy| {
+            (-2..=2).all(|dx| {
+                let (xx, yy) = (px + dx, py + dy);
+                if xx < 0 || yy < 0 || xx >= s || yy >= s {
+                    return false;
+                }
+                let d = virt[(yy * s + xx) as usize].radiance;
+                let dsum: f32 = d.iter().sum();
+                (sum == 0.0 && dsum == 0.0)
+                    || (sum > 0.0
+                        && dsum > 0.0
+                        && (0..2).all(|k| (c[k] / sum - d[k] / dsum).abs() < 1e-3))
+            })
+        })
+    };
+    let masked = |v: &[DirectPixel]| -> Vec<DirectPixel> {
+        v.iter()
+            .enumerate()
+            .map(|(i, p)| DirectPixel {
+                surface: if steady_colour(i) {
+                    p.surface
+                } else {
+                    NO_SURFACE
+                },
+                ..*p
+            })
+            .collect()
+    };
+    let (real_m, virt_m) = (masked(&real), masked(&virt));
+    let graph = graph_with(&ctx, &scene, &lights, depth, PaneLight::default());
+    let (gpu, ids) = render_with(&ctx, &graph, &scene, &camera, &lights);
+    let (agree, compared, lit) = agreement(&gpu, &ids, &real_m, &virt_m);
+    eprintln!(
+        "stained glass with mirrors: {agree}/{compared} pixels agree, {lit} lit by virtual lights, \
+         chains {chains:?}"
+    );
+    // Each chain through the window lights some of the compared pixels.
+    let lit_by = |chain: &[&str]| {
+        let c = chains.iter().position(|c| c == chain).unwrap();
+        virt_m
+            .iter()
+            .filter(|p| p.surface != NO_SURFACE && p.visible & (1 << c) != 0)
+            .count()
+    };
+    for chain in [
+        &["window"][..],
+        &["mirror-outside", "window"],
+        &["window", "mirror-floor"],
+        &["mirror-outside", "window", "mirror-floor"],
+    ] {
+        let n = lit_by(chain);
+        eprintln!("{chain:?}: {n} compared pixels");
+        assert!(n > 20, "{chain:?} lights {n} compared pixels");
+    }
+    assert!(
+        compared > (SIZE * SIZE / 10) as usize,
+        "{compared} compared"
+    );
+    assert!(lit > compared / 10, "virtual lights light {lit} pixels");
+    assert!(
+        agree as f64 >= 0.995 * compared as f64,
+        "{agree}/{compared}"
     );
 }
