@@ -326,7 +326,7 @@ fn virtual_lights_follow_a_moved_object() {
 }
 
 /// An axis-aligned box with outward winding.
-fn cuboid(name: &str, min: glam::Vec3, max: glam::Vec3, material: u32) -> lustre_geometry::Mesh {
+fn cuboid(name: &str, min: glam::Vec3, max: glam::Vec3, material: u32) -> Mesh {
     let p = |x: f32, y: f32, z: f32| {
         glam::Vec3::new(
             if x > 0.0 { max.x } else { min.x },
@@ -356,7 +356,7 @@ fn cuboid(name: &str, min: glam::Vec3, max: glam::Vec3, material: u32) -> lustre
         .iter()
         .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
         .collect();
-    lustre_geometry::Mesh::flat(name, &corners, &indices, material)
+    Mesh::flat(name, &corners, &indices, material)
 }
 
 /// A pool: a diffuse floor, an open water surface (η = 1.33, a single
