@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use glam::{Vec2, Vec3};
 use lustre_geometry::light::{AreaShape, Light};
 use lustre_geometry::material::{ConductorFresnel, MicrofacetDistribution};
-use lustre_geometry::obj::{DEFAULT_MATERIAL_NAME, framing_camera, load_mtl};
+use lustre_geometry::obj::{DEFAULT_MATERIAL_NAME, framing_camera, framing_direction, load_mtl};
 use lustre_geometry::{
     Aabb, GeometryError, LoadedScene, Material, MaterialModel, Mesh, ObjOptions, Rgb, Scene,
     SurfaceKind, builtin, load_obj, load_obj_with,
@@ -510,7 +510,12 @@ fn framing_camera_sees_the_whole_box() {
     assert_eq!(camera.fov_y_degrees, 40.0);
     assert_eq!(camera.up, Vec3::Y);
     let forward = (camera.target - camera.position).normalize();
-    assert_vec3_near(forward, -Vec3::Z, 1e-6);
+    // A three-quarter view from above, not straight down an axis.
+    assert_vec3_near(forward, -framing_direction(), 1e-6);
+    assert!(
+        forward.y < -0.3 && forward.x < -0.2 && forward.z < -0.6,
+        "{forward}"
+    );
     assert_vec3_near(camera.target, bounds.center(), 1e-6);
     for i in 0..8 {
         let corner = Vec3::new(
@@ -539,7 +544,7 @@ fn framing_camera_sees_the_whole_box() {
     let r = 0.5 * 3f32.sqrt();
     assert_vec3_near(
         unit.position,
-        Vec3::new(0.5, 0.5, 0.5 + r / 20f32.to_radians().sin()),
+        Vec3::splat(0.5) + framing_direction() * (r / 20f32.to_radians().sin()),
         1e-5,
     );
 }
@@ -1391,11 +1396,6 @@ const BAD_OBJ: &[(&str, &str, &str)] = &[
         "f 1 2",
     ),
     (
-        "unknown material",
-        "usemtl nosuch\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-        "usemtl nosuch",
-    ),
-    (
         "usemtl without a name",
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n",
         "usemtl",
@@ -1459,17 +1459,44 @@ fn missing_obj_file_is_an_io_error_naming_it() {
     }
 }
 
+/// The one warning of `loaded` that contains `needle`.
+fn warning_with<'a>(loaded: &'a LoadedScene, needle: &str) -> &'a str {
+    let found: Vec<&String> = loaded
+        .warnings
+        .iter()
+        .filter(|w| w.contains(needle))
+        .collect();
+    assert_eq!(found.len(), 1, "{needle} in {:?}", loaded.warnings);
+    found[0]
+}
+
+/// The material of the only mesh made of `triangles` triangles.
+fn material_of(loaded: &LoadedScene, mesh: &str) -> String {
+    let scene = &loaded.scene;
+    let m = scene
+        .meshes()
+        .iter()
+        .find(|m| m.name == mesh)
+        .unwrap_or_else(|| panic!("no mesh {mesh}"));
+    scene.materials()[m.material as usize].name.clone()
+}
+
 #[test]
-fn missing_mtl_file_is_reported_at_the_mtllib_line() {
+fn missing_mtl_file_is_a_warning_and_the_default_material() {
     let dir = test_dir("missing-mtl");
     let obj = write(
         &dir,
         "s.obj",
-        "# scene\nmtllib nothere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "# scene\nmtllib nothere.mtl\nusemtl paint\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
     );
-    assert_parse_error(load_obj(&obj), &obj, "mtllib");
-    let message = load_obj(&obj).unwrap_err().to_string();
-    assert!(message.contains("nothere.mtl"), "{message}");
+    let loaded = load_obj(&obj).unwrap();
+    let w = warning_with(&loaded, "nothere.mtl");
+    assert!(w.contains("s.obj:2:"), "{w}");
+    let w = warning_with(&loaded, "unknown material `paint`");
+    assert!(w.contains("s.obj:3:"), "{w}");
+    assert_eq!(material_of(&loaded, "s"), DEFAULT_MATERIAL_NAME);
+    // Without a light it also got the default studio.
+    assert!(loaded.studio.is_some());
 }
 
 #[test]
@@ -1485,22 +1512,32 @@ fn usemtl_before_its_mtllib_is_an_unknown_material() {
         "s.obj",
         &format!("usemtl white\nmtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n{LIGHT_OBJ}"),
     );
-    assert_parse_error(load_obj(&obj), &obj, "usemtl white");
+    let loaded = load_obj(&obj).unwrap();
+    let w = warning_with(&loaded, "unknown material `white`");
+    assert!(w.contains("s.obj:1:"), "{w}");
+    assert_eq!(material_of(&loaded, "s"), DEFAULT_MATERIAL_NAME);
+    // The library's light is there: no studio.
+    assert!(loaded.studio.is_none());
 }
 
 #[test]
-fn missing_texture_is_reported_at_the_mtl_line() {
+fn missing_texture_is_a_warning_at_the_mtl_line() {
     let files = scene_files(
         "missing-texture",
         "usemtl wood\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
         "newmtl wood\nKd 1 1 1\nmap_Kd -s 1 1 1 textures/wood.png\n",
     );
-    assert_parse_error(load_obj(&files.obj), &files.mtl, "map_Kd");
-    let message = load_obj(&files.obj).unwrap_err().to_string();
-    assert!(
-        message.contains("wood.png") && message.contains("scene.mtl"),
-        "{message}"
-    );
+    let loaded = load_obj(&files.obj).unwrap();
+    let w = warning_with(&loaded, "wood.png");
+    let line = exact_line(&files.mtl, "map_Kd -s 1 1 1 textures/wood.png");
+    assert!(w.contains(&format!("scene.mtl:{line}:")), "{w}");
+    let wood = loaded
+        .scene
+        .materials()
+        .iter()
+        .find(|m| m.name == "wood")
+        .unwrap();
+    assert_eq!(wood.diffuse_texture, None);
     let files = scene_files(
         "missing-specular-texture",
         "usemtl wood\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
@@ -1697,11 +1734,59 @@ fn invalid_utf8_is_reported_at_its_line() {
     }
 }
 
+/// A model without an emitter gets the default studio: a ground plane at
+/// the bottom of its box and an area light above it whose irradiance under
+/// it is about π W/m² (checked against the area light's own exact
+/// irradiance by sampling it), the same for the model in millimetres.
 #[test]
-fn obj_without_an_emitter_has_no_light() {
+fn obj_without_an_emitter_gets_a_default_studio() {
     let dir = test_dir("no-light");
-    let obj = write(&dir, "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    assert!(matches!(load_obj(&obj), Err(GeometryError::NoLight(name)) if name == "dark"));
+    for (name, scale) in [("dark", 1.0f32), ("dark-mm", 1000.0)] {
+        let v = |x: f32, y: f32, z: f32| format!("v {} {} {}\n", x * scale, y * scale, z * scale);
+        let text = format!(
+            "{}{}{}{}f 1 2 3\nf 1 3 4\n",
+            v(0.0, 0.2, 0.0),
+            v(1.0, 0.2, 0.0),
+            v(1.0, 0.7, 1.0),
+            v(0.0, 0.7, 1.0)
+        );
+        let obj = write(&dir, &format!("{name}.obj"), &text);
+        let loaded = load_obj(&obj).unwrap();
+        let studio = loaded.studio.expect("a studio");
+        warning_with(&loaded, "default studio");
+        let scene = &loaded.scene;
+        assert_eq!(scene.name, name);
+        assert_eq!(scene.lights().len(), 1);
+        assert!((studio.ground_height - 0.2 * scale).abs() < 1e-4 * scale);
+        assert!((studio.light_side - 0.5 * scale).abs() < 1e-4 * scale);
+        // Irradiance at the ground under the light's centre, by the area
+        // light's own sampling (Monte Carlo over its quad).
+        let p = Vec3::new(
+            studio.light_centre.x,
+            studio.ground_height,
+            studio.light_centre.z,
+        );
+        let light = &scene.lights()[0];
+        let n = 64;
+        let mut e = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                if let Some(s) = light.sample_direct(p, u) {
+                    e += s.weight.y * s.direction.y.max(0.0);
+                }
+            }
+        }
+        e /= (n * n) as f32;
+        assert!((e / PI - 1.0).abs() < 0.1, "{name}: E = {e}");
+        // The camera looks at the model, not at the studio.
+        let camera = scene.camera();
+        let model = Aabb::from_points([
+            Vec3::new(0.0, 0.2, 0.0) * scale,
+            Vec3::new(1.0, 0.7, 1.0) * scale,
+        ]);
+        assert_vec3_near(camera.target, model.center(), 1e-4 * scale);
+    }
 }
 
 // ---------------------------------------------------------------------------

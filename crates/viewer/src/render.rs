@@ -775,6 +775,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
+    // A model without a light got a default studio (lustre_geometry::obj::Studio).
+    let studio = loaded.studio.map(|s| {
+        json!({
+            "ground_height": s.ground_height,
+            "ground_half_side": s.ground_half_side,
+            "light_centre": s.light_centre.to_array(),
+            "light_side": s.light_side,
+            "radiance": s.radiance,
+        })
+    });
     let mut scene = loaded.scene;
     // Section 3: one point light of equal power for both phases; with more
     // light samples the photons leave the area light itself and only the
@@ -1196,6 +1206,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let sidecar = sidecar_path(&args.out);
     let mut info = json!({
         "scene": scene.name,
+        "studio": studio,
         "technique": args.technique.to_possible_value().map(|v| v.get_name().to_owned()),
         "photons": splatting.as_ref().map_or(args.photons, |s| s.emitted),
         "hit_records": splatting.as_ref().map(|s| s.hit_records),

@@ -13,6 +13,7 @@ pub fn load(arg: &str) -> anyhow::Result<LoadedScene> {
             scene: lustre_geometry::builtin(arg)?,
             degenerate_triangles_dropped: 0,
             warnings: Vec::new(),
+            studio: None,
         });
     }
     let path = Path::new(arg);

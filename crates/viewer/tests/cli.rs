@@ -551,3 +551,63 @@ fn beams_refuse_virtual_lights() {
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
     assert!(!out_path.exists());
 }
+
+/// A model as people have them: no light, its MTL file missing. `info` and
+/// `render` load it with warnings on stderr (the missing library, the
+/// unknown material, the default studio) instead of refusing it, and the
+/// sidecar records the studio.
+#[test]
+fn a_model_without_light_or_mtl_renders_in_a_default_studio() {
+    let dir = scratch("studio");
+    let obj = dir.join("teapotish.obj");
+    std::fs::write(
+        &obj,
+        "mtllib missing.mtl\nusemtl porcelain\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 0.8\n\
+         f 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\nf 1 4 3 2\n",
+    )
+    .unwrap();
+    let info = lustre(&["info", obj.to_str().unwrap()]);
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    // `info` lists the warnings with the scene.
+    let stdout = String::from_utf8_lossy(&info.stdout);
+    for needle in ["missing.mtl", "default studio", "studio-light"] {
+        assert!(stdout.contains(needle), "{needle}: {stdout}");
+    }
+    let out_path = dir.join("t.exr");
+    let args = [
+        "render",
+        obj.to_str().unwrap(),
+        "--photons",
+        "20000",
+        "--size",
+        "32x32",
+        "--aa",
+        "1",
+        "--light-samples",
+        "1",
+        "--out",
+        out_path.to_str().unwrap(),
+    ];
+    let Some(out) = render_or_skip("a_model_without_light_or_mtl_renders", &args) else {
+        return;
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("unknown material `porcelain`"), "{stderr}");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_path.with_extension("json")).unwrap())
+            .unwrap();
+    assert!(
+        sidecar["studio"]["radiance"]
+            .as_f64()
+            .is_some_and(|r| r > 0.0),
+        "{sidecar}"
+    );
+    let image = lustre_image::read_exr(&out_path).unwrap();
+    let mean = lustre_image::metrics::mean(&image);
+    assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
+}

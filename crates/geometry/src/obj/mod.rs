@@ -4,8 +4,9 @@
 //! [`Scene`] with [`Scene::new`]: one [`Object`] per OBJ object or group
 //! (`o`/`g`), one [`Mesh`] per (object, material) pair, the materials of every
 //! library, no explicit lights (meshes with an emissive material become area
-//! lights in [`Scene::new`], so a file without an emitter fails with
-//! [`GeometryError::NoLight`]) and the camera of [`framing_camera`].
+//! lights in [`Scene::new`]; a model without any emitter gets a default
+//! [`Studio`], a ground plane and an area light sized to its bounds, with a
+//! warning) and the camera of [`framing_camera`], a three-quarter view.
 //!
 //! # Validation before parsing
 //!
@@ -17,11 +18,7 @@
 //! not finite (`v`, `vt`, `vn` and every numeric MTL field), a `v` with
 //! `w = 0`, a face with fewer than three vertices, a face index that is `0`,
 //! beyond the `v`/`vt`/`vn` lines read so far, or (negative, relative) before
-//! the first one, a `usemtl` naming a material that no library loaded before
-//! it defines, a missing or unreadable MTL file (reported at the `mtllib`
-//! line of the OBJ file: a scene whose materials cannot be read is an error,
-//! not a silent grey), a missing texture (at the `map_Kd`/`map_Ks` line of
-//! the MTL file), an MTL statement before any `newmtl`, and out-of-range
+//! the first one, an MTL statement before any `newmtl`, and out-of-range
 //! material values (at the line that sets them). Only the validated
 //! statements reach tobj, rewritten with absolute indices; tobj's own
 //! errors, which should not happen any more, and a panic inside tobj are
@@ -65,6 +62,11 @@
 //!   exists, several whitespace-separated files, relative to the OBJ file's
 //!   folder. A material defined twice (in one library or two) keeps the later
 //!   definition, with a warning.
+//! - As other viewers do with files as people have them, a missing or
+//!   unreadable MTL file, a `usemtl` naming a material no library loaded
+//!   before it defines, and a missing texture are warnings (at the line of
+//!   the `mtllib`, the `usemtl` and the `map_Kd`/`map_Ks`), not failures:
+//!   those faces take the `default` material, the texture is left out.
 //!
 //! # Materials
 //!
@@ -205,6 +207,8 @@ pub struct LoadedScene {
     pub degenerate_triangles_dropped: usize,
     /// Things ignored or repaired, one message each (with file and line where one applies).
     pub warnings: Vec<String>,
+    /// The default studio added round a model without a light, if any.
+    pub studio: Option<Studio>,
 }
 
 /// Loads an OBJ file and its MTL libraries with the default [`ObjOptions`].
@@ -248,6 +252,13 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
         let material = match model.mesh.material_id {
             Some(id) if id < materials.len() => id as MaterialId,
             _ => *default_material.get_or_insert_with(|| {
+                // The scan's fallback for unknown materials, if it made one.
+                if let Some(d) = materials
+                    .iter()
+                    .position(|m| m.name == DEFAULT_MATERIAL_NAME)
+                {
+                    return d as MaterialId;
+                }
                 materials.push(Material::diffuse(DEFAULT_MATERIAL_NAME, Rgb::splat(0.5)));
                 (materials.len() - 1) as MaterialId
             }),
@@ -307,6 +318,30 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
         .iter()
         .map(Mesh::bounds)
         .fold(Aabb::EMPTY, Aabb::union);
+    // No emitter at all: a default studio round the model.
+    let studio = (!meshes
+        .iter()
+        .any(|m| materials[m.material as usize].is_emissive()))
+    .then(|| Studio::for_bounds(bounds));
+    if let Some(studio) = &studio {
+        let (extra_materials, extra_meshes) = studio.parts(bounds, materials.len() as MaterialId);
+        materials.extend(extra_materials);
+        for mesh in extra_meshes {
+            objects.push(Object {
+                name: mesh.name.clone(),
+                meshes: vec![meshes.len() as MeshId],
+                transform: glam::Affine3A::IDENTITY,
+            });
+            meshes.push(mesh);
+        }
+        warnings.push(format!(
+            "{}: no light: added a default studio (a ground plane at height {} and a {} m square area light of radiance {:.4} W/(m² sr) above the model)",
+            path.display(),
+            studio.ground_height,
+            studio.light_side,
+            studio.radiance
+        ));
+    }
     let scene = Scene::new(
         stem,
         meshes,
@@ -319,12 +354,26 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
         scene,
         degenerate_triangles_dropped: dropped,
         warnings,
+        studio,
     })
 }
 
+/// The direction from a framed box's centre to the camera of
+/// [`framing_camera`]: a three-quarter view, 30° round from +Z towards +X
+/// and 25° above the horizon, so that a model shows three of its sides
+/// rather than one face straight down an axis.
+pub fn framing_direction() -> Vec3 {
+    let (azimuth, elevation) = (30f32.to_radians(), 25f32.to_radians());
+    Vec3::new(
+        azimuth.sin() * elevation.cos(),
+        elevation.sin(),
+        azimuth.cos() * elevation.cos(),
+    )
+}
+
 /// The default camera of a loaded scene: a pinhole with a 40° vertical field
-/// of view and a square image, looking down -Z at the box's centre from
-/// `centre + (0, 0, r / sin 20°)` (`r` the radius of the box's bounding
+/// of view and a square image, looking at the box's centre from `centre +
+/// framing_direction() · r / sin 20°` (`r` the radius of the box's bounding
 /// sphere), up +Y, so that the whole box is in view.
 pub fn framing_camera(bounds: Aabb) -> Camera {
     let (center, radius) = if bounds.is_empty() {
@@ -334,11 +383,84 @@ pub fn framing_camera(bounds: Aabb) -> Camera {
     };
     let distance = radius / (0.5 * FRAMING_FOV_Y_DEGREES).to_radians().sin();
     Camera::look_at(
-        center + Vec3::Z * distance,
+        center + framing_direction() * distance,
         center,
         Vec3::Y,
         FRAMING_FOV_Y_DEGREES,
     )
+}
+
+/// What [`load_obj`] adds round a model that has no light, so that it shows
+/// as other viewers show it: a ground plane under it and a square area
+/// light above it, sized to its bounds (each a material of its own,
+/// `studio-ground` and `studio-light`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Studio {
+    /// Height of the ground plane: the bottom of the model's box.
+    pub ground_height: f32,
+    /// Half the side of the square ground, centred under the model: 2.5 times its largest extent.
+    pub ground_half_side: f32,
+    /// Centre of the light: one largest extent above the top of the box.
+    pub light_centre: Vec3,
+    /// Side of the square light: half the largest extent.
+    pub light_side: f32,
+    /// Its radiance, W/(m² sr): `π d² / A` for the light's distance `d` to
+    /// the ground and area `A`, so the irradiance under it is about π W/m²
+    /// whatever the model's units.
+    pub radiance: f32,
+}
+
+impl Studio {
+    /// The studio for a model's box.
+    pub fn for_bounds(bounds: Aabb) -> Self {
+        let extent = bounds.extent().max_element().max(1e-3);
+        let centre = bounds.center();
+        let light_centre = Vec3::new(centre.x, bounds.max.y + extent, centre.z);
+        let light_side = 0.5 * extent;
+        let distance = light_centre.y - bounds.min.y;
+        Self {
+            ground_height: bounds.min.y,
+            ground_half_side: 2.5 * extent,
+            light_centre,
+            light_side,
+            radiance: std::f32::consts::PI * distance * distance / (light_side * light_side),
+        }
+    }
+
+    /// Its two materials and two meshes (ground facing up, light facing
+    /// down), the materials numbered from `first_material`.
+    fn parts(&self, bounds: Aabb, first_material: MaterialId) -> (Vec<Material>, Vec<Mesh>) {
+        let c = bounds.center();
+        let (g, h) = (self.ground_half_side, self.ground_height);
+        let ground = Mesh::flat(
+            "studio-ground",
+            &[
+                Vec3::new(c.x - g, h, c.z - g),
+                Vec3::new(c.x - g, h, c.z + g),
+                Vec3::new(c.x + g, h, c.z + g),
+                Vec3::new(c.x + g, h, c.z - g),
+            ],
+            &[[0, 1, 2], [2, 3, 0]],
+            first_material,
+        );
+        let (l, s) = (self.light_centre, 0.5 * self.light_side);
+        let light = Mesh::flat(
+            "studio-light",
+            &[
+                Vec3::new(l.x - s, l.y, l.z - s),
+                Vec3::new(l.x + s, l.y, l.z - s),
+                Vec3::new(l.x + s, l.y, l.z + s),
+                Vec3::new(l.x - s, l.y, l.z + s),
+            ],
+            &[[0, 1, 2], [2, 3, 0]],
+            first_material + 1,
+        );
+        let materials = vec![
+            Material::diffuse("studio-ground", Rgb::splat(0.5)),
+            Material::diffuse("studio-light", Rgb::ZERO).with_emission(Rgb::splat(self.radiance)),
+        ];
+        (materials, vec![ground, light])
+    }
 }
 
 /// Vertex arrays of one tobj model, converted.

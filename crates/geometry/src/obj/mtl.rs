@@ -199,8 +199,15 @@ impl Ctx<'_> {
         }
     }
 
-    /// A texture statement: options skipped, the file resolved against `dir`.
-    fn texture(&self, dir: &Path, rest: &str, warnings: &mut Vec<String>) -> Result<PathBuf> {
+    /// A texture statement: options skipped, the file resolved against `dir`;
+    /// `None`, with a warning, when the file is not there (other viewers
+    /// show such a model without its texture, and so does Lustre).
+    fn texture(
+        &self,
+        dir: &Path,
+        rest: &str,
+        warnings: &mut Vec<String>,
+    ) -> Result<Option<PathBuf>> {
         let tokens: Vec<&str> = rest.split_whitespace().collect();
         let mut i = 0;
         let mut options = Vec::new();
@@ -246,13 +253,17 @@ impl Ctx<'_> {
         let direct = dir.join(&name);
         for candidate in [direct.clone(), dir.join(name.replace('\\', "/"))] {
             if candidate.is_file() {
-                return Ok(candidate);
+                return Ok(Some(candidate));
             }
         }
-        Err(self.error(format_args!(
-            "texture `{name}` not found (looked for `{}`)",
+        warnings.push(format!(
+            "{}:{}: material `{}`: texture `{name}` not found (looked for `{}`); drawn without it",
+            self.path.display(),
+            self.line,
+            self.material,
             direct.display()
-        )))
+        ));
+        Ok(None)
     }
 }
 
@@ -325,8 +336,8 @@ pub(super) fn parse_library(
                     })?;
                 m.illum = Some(At { value, line: n });
             }
-            "map_Kd" => m.map_kd = Some(ctx.texture(dir, rest, warnings)?),
-            "map_Ks" => m.map_ks = Some(ctx.texture(dir, rest, warnings)?),
+            "map_Kd" => m.map_kd = ctx.texture(dir, rest, warnings)?,
+            "map_Ks" => m.map_ks = ctx.texture(dir, rest, warnings)?,
             "lustre_model" => m.model = Some(ctx.word(rest)?),
             "lustre_alpha" => m.alpha = Some(ctx.number(rest, Range::Positive)?),
             "lustre_alpha_x" => m.alpha_x = Some(ctx.number(rest, Range::Positive)?),

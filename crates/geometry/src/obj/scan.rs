@@ -66,6 +66,8 @@ pub(super) fn scan_obj(
     let mut out: Vec<Out> = Vec::new();
     let mut materials: Vec<Material> = Vec::new();
     let mut material_index: HashMap<String, usize> = HashMap::new();
+    // Material names `usemtl` gave that no library defines (warned once each).
+    let mut unknown: std::collections::HashSet<String> = std::collections::HashSet::new();
     // tobj starts a new model at `o`/`g`, and at `usemtl` of another material,
     // when the current one has faces; the segments follow the same rule.
     let mut segments = vec![Segment {
@@ -250,16 +252,21 @@ pub(super) fn scan_obj(
                     rest.split_whitespace().map(|name| dir.join(name)).collect()
                 };
                 for file in files {
-                    let text = read_text(&file).map_err(|e| match e {
-                        GeometryError::Io { source, .. } => err(
-                            n,
-                            format!(
-                                "material library `{}` cannot be read: {source}",
+                    // A library that cannot be read is a warning: its
+                    // materials' faces take the default material (as other
+                    // viewers show such a model).
+                    let text = match read_text(&file) {
+                        Ok(text) => text,
+                        Err(GeometryError::Io { source, .. }) => {
+                            warnings.push(format!(
+                                "{}:{n}: material library `{}` cannot be read ({source}); its materials are drawn with the default material",
+                                path.display(),
                                 file.display()
-                            ),
-                        ),
-                        other => other,
-                    })?;
+                            ));
+                            continue;
+                        }
+                        Err(other) => return Err(other),
+                    };
                     for material in mtl::parse_library(&file, &text, warnings)? {
                         match material_index.get(&material.name) {
                             Some(&m) => {
@@ -283,13 +290,30 @@ pub(super) fn scan_obj(
                 if rest.is_empty() {
                     return Err(err(n, "`usemtl` names no material".into()));
                 }
-                let Some(&m) = material_index.get(rest) else {
-                    return Err(err(
-                        n,
-                        format!(
-                            "unknown material `{rest}`: no material library loaded before this line defines it"
-                        ),
-                    ));
+                let m = match material_index.get(rest) {
+                    Some(&m) => m,
+                    None => {
+                        if unknown.insert(rest.to_owned()) {
+                            warnings.push(format!(
+                                "{}:{n}: unknown material `{rest}` (no material library loaded before this line defines it); drawn with the default material",
+                                path.display()
+                            ));
+                        }
+                        match material_index.get(super::DEFAULT_MATERIAL_NAME) {
+                            Some(&d) => d,
+                            None => {
+                                materials.push(Material::diffuse(
+                                    super::DEFAULT_MATERIAL_NAME,
+                                    crate::Rgb::splat(0.5),
+                                ));
+                                material_index.insert(
+                                    super::DEFAULT_MATERIAL_NAME.to_owned(),
+                                    materials.len() - 1,
+                                );
+                                materials.len() - 1
+                            }
+                        }
+                    }
                 };
                 if current_material != Some(m) && segment_has_faces {
                     segments.push(Segment::default());
