@@ -18,7 +18,7 @@
 //! quadrilateral that the window's rectangle makes in the light's image
 //! (figure 8(b): the texture plane is not aligned with the light's view; the
 //! rectangle-to-quadrilateral map of Heckbert 1989, section 2.2.3, the
-//! paper's reference [18]). Every point on the line from `L` through `X`
+//! paper's reference \[18\]). Every point on the line from `L` through `X`
 //! gets `X`'s coordinates, so the texture lands on every receiver as the
 //! light through the window does ([`Projector`]).
 //!

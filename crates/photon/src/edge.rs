@@ -1,4 +1,4 @@
-//! The kernel's mass on its surface near polygon edges (beyond section 2.2: the paper's future work, "improving the appearance of the polygon edges similarly to [11]").
+//! The kernel's mass on its surface near polygon edges (beyond section 2.2: the paper's future work, "improving the appearance of the polygon edges similarly to \[11\]").
 //!
 //! Equation 2 sums kernels of unit volume, but near a surface's edge part of
 //! the kernel around a point `x` lies off the polygon, where no photon can

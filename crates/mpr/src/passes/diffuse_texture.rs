@@ -64,9 +64,8 @@
 //! [`SplatBuffers::new_excluding`] with [`DiffuseAtlas::textured`].
 //!
 //! A frame: once, [`DiffuseAtlas::build`] and [`DiffuseTextures::new`]; per
-//! frame [`DiffuseTexturePass::prepare`] and, after the depth pre-pass,
-//! [`DiffuseTexturePass::encode`] (in any order with the splat and direct
-//! passes, which also add into HDR).
+//! view, after the depth pre-pass, [`DiffuseTexturePass::encode`] (in any
+//! order with the splat and direct passes, which also add into HDR).
 //!
 //! [`SplatBuffers::new_excluding`]: crate::passes::splat::SplatBuffers::new_excluding
 

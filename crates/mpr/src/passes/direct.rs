@@ -25,8 +25,7 @@
 //! area light itself is an error.
 //!
 //! A frame: [`DirectPass::encode_shadows`] once per light or scene pose,
-//! then per frame [`DirectPass::prepare`] and, after the depth pre-pass,
-//! [`DirectPass::encode`].
+//! then per view, after the depth pre-pass, [`DirectPass::encode`].
 
 use std::cell::Cell;
 

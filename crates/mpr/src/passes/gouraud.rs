@@ -23,7 +23,7 @@ use crate::{GpuContext, MprError, Result};
 /// The Gouraud pass's own WGSL (`src/passes/gouraud.wgsl`); compiled after the view block.
 pub const GOURAUD_WGSL: &str = include_str!("gouraud.wgsl");
 
-/// Layout of the per-corner radiance buffer: `@location(4) vec3f`, one per [`GpuVertex`] (section 2.4, one value per vertex).
+/// Layout of the per-corner radiance buffer: `@location(4) vec3f`, one per [`crate::GpuVertex`] (section 2.4, one value per vertex).
 pub const RADIANCE_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: size_of::<[f32; 3]>() as wgpu::BufferAddress,
     step_mode: wgpu::VertexStepMode::Vertex,
