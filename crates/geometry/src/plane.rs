@@ -41,6 +41,14 @@ impl Plane {
         self.normal.extend(-self.offset)
     }
 
+    /// The same plane with its normal turned round (the other side in front).
+    pub fn flipped(&self) -> Self {
+        Self {
+            normal: -self.normal,
+            offset: -self.offset,
+        }
+    }
+
     /// The affine mirror transform `x -> x - 2 (n·x - d) n` as a matrix.
     ///
     /// Its linear part `I - 2 n nᵀ` has determinant -1, so it flips the winding

@@ -25,8 +25,6 @@
 //! Written here rather than taken from a crate: the square-to-quadrilateral
 //! solve is eight lines of closed form, and glam has no homography type.
 
-use std::collections::BTreeMap;
-
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use lustre_beams::ScatterMaterial;
 use lustre_geometry::{Plane, Rgb, Scene, SurfaceKind};
@@ -155,22 +153,6 @@ impl Window {
             pane.transmittance.y,
             pane.transmittance.z,
         )
-    }
-
-    /// The mean filter over the covered texels (the window's uniform colour).
-    pub fn mean_transmittance(&self) -> Vec3 {
-        let (sum, covered) = self
-            .texture
-            .texels
-            .iter()
-            .fold((Vec3::ZERO, 0.0f32), |(s, c), t| {
-                (s + Vec3::new(t[0], t[1], t[2]), c + t[3])
-            });
-        if covered > 0.0 {
-            sum / covered
-        } else {
-            Vec3::ZERO
-        }
     }
 }
 
@@ -458,15 +440,6 @@ pub fn texture_bytes(windows: &[Window]) -> usize {
         .sum()
 }
 
-/// The surfaces of every window, with their window's index.
-pub fn pane_surfaces(windows: &[Window]) -> BTreeMap<u32, usize> {
-    windows
-        .iter()
-        .enumerate()
-        .flat_map(|(i, w)| w.surfaces.iter().map(move |&s| (s, i)))
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -583,7 +556,14 @@ mod tests {
         // Two columns red, five blue, one mixed (whichever axis s runs along x).
         assert_eq!((red, blue), (16, 40));
         // 10 of the 32 sample columns (4 per texel) lie at x < 0.3.
-        let mean = w.mean_transmittance();
+        let (sum, covered) = w
+            .texture
+            .texels
+            .iter()
+            .fold((Vec3::ZERO, 0.0f32), |(s, c), t| {
+                (s + Vec3::new(t[0], t[1], t[2]), c + t[3])
+            });
+        let mean = sum / covered;
         assert!(
             (mean - Vec3::new(10.0 / 32.0, 0.0, 22.0 / 32.0)).length() < 1e-6,
             "{mean}"

@@ -383,6 +383,32 @@ pub fn view_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// The pixels `[x, y, w, h]` of a `width × height` target (row 0 at the
+/// top) that the NDC rectangle `[lo, hi]` covers, one pixel added all round
+/// and clamped to the target; zero-sized when it misses the target.
+pub fn ndc_to_pixels(lo: glam::DVec2, hi: glam::DVec2, width: u32, height: u32) -> [u32; 4] {
+    let (w, h) = (width as f64, height as f64);
+    let x0 = (((lo.x + 1.0) * 0.5 * w).floor() - 1.0).clamp(0.0, w);
+    let x1 = (((hi.x + 1.0) * 0.5 * w).ceil() + 1.0).clamp(0.0, w);
+    let y0 = (((1.0 - hi.y) * 0.5 * h).floor() - 1.0).clamp(0.0, h);
+    let y1 = (((1.0 - lo.y) * 0.5 * h).ceil() + 1.0).clamp(0.0, h);
+    [
+        x0 as u32,
+        y0 as u32,
+        (x1 - x0).max(0.0) as u32,
+        (y1 - y0).max(0.0) as u32,
+    ]
+}
+
+/// The intersection of two pixel rectangles `[x, y, w, h]` (empty: zero size).
+pub fn intersect_rects(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
+    let x0 = a[0].max(b[0]);
+    let y0 = a[1].max(b[1]);
+    let x1 = (a[0].saturating_add(a[2])).min(b[0].saturating_add(b[2]));
+    let y1 = (a[1].saturating_add(a[3])).min(b[1].saturating_add(b[3]));
+    [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]
+}
+
 /// The world bounding box of each surface of `scene` in its current pose,
 /// in `SurfaceId` order (`[+∞, −∞]` for a surface without triangles).
 pub fn surface_boxes(scene: &lustre_geometry::Scene) -> Vec<[Vec3; 2]> {

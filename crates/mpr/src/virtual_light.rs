@@ -426,11 +426,7 @@ pub fn window_faces(windows: &[Window]) -> Vec<SpecularFace> {
                 factor: Vec3::ONE,
                 corners: corners.clone(),
             };
-            let flipped = lustre_geometry::Plane {
-                normal: -w.plane.normal,
-                offset: -w.plane.offset,
-            };
-            [face(w.plane), face(flipped)]
+            [face(w.plane), face(w.plane.flipped())]
         })
         .collect()
 }
@@ -508,16 +504,8 @@ pub fn light_scissor(
     if !any {
         return None;
     }
-    // NDC to pixels, row 0 at the top; one pixel of margin.
-    let (w, h) = (width as f64, height as f64);
-    let x0 = (((min.x + 1.0) * 0.5 * w).floor() - 1.0).clamp(0.0, w);
-    let x1 = (((max.x + 1.0) * 0.5 * w).ceil() + 1.0).clamp(0.0, w);
-    let y0 = (((1.0 - max.y) * 0.5 * h).floor() - 1.0).clamp(0.0, h);
-    let y1 = (((1.0 - min.y) * 0.5 * h).ceil() + 1.0).clamp(0.0, h);
-    if x1 <= x0 || y1 <= y0 {
-        return None;
-    }
-    Some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
+    let rect = crate::view::ndc_to_pixels(min, max, width, height);
+    (rect[2] > 0 && rect[3] > 0).then_some(rect)
 }
 
 /// Shadow-volume generations per light and image (section 8.1): one for
@@ -645,17 +633,16 @@ pub fn path_arrival(
             | SpecularKind::Glossy(_)
             | SpecularKind::Pane { .. } => x,
             SpecularKind::Slab { thickness, .. } => {
-                let previous = path.prefix[j - 1].transform_point3(light);
                 let dir = point - source;
                 let far = HalfSpace {
                     normal: face.plane.normal,
                     offset: face.plane.offset - thickness,
                 };
-                let (d0, slope) = (far.depth(previous), far.normal.dot(dir));
+                let (d0, slope) = (far.depth(before), far.normal.dot(dir));
                 if slope <= 0.0 || d0 >= 0.0 {
                     return None;
                 }
-                previous + dir * (-d0 / slope)
+                before + dir * (-d0 / slope)
             }
         };
     }

@@ -2,7 +2,7 @@
 
 mod support;
 
-use support::{lustre, render_or_skip, scratch};
+use support::{lustre, render_or_skip, scratch, sidecar};
 
 #[test]
 fn info_describes_the_builtin_scenes() {
@@ -200,10 +200,7 @@ fn render_writes_the_image_and_its_sidecar_and_nothing_else() {
             String::from_utf8_lossy(&out.stderr)
         );
         assert!(out_path.exists());
-        let sidecar: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(out_path.with_extension("json")).unwrap(),
-        )
-        .unwrap();
+        let sidecar = sidecar(&out_path);
         assert_eq!(sidecar["photons"], 5000);
         assert_eq!(sidecar["technique"], technique);
         assert_eq!(sidecar["size"], serde_json::json!([48, 32]));
@@ -450,9 +447,7 @@ fn beams_render_the_stained_glass_window_and_record_their_beams() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let sidecar: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_path.with_extension("json")).unwrap())
-            .unwrap();
+    let sidecar = sidecar(&out_path);
     let beams = &sidecar["beams"];
     // One point light through every pane triangle: one transmitted and one
     // reflected beam each, towards opposite sides of the window.
@@ -511,10 +506,7 @@ fn mpr_draws_the_stained_glass_window_through_its_projective_texture() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let sidecar: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(out_path.with_extension("json")).unwrap(),
-        )
-        .unwrap();
+        let sidecar = sidecar(&out_path);
         let w = &sidecar["passes"]["windows"];
         assert_eq!(w["count"], windows, "{sidecar}");
         assert_eq!(w["panes"], 16, "{sidecar}");
@@ -598,9 +590,7 @@ fn a_model_without_light_or_mtl_renders_in_a_default_studio() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("unknown material `porcelain`"), "{stderr}");
-    let sidecar: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_path.with_extension("json")).unwrap())
-            .unwrap();
+    let sidecar = sidecar(&out_path);
     assert!(
         sidecar["studio"]["radiance"]
             .as_f64()

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use lustre_image::metrics::{RELATIVE_MSE_EPSILON, relative_mse};
-use support::{lustre, scratch};
+use support::{lustre, scratch, sidecar};
 
 /// Runs `lustre` and fails the test with its stderr unless it succeeds.
 fn ok(args: &[&str]) -> Output {
@@ -192,10 +192,6 @@ fn render_or_skip(test: &str, args: &[&str]) -> Option<Output> {
 
 fn pixels(path: &Path) -> Vec<[f32; 3]> {
     lustre_image::read_exr(path).unwrap().into_pixels()
-}
-
-fn sidecar(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path.with_extension("json")).unwrap()).unwrap()
 }
 
 /// Largest per-channel difference relative to the image's largest value.

@@ -4,7 +4,7 @@ pub mod bathroom;
 pub mod cardioid;
 mod cornell;
 pub mod mirrors;
-mod parts;
+pub(crate) mod parts;
 pub mod pool;
 pub mod stained_glass;
 pub mod tree;

@@ -211,6 +211,12 @@ pub struct LoadedScene {
     pub studio: Option<Studio>,
 }
 
+/// The material of faces without a known one: Mitsuba's default BSDF,
+/// diffuse with reflectance 0.5, named [`DEFAULT_MATERIAL_NAME`].
+fn fallback_material() -> Material {
+    Material::diffuse(DEFAULT_MATERIAL_NAME, Rgb::splat(0.5))
+}
+
 /// Loads an OBJ file and its MTL libraries with the default [`ObjOptions`].
 pub fn load_obj(path: &Path) -> Result<LoadedScene> {
     load_obj_with(path, &ObjOptions::default())
@@ -259,7 +265,7 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
                 {
                     return d as MaterialId;
                 }
-                materials.push(Material::diffuse(DEFAULT_MATERIAL_NAME, Rgb::splat(0.5)));
+                materials.push(fallback_material());
                 (materials.len() - 1) as MaterialId
             }),
         };
@@ -430,29 +436,24 @@ impl Studio {
     /// Its two materials and two meshes (ground facing up, light facing
     /// down), the materials numbered from `first_material`.
     fn parts(&self, bounds: Aabb, first_material: MaterialId) -> (Vec<Material>, Vec<Mesh>) {
+        use crate::builtin::parts::quad;
         let c = bounds.center();
         let (g, h) = (self.ground_half_side, self.ground_height);
-        let ground = Mesh::flat(
+        // Facing z × x = +y.
+        let ground = quad(
             "studio-ground",
-            &[
-                Vec3::new(c.x - g, h, c.z - g),
-                Vec3::new(c.x - g, h, c.z + g),
-                Vec3::new(c.x + g, h, c.z + g),
-                Vec3::new(c.x + g, h, c.z - g),
-            ],
-            &[[0, 1, 2], [2, 3, 0]],
+            Vec3::new(c.x - g, h, c.z - g),
+            2.0 * g * Vec3::Z,
+            2.0 * g * Vec3::X,
             first_material,
         );
-        let (l, s) = (self.light_centre, 0.5 * self.light_side);
-        let light = Mesh::flat(
+        let (l, s) = (self.light_centre, self.light_side);
+        // Facing x × z = -y.
+        let light = quad(
             "studio-light",
-            &[
-                Vec3::new(l.x - s, l.y, l.z - s),
-                Vec3::new(l.x + s, l.y, l.z - s),
-                Vec3::new(l.x + s, l.y, l.z + s),
-                Vec3::new(l.x - s, l.y, l.z + s),
-            ],
-            &[[0, 1, 2], [2, 3, 0]],
+            Vec3::new(l.x - 0.5 * s, l.y, l.z - 0.5 * s),
+            s * Vec3::X,
+            s * Vec3::Z,
             first_material + 1,
         );
         let materials = vec![

@@ -302,10 +302,7 @@ pub(super) fn scan_obj(
                         match material_index.get(super::DEFAULT_MATERIAL_NAME) {
                             Some(&d) => d,
                             None => {
-                                materials.push(Material::diffuse(
-                                    super::DEFAULT_MATERIAL_NAME,
-                                    crate::Rgb::splat(0.5),
-                                ));
+                                materials.push(super::fallback_material());
                                 material_index.insert(
                                     super::DEFAULT_MATERIAL_NAME.to_owned(),
                                     materials.len() - 1,

@@ -35,9 +35,9 @@ use crate::passes::direct::{DirectLights, DirectPass, GpuLight, GpuWindow};
 use crate::passes::shadow_volume::{
     SHAD_ZERO, ShadowVolumeBuffers, ShadowVolumePass, VolumeLight, VolumeLights,
 };
-use crate::passes::specular::{SpecularFace, SpecularKind, intersect_rects};
+use crate::passes::specular::{SpecularFace, SpecularKind};
 use crate::projective_texture::{Projector, Window, upload_layers};
-use crate::view::{ViewBuffer, ViewSlot};
+use crate::view::{ViewBuffer, ViewSlot, intersect_rects};
 use crate::virtual_light::{
     MAX_SHADOW_DEPTH, SpecularPath, VirtualLightSettings, cone_planes, light_scissor, outgoing,
     shadow_generations, specular_paths,
@@ -101,8 +101,6 @@ pub struct VirtualLights {
     chains: Vec<Chains>,
     buffers: Vec<ShadowVolumeBuffers>,
     bytes: usize,
-    /// Per surface: the world box of its triangles.
-    surface_boxes: Vec<[Vec3; 2]>,
     frame: Mutex<FrameState>,
 }
 
@@ -253,7 +251,6 @@ impl VirtualLights {
             .iter()
             .map(|v| ShadowVolumeBuffers::upload(ctx, v))
             .collect::<Result<Vec<_>>>()?;
-        let surface_boxes = crate::view::surface_boxes(scene);
         Ok(Self {
             settings,
             faces: faces.to_vec(),
@@ -262,7 +259,6 @@ impl VirtualLights {
             chains,
             buffers,
             bytes,
-            surface_boxes,
             frame: Mutex::new(FrameState {
                 blocks: VolumeLights::new(ctx, pass, 1),
                 first: Vec::new(),
@@ -348,7 +344,10 @@ impl VirtualLights {
     /// Writes, for the real lights `direct` holds now (light `i` has the
     /// chains of central position `chain_of[i]`), every virtual light and
     /// every draw's block: the jittered light carried through each prefix,
-    /// the suffix transform (section 4.4's pivot, carried through the faces).
+    /// the suffix transform (section 4.4's pivot, carried through the faces);
+    /// the surfaces each may light are found among `surface_boxes` (per
+    /// surface its world box, [`crate::view::surface_boxes`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &self,
         ctx: &GpuContext,
@@ -356,6 +355,7 @@ impl VirtualLights {
         direct_pass: &DirectPass,
         direct: &DirectLights,
         chain_of: &[usize],
+        surface_boxes: &[[Vec3; 2]],
     ) -> Result<()> {
         let mut frame = self.frame.lock().unwrap_or_else(|e| e.into_inner());
         let mut lights: Vec<GpuLight> = Vec::new();
@@ -373,12 +373,12 @@ impl VirtualLights {
             for (path, draws) in chains.paths.iter().zip(&chains.draws) {
                 let mut virtual_light = light.through(path.transform(), path.factor);
                 virtual_light.window = self.window_of(path, light.position());
-                let surfaces = self.receivers(path, virtual_light.position());
+                let surfaces = self.receivers(path, virtual_light.position(), surface_boxes);
                 let bound =
                     surfaces
                         .iter()
                         .fold([Vec3::INFINITY, Vec3::NEG_INFINITY], |[lo, hi], &s| {
-                            let [a, b] = self.surface_boxes[s as usize];
+                            let [a, b] = surface_boxes[s as usize];
                             [lo.min(a), hi.max(b)]
                         });
                 boxes.push((virtual_light.position(), bound));
@@ -422,7 +422,12 @@ impl VirtualLights {
     /// not wholly behind its last face nor wholly outside the cone from
     /// `source` through it (its light volume, section 4.2), tested on each
     /// surface's box (section 8's culling).
-    fn receivers(&self, path: &SpecularPath, source: Vec3) -> Vec<u32> {
+    fn receivers(
+        &self,
+        path: &SpecularPath,
+        source: Vec3,
+        surface_boxes: &[[Vec3; 2]],
+    ) -> Vec<u32> {
         let Some(&last) = path.faces.last() else {
             return Vec::new();
         };
@@ -430,7 +435,7 @@ impl VirtualLights {
         let mut planes = cone_planes(source, face);
         planes.push(outgoing(face));
         let mut out = Vec::new();
-        for (surface, [lo, hi]) in self.surface_boxes.iter().enumerate() {
+        for (surface, [lo, hi]) in surface_boxes.iter().enumerate() {
             if !lo.is_finite() {
                 continue;
             }

@@ -52,7 +52,8 @@ pub struct ShadowVolumes {
     /// The lights reflected and refracted by specular faces (sections 4.2, 4.3).
     virtual_lights: Option<VirtualLights>,
     /// Per surface, its world box: each view's lit redraws draw the
-    /// surfaces that may show in its region.
+    /// surfaces that may show in its region, and the virtual lights find
+    /// their receivers among them.
     surface_boxes: Vec<[Vec3; 2]>,
 }
 
@@ -237,7 +238,14 @@ impl ShadowVolumes {
         let mut lights = self.lights.lock().unwrap_or_else(|e| e.into_inner());
         lights.write(ctx, &self.pass, &positions)?;
         match &self.virtual_lights {
-            Some(v) => v.prepare(ctx, &self.pass, direct_pass, direct, &self.volume_of),
+            Some(v) => v.prepare(
+                ctx,
+                &self.pass,
+                direct_pass,
+                direct,
+                &self.volume_of,
+                &self.surface_boxes,
+            ),
             None => Ok(()),
         }
     }

@@ -221,11 +221,7 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                                 factor: tint * (1.0 - f0),
                                 corners: corners(surface),
                             };
-                            let flipped = Plane {
-                                normal: -plane.normal,
-                                offset: -plane.offset,
-                            };
-                            vec![face(plane, 1.0 / ior), face(flipped, ior)]
+                            vec![face(plane, 1.0 / ior), face(plane.flipped(), ior)]
                         }
                     }
                 }
@@ -233,15 +229,6 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
             }
         })
         .collect()
-}
-
-/// The intersection of two pixel rectangles `[x, y, w, h]` (empty: zero size).
-pub fn intersect_rects(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
-    let x0 = a[0].max(b[0]);
-    let y0 = a[1].max(b[1]);
-    let x1 = (a[0].saturating_add(a[2])).min(b[0].saturating_add(b[2]));
-    let y1 = (a[1].saturating_add(a[3])).min(b[1].saturating_add(b[3]));
-    [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]
 }
 
 /// The views of one frame in depth-first order and, per view, the faces
@@ -278,8 +265,8 @@ impl ViewTree {
                 let Some(face) = faces.get(f) else {
                     continue;
                 };
-                let mut lo = glam::Vec2::splat(f32::INFINITY);
-                let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
+                let mut lo = glam::DVec2::splat(f64::INFINITY);
+                let mut hi = glam::DVec2::splat(f64::NEG_INFINITY);
                 let mut behind = face.corners.is_empty();
                 for c in &face.corners {
                     let p = m * c.extend(1.0);
@@ -287,20 +274,15 @@ impl ViewTree {
                         behind = true;
                         break;
                     }
-                    let ndc = glam::Vec2::new(p.x / p.w, p.y / p.w);
+                    let ndc = glam::Vec2::new(p.x / p.w, p.y / p.w).as_dvec2();
                     lo = lo.min(ndc);
                     hi = hi.max(ndc);
                 }
                 out[child] = if behind {
                     parent
                 } else {
-                    let (w, h) = (width as f32, height as f32);
-                    let x0 = (((lo.x + 1.0) * 0.5 * w).floor() - 1.0).clamp(0.0, w) as u32;
-                    let x1 = (((hi.x + 1.0) * 0.5 * w).ceil() + 1.0).clamp(0.0, w) as u32;
-                    let y0 = (((1.0 - hi.y) * 0.5 * h).floor() - 1.0).clamp(0.0, h) as u32;
-                    let y1 = (((1.0 - lo.y) * 0.5 * h).ceil() + 1.0).clamp(0.0, h) as u32;
-                    intersect_rects(
-                        [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)],
+                    crate::view::intersect_rects(
+                        crate::view::ndc_to_pixels(lo, hi, width, height),
                         parent,
                     )
                 };

@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs the `lustre` binary with `args`.
@@ -34,4 +34,9 @@ pub fn render_or_skip(test: &str, args: &[&str]) -> Option<Output> {
         return None;
     }
     Some(out)
+}
+
+/// The JSON sidecar written beside the render `path`.
+pub fn sidecar(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path.with_extension("json")).unwrap()).unwrap()
 }
