@@ -253,7 +253,7 @@ pub const CASES: &[Case] = &[
         trace: None,
         bounds: bounds(0.00169, 0.0557, 0.2028, (0.9738, 1.0138)),
     },
-    // measured: relMSE 0.00219, FLIP mean 0.0632, p99 0.1691, mean ratio 0.9986 (1.4 s)
+    // measured: relMSE 0.00218, FLIP mean 0.0631, p99 0.1692, mean ratio 0.9988 (0.9 s)
     Case {
         name: "cornell-detp",
         scene: "cornell",
@@ -293,7 +293,7 @@ pub const CASES: &[Case] = &[
         trace: None,
         bounds: bounds(0.00544, 0.0752, 0.3627, (0.9768, 1.0168)),
     },
-    // measured: relMSE 0.00536, FLIP mean 0.0794, p99 0.3192, mean ratio 1.0003 (2.5 s)
+    // measured: relMSE 0.00531, FLIP mean 0.0793, p99 0.3184, mean ratio 1.0006 (3.3 s)
     Case {
         name: "glosbox-detp",
         scene: "glosbox",

@@ -70,9 +70,8 @@ use lustre_photon::{
 use serde_json::json;
 
 use crate::render_density::{
-    DEFAULT_DETP_RADIUS, DEFAULT_GLOSSY_RADIUS_FACTOR, DEFAULT_MESH_EDGE, DEFAULT_PHOTONMAP_K,
-    DensitySettings, DetpAcceleration, Estimator, GlossyEstimate, PreTestArg, vertex_lit_scene,
-    vertex_radiance,
+    DEFAULT_PHOTONMAP_K, DensityLengths, DensitySettings, DetpAcceleration, Estimator,
+    GlossyEstimate, PreTestArg, vertex_lit_scene, vertex_radiance,
 };
 use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
 use crate::scene_arg;
@@ -110,6 +109,11 @@ impl Technique {
     /// Whether the technique draws the multi-pass pipeline's frame (Diefenbach & Badler 1997): specular images, shadow volumes, virtual lights.
     fn multipass(self) -> bool {
         matches!(self, Self::Mpr | Self::Beams)
+    }
+
+    /// Whether the technique lights mesh vertices by a density estimator (García et al.).
+    fn per_vertex(self) -> bool {
+        matches!(self, Self::Detp | Self::Impact | Self::Photonmap)
     }
 
     /// The density estimator of a per-vertex technique, `None` for the splatting ones.
@@ -376,10 +380,10 @@ pub struct RenderArgs {
     /// Exposure in stops applied to the PNG (EXR files are never scaled).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
-    /// DETP disc radius in m (`--technique detp`).
-    #[arg(long, default_value_t = DEFAULT_DETP_RADIUS)]
-    pub radius: f32,
-    /// DETP disc radius in m for the non-diffuse part of glossy surfaces' view-dependent estimate (García et al. section 2.10; their diffuse part keeps `--radius`). Defaults to 3 × `--radius`, 0.15 m.
+    /// DETP disc radius in scene units (`--technique detp`). Defaults to 2.5 % of the scene's size, the longest side of its bounding box (0.05 m in `cornell`).
+    #[arg(long)]
+    pub radius: Option<f32>,
+    /// DETP disc radius in scene units for the non-diffuse part of glossy surfaces' view-dependent estimate (García et al. section 2.10; their diffuse part keeps `--radius`). Defaults to 3 × the disc radius (0.15 m in `cornell`).
     #[arg(long)]
     pub glossy_radius: Option<f32>,
     /// Nearest impacts of Photon Maps (`--technique photonmap`); their power is divided by the part of their disc that lies on the vertex's surface (half on an edge against a wall, a quarter in a corner).
@@ -403,9 +407,9 @@ pub struct RenderArgs {
     /// DETP's pre-intersection test against the disc's tangent triangle (García et al. section 2.8).
     #[arg(long, value_enum, default_value_t = PreTestArg::None)]
     pub pretest: PreTestArg,
-    /// Longest mesh edge in m after subdivision, for the per-vertex techniques.
-    #[arg(long, default_value_t = DEFAULT_MESH_EDGE)]
-    pub mesh_edge: f32,
+    /// Longest mesh edge in scene units after subdivision, for the per-vertex techniques. Defaults to 5 % of the scene's size (0.1 m in `cornell`).
+    #[arg(long)]
+    pub mesh_edge: Option<f32>,
     /// `--technique splat-direct`: jittered point lights per area light for the
     /// direct light, each with its own shadow map (Diefenbach & Badler 1997,
     /// section 4.4: soft shadows), photons then leaving the area light itself;
@@ -559,19 +563,18 @@ impl RenderArgs {
         }
     }
 
-    /// DETP's glossy disc radius: `--glossy-radius`, or [`DEFAULT_GLOSSY_RADIUS_FACTOR`] × `--radius`.
-    pub fn glossy_radius(&self) -> f32 {
-        self.glossy_radius
-            .unwrap_or(DEFAULT_GLOSSY_RADIUS_FACTOR * self.radius)
+    /// The per-vertex techniques' lengths on `scene`: those given, the others relative to its size.
+    pub fn density_lengths(&self, scene: &Scene) -> anyhow::Result<DensityLengths> {
+        DensityLengths::for_scene(scene, self.radius, self.glossy_radius, self.mesh_edge)
     }
 
-    /// The per-vertex techniques' settings from these options.
-    pub fn density_settings(&self) -> DensitySettings {
+    /// The per-vertex techniques' settings from these options and the lengths chosen for the scene.
+    pub fn density_settings(&self, lengths: &DensityLengths) -> DensitySettings {
         DensitySettings {
             photons: self.photons,
             seed: self.seed,
             artifact_control: self.artifact_control,
-            glossy_radius: self.glossy_radius(),
+            glossy_radius: lengths.glossy_radius,
             glossy: self.glossy_estimate,
             acceleration: self.detp_acceleration,
             pretest: self.pretest,
@@ -751,23 +754,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         );
     }
     glossy_images.validate()?;
-    let density = args.technique.estimator(args.radius, args.k);
-    match density {
-        Some(Estimator::PhotonMaps { k: 0 }) => {
-            bail!("--k 0: Photon Maps needs at least one nearest impact")
+    if args.technique == Technique::Photonmap && args.k == 0 {
+        bail!("--k 0: Photon Maps needs at least one nearest impact");
+    }
+    for (option, value) in [
+        ("--radius", args.radius),
+        ("--glossy-radius", args.glossy_radius),
+        ("--mesh-edge", args.mesh_edge),
+    ] {
+        if let Some(v) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            bail!("{option} {v}: must be positive and finite");
         }
-        Some(Estimator::Detp { radius }) if !(radius > 0.0 && radius.is_finite()) => {
-            bail!("--radius {radius}: the DETP disc radius must be positive")
-        }
-        Some(Estimator::Detp { .. })
-            if !(args.glossy_radius() > 0.0 && args.glossy_radius().is_finite()) =>
-        {
-            bail!(
-                "--glossy-radius {}: the DETP glossy disc radius must be positive",
-                args.glossy_radius()
-            )
-        }
-        _ => {}
     }
     let mut timings = serde_json::Map::new();
     let start = Instant::now();
@@ -786,14 +783,22 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         })
     });
     let mut scene = loaded.scene;
+    // The per-vertex techniques' lengths, relative to the scene as loaded.
+    let lengths = args
+        .technique
+        .per_vertex()
+        .then(|| args.density_lengths(&scene))
+        .transpose()?;
+    let density = lengths.map(|l| args.technique.estimator(l.radius, args.k));
+    let density = density.flatten();
     // Section 3: one point light of equal power for both phases; with more
     // light samples the photons leave the area light itself and only the
     // direct light uses its jittered point lights.
     if args.point_lights() {
         scene = with_point_lights(&scene)?;
     }
-    if density.is_some() {
-        scene = vertex_lit_scene(&scene, args.mesh_edge)?;
+    if let Some(lengths) = &lengths {
+        scene = vertex_lit_scene(&scene, lengths.mesh_edge)?;
     }
     let (width, height) = args.size;
     scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));
@@ -803,10 +808,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     timings.insert("load".into(), json!(ms(start)));
 
     if let Some(frames) = args.frames {
-        let Some(estimator) = density else {
+        let (Some(estimator), Some(lengths)) = (density, lengths) else {
             bail!("--frames: only the per-vertex techniques (detp, impact, photonmap) animate");
         };
-        return crate::render_frames::run(args, scene, estimator, frames);
+        return crate::render_frames::run(args, &lengths, scene, estimator, frames);
     }
     // Beams start at point lights: each area light's cosine point light of
     // equal power at its centre (Stürzlinger & Bastos 1997, section 3).
@@ -871,7 +876,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             None,
         ),
         Some(estimator) => {
-            let v = vertex_radiance(estimator, &scene, &args.density_settings())?;
+            let lengths = lengths.context("a per-vertex technique has its lengths")?;
+            let v = vertex_radiance(estimator, &scene, &args.density_settings(&lengths))?;
             eprintln!(
                 "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
                 estimator.name(),
@@ -1216,9 +1222,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "support": format!("{:?}", args.support_rule()),
         "emission": splatting.as_ref().map(|s| format!("{:?}", s.emission)),
         "estimator": density.map(|e| format!("{e:?}")),
-        "mesh_edge": density.map(|_| args.mesh_edge),
+        "mesh_edge": lengths.map(|l| l.mesh_edge),
         "artifact_control": density.map(|_| args.artifact_control),
-        "glossy_radius": matches!(density, Some(Estimator::Detp { .. })).then(|| args.glossy_radius()),
+        "glossy_radius": lengths.filter(|_| matches!(density, Some(Estimator::Detp { .. }))).map(|l| l.glossy_radius),
         "glossy_estimate": density.map(|_| format!("{:?}", args.glossy_estimate)),
         "detp_acceleration": density.map(|_| format!("{:?}", args.detp_acceleration)),
         "pretest": density.map(|_| format!("{:?}", args.pretest)),
@@ -1279,6 +1285,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "batch_records": args.batch_records,
     })));
     info["peak_memory_bytes"] = json!(peak_memory_bytes());
+    // The size the per-vertex techniques' default lengths scale with.
+    info["scene_size"] = json!(lengths.map(|l| l.scene_size));
     lustre_image::write_json_atomic(&sidecar, &info)
         .with_context(|| format!("cannot write {}", sidecar.display()))?;
     eprintln!("wrote {} and {}", args.out.display(), sidecar.display());

@@ -14,14 +14,78 @@ use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
 use lustre_mpr::passes::gouraud::corner_radiance;
 
-/// Default DETP disc radius in m (section 1.2): 2.5 % of the 2 m Cornell box, half the default mesh edge (the paper's reference uses 1 % of the scene with 100 M rays). With artifact control (on by default), `cornell` at 256×256 and 1 M photons measures relMSE 0.00173, 0.00140, 0.00131, 0.00127, 0.00128, 0.00133 at r = 0.03, 0.04, 0.05, 0.06, 0.07, 0.08 (seed 1): flat from 0.05 on, where the floor's error grows with the blur and the boxes' falls with the noise; without it 0.0029 at 0.05 and at best 0.0028, the bias of the discs cut by walls.
-pub const DEFAULT_DETP_RADIUS: f32 = 0.05;
+/// Default DETP disc radius as a fraction of the scene's size ([`scene_size`], the longest side of its bounding box; section 1.2): 2.5 %, 0.05 m in the 2 m Cornell box and half the default mesh edge (the paper's reference uses 1 % of the scene with 100 M rays, where a smaller disc holds as many rays as ours at 1 M). With artifact control (on by default), `cornell` at 256×256 and 1 M photons measures relMSE 0.00173, 0.00140, 0.00131, 0.00127, 0.00128, 0.00133 at r = 0.03, 0.04, 0.05, 0.06, 0.07, 0.08 m (seed 1): flat from 0.05 on, where the floor's error grows with the blur and the boxes' falls with the noise; without it 0.0029 at 0.05 and at best 0.0028, the bias of the discs cut by walls. A fraction rather than a length, so that a model in millimetres or kilometres gets the image it gets in metres.
+pub const DETP_RADIUS_FRACTION: f32 = 0.025;
 /// Default DETP glossy disc radius as a multiple of the disc radius (section 2.10; beyond the paper, which uses one radius): only the rays inside a glossy lobe count towards the non-diffuse part of the radiance, so its estimate on a 0.05 m disc is speckled (coloured blotches on `glosbox`'s floor, a noisy gold box). `glosbox` (1 M photons, 256×256, artifact control) measures relMSE 0.0059, 0.0034, 0.0027, 0.0026, 0.0027 with glossy radii 0.05, 0.1, 0.15, 0.2, 0.25 m; the floor (α = 0.05) is best at 0.2–0.25, the gold box (α = 0.1, 0.6 m faces) at 0.15–0.2, and 0.2 costs a third more time than 0.15 for 4 % less error. Both radii scale alike with the photon count (the kernel's bias–variance balance), hence a factor rather than a length.
 pub const DEFAULT_GLOSSY_RADIUS_FACTOR: f32 = 3.0;
 /// Default number `k` of nearest impacts of Photon Maps (section 1.2, Jensen): with the normal filter and the boundary correction (`lustre_density::boundary`), 300 at the default 1 M photons gives `cornell` relMSE 0.0022 against the reference and `glosbox` 0.0085 (0.0083–0.0085 over seeds 1–3), the smallest k tried under 0.0050 and 0.0100 with a margin (k = 200: 0.0024 and 0.0101; k = 400: 0.0022 and 0.0065); `glosbox`'s error is the variance of the glossy floor's and gold box's view-dependent estimate. About 1.1 s of CPU for `cornell`'s estimate, less than half of what k = 200 cost before the kd-tree split on the widest axis and skipped subtrees by their normals.
 pub const DEFAULT_PHOTONMAP_K: usize = 300;
-/// Default longest edge in m after subdivision for per-vertex lighting (section 2.9 meshes into 0.02 m squares; 0.1 m gives `cornell` about 6,500 vertices, keeping DETP's every-segment-at-every-vertex cost near ten seconds on two cores).
-pub const DEFAULT_MESH_EDGE: f32 = 0.1;
+/// Default longest edge after subdivision for per-vertex lighting, as a fraction of the scene's size (section 2.9 meshes into 0.02 m squares): 5 %, 0.1 m in `cornell`, which gives it about 6,500 vertices and keeps DETP's every-segment-at-every-vertex cost near ten seconds on two cores.
+pub const MESH_EDGE_FRACTION: f32 = 0.05;
+
+/// The scene's size for the relative defaults: the longest side of its bounding box, lights included (the scene units' metre; `cornell` 2.01).
+pub fn scene_size(scene: &Scene) -> f32 {
+    scene.bounds().extent().max_element()
+}
+
+/// The lengths of the per-vertex techniques: given on the command line, or relative to the scene's size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DensityLengths {
+    /// The scene's size they were chosen from ([`scene_size`]).
+    pub scene_size: f32,
+    /// DETP's disc radius (section 1.2).
+    pub radius: f32,
+    /// DETP's disc radius for the non-diffuse part of glossy meshes (section 2.10).
+    pub glossy_radius: f32,
+    /// Longest mesh edge after subdivision (section 2.9).
+    pub mesh_edge: f32,
+}
+
+impl DensityLengths {
+    /// Each length given, or its default relative to `scene`'s size: [`DETP_RADIUS_FRACTION`], [`DEFAULT_GLOSSY_RADIUS_FACTOR`] × the radius and [`MESH_EDGE_FRACTION`]; an error names the option to give when the scene has no size to scale by.
+    pub fn for_scene(
+        scene: &Scene,
+        radius: Option<f32>,
+        glossy_radius: Option<f32>,
+        mesh_edge: Option<f32>,
+    ) -> anyhow::Result<Self> {
+        let size = scene_size(scene);
+        let relative = |fraction: f32, option: &str| {
+            if size.is_finite() && size > 0.0 {
+                Ok(fraction * size)
+            } else {
+                anyhow::bail!(
+                    "scene `{}` has no extent ({size}) to scale the default {option} by; give {option}",
+                    scene.name
+                )
+            }
+        };
+        let radius = match radius {
+            Some(r) => r,
+            None => relative(DETP_RADIUS_FRACTION, "--radius")?,
+        };
+        let mesh_edge = match mesh_edge {
+            Some(e) => e,
+            None => relative(MESH_EDGE_FRACTION, "--mesh-edge")?,
+        };
+        let lengths = Self {
+            scene_size: size,
+            radius,
+            glossy_radius: glossy_radius.unwrap_or(DEFAULT_GLOSSY_RADIUS_FACTOR * radius),
+            mesh_edge,
+        };
+        for (option, value) in [
+            ("--radius", lengths.radius),
+            ("--glossy-radius", lengths.glossy_radius),
+            ("--mesh-edge", lengths.mesh_edge),
+        ] {
+            if !(value > 0.0 && value.is_finite()) {
+                anyhow::bail!("{option} {value}: must be positive and finite");
+            }
+        }
+        Ok(lengths)
+    }
+}
 
 pub use lustre_density::Estimator;
 
@@ -244,6 +308,91 @@ mod tests {
         assert_eq!(fine.lights()[0].power(), scene.lights()[0].power());
         assert!(fine.triangle_count() > 10 * scene.triangle_count());
         assert!((fine.bounds().extent() - scene.bounds().extent()).length() < 1e-6);
+    }
+
+    /// `scene` with every length multiplied by `factor`: vertices, object translations and the camera; area lights keep their radiance, so every irradiance is unchanged.
+    fn scaled(scene: &Scene, factor: f32) -> Scene {
+        let meshes = scene
+            .meshes()
+            .iter()
+            .map(|m| {
+                let mut m = m.clone();
+                m.positions.iter_mut().for_each(|p| *p *= factor);
+                m
+            })
+            .collect();
+        let mut out = scene.with_meshes(meshes).unwrap();
+        for (o, object) in scene.objects().iter().enumerate() {
+            let mut t = object.transform;
+            t.translation *= factor;
+            out.set_object_transform(o as u32, t).unwrap();
+        }
+        let mut camera = *scene.camera();
+        camera.position *= factor;
+        camera.target *= factor;
+        camera.near *= factor;
+        out.set_camera(camera);
+        out
+    }
+
+    #[test]
+    fn default_lengths_are_relative_to_the_scene() {
+        let cornell = builtin("cornell").unwrap();
+        let l = DensityLengths::for_scene(&cornell, None, None, None).unwrap();
+        assert!((l.scene_size - 2.01).abs() < 1e-5, "{}", l.scene_size);
+        assert!((l.radius - 0.025 * 2.01).abs() < 1e-6);
+        assert!((l.glossy_radius - 3.0 * l.radius).abs() < 1e-6);
+        assert!((l.mesh_edge - 0.05 * 2.01).abs() < 1e-6);
+        let given = DensityLengths::for_scene(&cornell, Some(0.2), None, Some(0.3)).unwrap();
+        assert_eq!(
+            (given.radius, given.glossy_radius, given.mesh_edge),
+            (0.2, 0.6, 0.3)
+        );
+        let big = DensityLengths::for_scene(&scaled(&cornell, 1000.0), None, None, None).unwrap();
+        assert!((big.radius / l.radius - 1000.0).abs() < 0.01);
+        assert!((big.mesh_edge / l.mesh_edge - 1000.0).abs() < 0.01);
+        let bad = DensityLengths::for_scene(&cornell, Some(-1.0), None, None);
+        assert!(format!("{:#}", bad.unwrap_err()).contains("--radius -1"));
+    }
+
+    /// The same per-corner radiance for `cornell` in metres and in millimetres under the relative defaults: every length of DETP (disc, glossy disc, mesh edge, ray offsets) scales with the scene.
+    #[test]
+    fn a_scene_scaled_by_1000_gets_the_same_radiance() {
+        let metres = builtin("cornell").unwrap();
+        let millimetres = scaled(&metres, 1000.0);
+        let corners = |scene: &Scene| {
+            let l = DensityLengths::for_scene(scene, None, None, None).unwrap();
+            let meshed = vertex_lit_scene(scene, 4.0 * l.mesh_edge).unwrap();
+            let mut settings = DensitySettings::new(20_000, 1);
+            settings.artifact_control = true;
+            settings.glossy_radius = l.glossy_radius;
+            let r = vertex_radiance(
+                Estimator::Detp {
+                    radius: 4.0 * l.radius,
+                },
+                &meshed,
+                &settings,
+            )
+            .unwrap();
+            (meshed.triangle_count(), r.corners)
+        };
+        let (n_m, m) = corners(&metres);
+        let (n_mm, mm) = corners(&millimetres);
+        assert_eq!(n_m, n_mm, "the same subdivision");
+        let (mut worst, mut sum, mut total) = (0.0f32, 0.0f64, 0.0f64);
+        for (a, b) in m.iter().flatten().zip(mm.iter().flatten()) {
+            worst = worst.max((a - b).abs() / a.abs().max(1e-3));
+            sum += f64::from((a - b).abs());
+            total += f64::from(a.abs());
+        }
+        assert!(total > 0.0);
+        // Measured: 4e-8 mean, 2e-7 worst (float rounding of the scaled coordinates).
+        assert!(
+            sum / total < 1e-5,
+            "mean relative difference {}",
+            sum / total
+        );
+        assert!(worst < 1e-3, "worst corner differs by {worst}");
     }
 
     #[test]

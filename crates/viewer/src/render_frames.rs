@@ -15,7 +15,7 @@ use lustre_mpr::{
 use serde_json::json;
 
 use crate::render::{RenderArgs, sidecar_path, write_image};
-use crate::render_density::corners;
+use crate::render_density::{DensityLengths, corners};
 
 /// The path of frame `index` of `out`: `render.png` becomes `render-0003.png`.
 pub fn frame_path(out: &Path, index: usize) -> PathBuf {
@@ -132,6 +132,7 @@ impl Gpu {
 /// Runs `frames` frames of the quasi-static simulation on `scene` (already meshed for per-vertex lighting) and writes the images and the sidecar.
 pub fn run(
     args: &RenderArgs,
+    lengths: &DensityLengths,
     scene: Scene,
     estimator: Estimator,
     frames: usize,
@@ -149,8 +150,12 @@ pub fn run(
     let ids: Vec<ObjectId> = paths.iter().map(|m| m.object).collect();
     let times: Vec<Vec<f32>> = paths.iter().map(|m| m.path.frame_times(frames)).collect();
     let start = Instant::now();
-    let mut sim = QuasiStatic::new(scene, &ids, args.density_settings().options(estimator))
-        .with_context(|| format!("{} first frame", estimator.name()))?;
+    let mut sim = QuasiStatic::new(
+        scene,
+        &ids,
+        args.density_settings(lengths).options(estimator),
+    )
+    .with_context(|| format!("{} first frame", estimator.name()))?;
     let setup_ms = ms(start.elapsed());
     let first = sim.first_frame();
     eprintln!(
@@ -213,9 +218,10 @@ pub fn run(
         "photons": args.photons,
         "seed": args.seed,
         "frames": frames,
-        "mesh_edge": args.mesh_edge,
+        "scene_size": lengths.scene_size,
+        "mesh_edge": lengths.mesh_edge,
         "artifact_control": args.artifact_control,
-        "glossy_radius": matches!(estimator, Estimator::Detp { .. }).then(|| args.glossy_radius()),
+        "glossy_radius": matches!(estimator, Estimator::Detp { .. }).then_some(lengths.glossy_radius),
         "glossy_estimate": format!("{:?}", args.glossy_estimate),
         "detp_acceleration": format!("{:?}", args.detp_acceleration),
         "pretest": format!("{:?}", args.pretest),

@@ -127,7 +127,7 @@ fn each_vertex_technique_renders_a_lit_cornell_with_its_sidecar() {
         ("detp", ["--radius", "0"], "radius"),
         ("detp", ["--glossy-radius", "0"], "--glossy-radius"),
         ("photonmap", ["--k", "0"], "--k"),
-        ("impact", ["--mesh-edge", "0"], "subdivide"),
+        ("impact", ["--mesh-edge", "0"], "--mesh-edge"),
     ] {
         let mut all = vec![
             "render",
@@ -151,6 +151,65 @@ fn each_vertex_technique_renders_a_lit_cornell_with_its_sidecar() {
             "{args:?}: {stderr}"
         );
     }
+}
+
+/// A model in millimetres gets the image it gets in metres: the default studio, the DETP disc, glossy disc and mesh edge all scale with the scene's size (García et al.'s radius relative to the scene), and the sidecar records them.
+#[test]
+fn a_model_in_millimetres_renders_as_in_metres() {
+    let dir = scratch("units");
+    // A pyramid on a slab, no light: the default studio lights it.
+    let obj = |scale: f32| {
+        let v = [
+            [-1.0, 0.0, -1.0],
+            [1.0, 0.0, -1.0],
+            [1.0, 0.0, 1.0],
+            [-1.0, 0.0, 1.0],
+            [0.0, 1.2, 0.0],
+            [-1.5, -0.1, -1.5],
+            [1.5, -0.1, -1.5],
+            [1.5, -0.1, 1.5],
+            [-1.5, -0.1, 1.5],
+        ];
+        let mut text = String::new();
+        for p in v {
+            text += &format!("v {} {} {}\n", p[0] * scale, p[1] * scale, p[2] * scale);
+        }
+        text += "f 1 5 2\nf 2 5 3\nf 3 5 4\nf 4 5 1\nf 6 9 8\nf 6 8 7\n";
+        text
+    };
+    let mut images = Vec::new();
+    let mut sidecars = Vec::new();
+    for (name, scale) in [("metres", 1.0), ("millimetres", 1000.0)] {
+        let path = dir.join(format!("{name}.obj"));
+        std::fs::write(&path, obj(scale)).unwrap();
+        let out = dir.join(format!("{name}.exr"));
+        let quick = ["--photons", "5000", "--size", "32x32", "--seed", "1"];
+        let Some(sidecar) = render_scene(
+            "a_model_in_millimetres",
+            path.to_str().unwrap(),
+            "detp",
+            &quick,
+            &out,
+        ) else {
+            return;
+        };
+        images.push(lustre_image::read_exr(&out).unwrap());
+        sidecars.push(sidecar);
+    }
+    let ratio = |key: &str| sidecars[1][key].as_f64().unwrap() / sidecars[0][key].as_f64().unwrap();
+    for key in ["scene_size", "mesh_edge", "glossy_radius"] {
+        assert!((ratio(key) - 1000.0).abs() < 0.01, "{key}: {sidecars:?}");
+    }
+    let size = sidecars[0]["scene_size"].as_f64().unwrap();
+    assert!(
+        (sidecars[0]["mesh_edge"].as_f64().unwrap() - 0.05 * size).abs() < 1e-6,
+        "{sidecars:?}"
+    );
+    assert_eq!(sidecars[0]["triangles"], sidecars[1]["triangles"]);
+    let mean = lustre_image::metrics::mean(&images[0]);
+    assert!(mean.iter().all(|&m| m > 0.0), "{mean:?}");
+    let relmse = relative_mse(&images[1], &images[0], RELATIVE_MSE_EPSILON).unwrap();
+    assert!(relmse < 1e-5, "millimetres against metres: relMSE {relmse}");
 }
 
 /// Time and relMSE of each technique at 100k photons, 256x256, against the path-traced reference.

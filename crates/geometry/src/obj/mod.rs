@@ -402,7 +402,7 @@ pub fn framing_camera(bounds: Aabb) -> Camera {
 /// `studio-ground` and `studio-light`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Studio {
-    /// Height of the ground plane: the bottom of the model's box.
+    /// Height of the ground plane: a thousandth of the model's largest extent below the bottom of its box, so that a flat base does not lie in the ground's plane (coplanar faces z-fight, differently at every scale, and photons land on either).
     pub ground_height: f32,
     /// Half the side of the square ground, centred under the model: 2.5 times its largest extent.
     pub ground_half_side: f32,
@@ -416,6 +416,9 @@ pub struct Studio {
     pub radiance: f32,
 }
 
+/// The gap between a model's box and the studio's ground, in the model's largest extents.
+const GROUND_GAP: f32 = 1e-3;
+
 impl Studio {
     /// The studio for a model's box.
     pub fn for_bounds(bounds: Aabb) -> Self {
@@ -423,9 +426,10 @@ impl Studio {
         let centre = bounds.center();
         let light_centre = Vec3::new(centre.x, bounds.max.y + extent, centre.z);
         let light_side = 0.5 * extent;
-        let distance = light_centre.y - bounds.min.y;
+        let ground_height = bounds.min.y - GROUND_GAP * extent;
+        let distance = light_centre.y - ground_height;
         Self {
-            ground_height: bounds.min.y,
+            ground_height,
             ground_half_side: 2.5 * extent,
             light_centre,
             light_side,
