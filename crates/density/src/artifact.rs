@@ -126,7 +126,7 @@ fn step_past(t: f32) -> f32 {
     t.next_up()
 }
 
-/// Whether the path `origin + t dir`, `t ∈ [0, length]`, meets a triangle outside `own`; a hit within `near` of the origin that the path leaves through its front face is ignored (the path starts on that surface).
+/// Whether the path `origin + t dir`, `t ∈ [0, length]`, meets a triangle outside `own`; a hit within `near` of the origin that the path leaves through its front face is ignored (the path starts on that surface). One any-hit query that passes over the own mesh's triangles: on a dense mesh a path along the surface crosses many of them, and stepping from one to the next with closest-hit queries cost a third of a glossy model's DETP estimate.
 fn blocked(
     bvh: &Bvh,
     origin: Vec3,
@@ -138,21 +138,18 @@ fn blocked(
     // Queried from `BACK_OFF` behind the origin, distances shifted by it (see `BACK_OFF`).
     let from = origin - BACK_OFF * dir;
     let end = length + BACK_OFF;
-    if !bvh.any_hit(&Ray::segment(from, dir, BACK_OFF, end)) {
-        return false;
-    }
-    let mut t = BACK_OFF;
-    for _ in 0..MAX_STEPS {
-        let Some(h) = bvh.closest_hit(&Ray::segment(from, dir, t, end)) else {
+    let triangles = bvh.triangles();
+    bvh.any_hit_where(&Ray::segment(from, dir, BACK_OFF, end), |id, t| {
+        if own.contains(&id) {
             return false;
-        };
-        let leaving = h.t - BACK_OFF <= near && dir.dot(h.geometric_normal) >= 0.0;
-        if !own.contains(&h.triangle) && !leaving {
+        }
+        if t - BACK_OFF > near {
             return true;
         }
-        t = step_past(h.t);
-    }
-    false
+        let [p0, p1, p2] = triangles[id as usize].positions;
+        // Leaving through the front face: the surface the path starts on.
+        dir.dot((p1 - p0).cross(p2 - p0)) < 0.0
+    })
 }
 
 /// The reachable area of a disc (section 1.2.1, walls and corners): `π r²` times the fraction of the `n × n` stratified points whose path from the vertex, `offset · r` above the plane, meets no triangle outside `own` (the vertex's mesh). `inward` is a unit tangent direction into the vertex's own surface for a vertex on its mesh's border (zero otherwise, see [`inward_directions`]): the paths start `offset · r` that way, off the edges of walls that end at the vertex (a floor corner). Fails on a bad disc, `inward` or options.

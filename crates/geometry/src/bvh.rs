@@ -161,6 +161,23 @@ impl Bvh {
         })
     }
 
+    /// Whether a triangle that `accept` takes lies on the ray with `t` in `[ray.t_min, ray.t_max]`: `accept` gets each triangle met (scene-wide id, distance) in traversal order until it takes one, so triangles it refuses, such as a path's own mesh, cost no further query.
+    pub fn any_hit_where(
+        &self,
+        ray: &Ray,
+        mut accept: impl FnMut(TriangleId, f32) -> bool,
+    ) -> bool {
+        let Some(bvh) = &self.cwbvh else {
+            return false;
+        };
+        !bvh.ray_traverse_miss(to_obvhs(ray), |r, slot| {
+            match intersect_triangle_a(r.origin, r.direction, r.tmin, r.tmax, &self.ordered[slot]) {
+                Some(h) if accept(bvh.primitive_indices[slot], h.t) => h.t,
+                _ => f32::INFINITY,
+            }
+        })
+    }
+
     /// Calls `f` with the scene-wide id of every triangle whose bounding box overlaps the box `min..=max` (each once, in no particular order).
     pub fn overlapping(&self, min: Vec3, max: Vec3, mut f: impl FnMut(TriangleId)) {
         let Some(bvh) = &self.cwbvh else {

@@ -42,6 +42,7 @@ use anyhow::{Context, bail};
 use clap::ValueEnum;
 use lustre_beams::{BeamInput, BeamSet, BuildOptions, GlossyVolume, SplitPoint};
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
+use lustre_geometry::obj::Studio;
 use lustre_geometry::{Bvh, Scene};
 use lustre_image::{Image, Precision};
 use lustre_mpr::beam_paths::scatterer_surfaces;
@@ -563,9 +564,19 @@ impl RenderArgs {
         }
     }
 
-    /// The per-vertex techniques' lengths on `scene`: those given, the others relative to its size.
-    pub fn density_lengths(&self, scene: &Scene) -> anyhow::Result<DensityLengths> {
-        DensityLengths::for_scene(scene, self.radius, self.glossy_radius, self.mesh_edge)
+    /// The per-vertex techniques' lengths on `scene` (in `studio` if it has one): those given, the others relative to its size.
+    pub fn density_lengths(
+        &self,
+        scene: &Scene,
+        studio: Option<&Studio>,
+    ) -> anyhow::Result<DensityLengths> {
+        DensityLengths::for_scene(
+            scene,
+            studio,
+            self.radius,
+            self.glossy_radius,
+            self.mesh_edge,
+        )
     }
 
     /// The per-vertex techniques' settings from these options and the lengths chosen for the scene.
@@ -780,6 +791,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "light_centre": s.light_centre.to_array(),
             "light_side": s.light_side,
             "radiance": s.radiance,
+            "model_size": s.model_size,
         })
     });
     let mut scene = loaded.scene;
@@ -787,7 +799,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let lengths = args
         .technique
         .per_vertex()
-        .then(|| args.density_lengths(&scene))
+        .then(|| args.density_lengths(&scene, loaded.studio.as_ref()))
         .transpose()?;
     let density = lengths.map(|l| args.technique.estimator(l.radius, args.k));
     let density = density.flatten();

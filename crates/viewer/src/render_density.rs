@@ -12,6 +12,7 @@ use lustre_density::quadtree::QuadTreeOptions;
 use lustre_density::{Acceleration, PreTest, QuasiStatic, QuasiStaticOptions};
 use lustre_geometry::Scene;
 use lustre_geometry::meshing::subdivide;
+use lustre_geometry::obj::Studio;
 use lustre_mpr::passes::gouraud::corner_radiance;
 
 /// Default DETP disc radius as a fraction of the scene's size ([`scene_size`], the longest side of its bounding box; section 1.2): 2.5 %, 0.05 m in the 2 m Cornell box and half the default mesh edge (the paper's reference uses 1 % of the scene with 100 M rays, where a smaller disc holds as many rays as ours at 1 M). With artifact control (on by default), `cornell` at 256×256 and 1 M photons measures relMSE 0.00173, 0.00140, 0.00131, 0.00127, 0.00128, 0.00133 at r = 0.03, 0.04, 0.05, 0.06, 0.07, 0.08 m (seed 1): flat from 0.05 on, where the floor's error grows with the blur and the boxes' falls with the noise; without it 0.0029 at 0.05 and at best 0.0028, the bias of the discs cut by walls. A fraction rather than a length, so that a model in millimetres or kilometres gets the image it gets in metres.
@@ -23,9 +24,9 @@ pub const DEFAULT_PHOTONMAP_K: usize = 300;
 /// Default longest edge after subdivision for per-vertex lighting, as a fraction of the scene's size (section 2.9 meshes into 0.02 m squares): 5 %, 0.1 m in `cornell`, which gives it about 6,500 vertices and keeps DETP's every-segment-at-every-vertex cost near ten seconds on two cores.
 pub const MESH_EDGE_FRACTION: f32 = 0.05;
 
-/// The scene's size for the relative defaults: the longest side of its bounding box, lights included (the scene units' metre; `cornell` 2.01).
-pub fn scene_size(scene: &Scene) -> f32 {
-    scene.bounds().extent().max_element()
+/// The scene's size for the relative defaults: the longest side of its bounding box, lights included (`cornell` 2.01 m), or for a model in the default studio the model's (the studio is five times as wide, and the model is what is looked at).
+pub fn scene_size(scene: &Scene, studio: Option<&Studio>) -> f32 {
+    studio.map_or_else(|| scene.bounds().extent().max_element(), |s| s.model_size)
 }
 
 /// The lengths of the per-vertex techniques: given on the command line, or relative to the scene's size.
@@ -42,14 +43,15 @@ pub struct DensityLengths {
 }
 
 impl DensityLengths {
-    /// Each length given, or its default relative to `scene`'s size: [`DETP_RADIUS_FRACTION`], [`DEFAULT_GLOSSY_RADIUS_FACTOR`] × the radius and [`MESH_EDGE_FRACTION`]; an error names the option to give when the scene has no size to scale by.
+    /// Each length given, or its default relative to the size of `scene` (in `studio` if it has one, [`scene_size`]): [`DETP_RADIUS_FRACTION`], [`DEFAULT_GLOSSY_RADIUS_FACTOR`] × the radius and [`MESH_EDGE_FRACTION`]; an error names the option to give when the scene has no size to scale by.
     pub fn for_scene(
         scene: &Scene,
+        studio: Option<&Studio>,
         radius: Option<f32>,
         glossy_radius: Option<f32>,
         mesh_edge: Option<f32>,
     ) -> anyhow::Result<Self> {
-        let size = scene_size(scene);
+        let size = scene_size(scene, studio);
         let relative = |fraction: f32, option: &str| {
             if size.is_finite() && size > 0.0 {
                 Ok(fraction * size)
@@ -338,20 +340,21 @@ mod tests {
     #[test]
     fn default_lengths_are_relative_to_the_scene() {
         let cornell = builtin("cornell").unwrap();
-        let l = DensityLengths::for_scene(&cornell, None, None, None).unwrap();
+        let l = DensityLengths::for_scene(&cornell, None, None, None, None).unwrap();
         assert!((l.scene_size - 2.01).abs() < 1e-5, "{}", l.scene_size);
         assert!((l.radius - 0.025 * 2.01).abs() < 1e-6);
         assert!((l.glossy_radius - 3.0 * l.radius).abs() < 1e-6);
         assert!((l.mesh_edge - 0.05 * 2.01).abs() < 1e-6);
-        let given = DensityLengths::for_scene(&cornell, Some(0.2), None, Some(0.3)).unwrap();
+        let given = DensityLengths::for_scene(&cornell, None, Some(0.2), None, Some(0.3)).unwrap();
         assert_eq!(
             (given.radius, given.glossy_radius, given.mesh_edge),
             (0.2, 0.6, 0.3)
         );
-        let big = DensityLengths::for_scene(&scaled(&cornell, 1000.0), None, None, None).unwrap();
+        let big =
+            DensityLengths::for_scene(&scaled(&cornell, 1000.0), None, None, None, None).unwrap();
         assert!((big.radius / l.radius - 1000.0).abs() < 0.01);
         assert!((big.mesh_edge / l.mesh_edge - 1000.0).abs() < 0.01);
-        let bad = DensityLengths::for_scene(&cornell, Some(-1.0), None, None);
+        let bad = DensityLengths::for_scene(&cornell, None, Some(-1.0), None, None);
         assert!(format!("{:#}", bad.unwrap_err()).contains("--radius -1"));
     }
 
@@ -361,7 +364,7 @@ mod tests {
         let metres = builtin("cornell").unwrap();
         let millimetres = scaled(&metres, 1000.0);
         let corners = |scene: &Scene| {
-            let l = DensityLengths::for_scene(scene, None, None, None).unwrap();
+            let l = DensityLengths::for_scene(scene, None, None, None, None).unwrap();
             let meshed = vertex_lit_scene(scene, 4.0 * l.mesh_edge).unwrap();
             let mut settings = DensitySettings::new(20_000, 1);
             settings.artifact_control = true;

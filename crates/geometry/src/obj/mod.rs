@@ -414,6 +414,8 @@ pub struct Studio {
     /// the ground and area `A`, so the irradiance under it is about π W/m²
     /// whatever the model's units.
     pub radiance: f32,
+    /// The model's largest extent: the scene's size for lengths relative to it (the studio around it is five times as wide).
+    pub model_size: f32,
 }
 
 /// The gap between a model's box and the studio's ground, in the model's largest extents.
@@ -434,6 +436,7 @@ impl Studio {
             light_centre,
             light_side,
             radiance: std::f32::consts::PI * distance * distance / (light_side * light_side),
+            model_size: extent,
         }
     }
 
