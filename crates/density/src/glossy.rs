@@ -548,7 +548,6 @@ impl GlossyVertices {
             });
         }
         let slack = crate::accel::scene_slack(scene);
-        let segments: Vec<RaySegment> = rays.segments().copied().collect();
         // One disc per vertex with a usable normal, and where it goes.
         let mut meshes = meshes.to_vec();
         meshes.sort_unstable();
@@ -579,6 +578,12 @@ impl GlossyVertices {
                 pretest: PreTest::None,
             },
         )?;
+        // Without a disc (no glossy mesh of this kind, e.g. a frame's mobile ones) no segment is looked at.
+        let segments: Vec<RaySegment> = if set.discs().is_empty() {
+            Vec::new()
+        } else {
+            rays.segments().copied().collect()
+        };
         let crossings = set.crossings(&segments)?;
         let built = set
             .discs()

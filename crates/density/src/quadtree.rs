@@ -268,6 +268,50 @@ impl Node {
         (self.count, self.power, self.lo, self.hi) = (count, power, lo, hi);
     }
 
+    /// The subtree of `cell` over `entries` (in any order) with the shape [`Node::split`] gives a key-sorted leaf, and each leaf's rays in key order: the rays are partitioned among the children level by level through `scratch` (as long as `entries`), and each is copied once into its leaf, sorted there. Splitting one sorted leaf moved every ray into a new vector at each level and sorted them all first, a third of a dense glossy model's estimate.
+    fn build(
+        entries: &mut [Entry],
+        scratch: &mut [Entry],
+        cell: Cell,
+        options: &QuadTreeOptions,
+    ) -> Self {
+        if entries.len() <= options.capacity || cell.depth >= options.max_depth {
+            // Stable: rays with equal keys keep their order, as in a sorted leaf split.
+            entries.sort_by(|a, b| key_order(&a.ray, &b.ray));
+            return Self::leaf(entries.to_vec());
+        }
+        let mut counts = [0usize; 4];
+        for e in entries.iter() {
+            counts[cell.child_of(e.uv)] += 1;
+        }
+        let mut next = [
+            0,
+            counts[0],
+            counts[0] + counts[1],
+            counts[0] + counts[1] + counts[2],
+        ];
+        for e in entries.iter() {
+            let i = cell.child_of(e.uv);
+            scratch[next[i]] = *e;
+            next[i] += 1;
+        }
+        // Each child's rays are now a run of `scratch`; `entries` is their scratch.
+        let (mut rays, mut spare) = (scratch, entries);
+        let mut i = 0;
+        let children = counts.map(|n| {
+            let (own, rest) = std::mem::take(&mut rays).split_at_mut(n);
+            let (own_spare, rest_spare) = std::mem::take(&mut spare).split_at_mut(n);
+            (rays, spare) = (rest, rest_spare);
+            let child = Self::build(own, own_spare, cell.child(i), options);
+            i += 1;
+            child
+        });
+        let mut node = Self::leaf(Vec::new());
+        node.kind = Kind::Inner(Box::new(children));
+        node.refresh();
+        node
+    }
+
     /// Splits a leaf that holds too many rays, recursively (the canonical shape rule).
     fn split(&mut self, cell: Cell, options: &QuadTreeOptions) {
         if self.count <= options.capacity || cell.depth >= options.max_depth {
@@ -482,9 +526,8 @@ impl QuadTree {
     pub fn from_rays(options: QuadTreeOptions, rays: &[IncidentRay]) -> Result<Self> {
         options.validate()?;
         let mut entries: Vec<Entry> = rays.iter().map(|&r| Entry::new(r)).collect();
-        entries.sort_by(|a, b| key_order(&a.ray, &b.ray));
-        let mut root = Node::leaf(entries);
-        root.split(Cell::ROOT, &options);
+        let mut scratch = entries.clone();
+        let root = Node::build(&mut entries, &mut scratch, Cell::ROOT, &options);
         Ok(Self { options, root })
     }
 

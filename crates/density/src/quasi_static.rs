@@ -489,7 +489,9 @@ impl QuasiStatic {
             .filter(|&m| self.world.is_mobile_mesh(m) == mobile)
             .collect();
         let mut vertices = GlossyVertices::build(&self.scene, &self.rays, radius, mode, &meshes)?;
-        if let Some(options) = self.options.artifact {
+        if let Some(options) = self.options.artifact
+            && !meshes.is_empty()
+        {
             let bvh = self.world.static_scene_bvh(&self.scene);
             let grid = TriangleGrid::new(bvh, 2.0 * radius);
             let mut areas: Vec<Vec<f32>> = vec![Vec::new(); self.scene.meshes().len()];

@@ -231,6 +231,28 @@ fn quadtree_without_summarising_matches_the_list() {
     eprintln!("largest (error − bound) / value: {worst_excess:.2e}");
 }
 
+/// The direct build (rays partitioned level by level, each leaf sorted) gives the tree that inserting the rays one by one gives, at the default shape and at the depth limit, duplicates included.
+#[test]
+fn a_built_tree_equals_one_grown_by_insertion() {
+    let mut rays = disc_rays();
+    rays.extend_from_within(..rays.len() / 3);
+    for options in [
+        QuadTreeOptions::default(),
+        QuadTreeOptions {
+            capacity: 1,
+            max_depth: 3,
+        },
+    ] {
+        let mut grown = QuadTree::new(options).unwrap();
+        for &ray in &rays {
+            grown.insert(ray);
+        }
+        let built = QuadTree::from_rays(options, &rays).unwrap();
+        built.validate().unwrap();
+        assert_eq!(built, grown, "{options:?}");
+    }
+}
+
 #[test]
 fn insertions_and_removals_equal_a_rebuild() {
     let rays = disc_rays();
