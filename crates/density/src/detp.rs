@@ -44,6 +44,13 @@ impl Disc {
         }
     }
 
+    /// A box round every point where [`Disc::is_crossed_by`] with `slack` finds a segment crossing the disc: `centre ± r`, padded by the slack, a thousandth of `r` and `10⁻⁵` of the centre's largest coordinate for rounding.
+    pub fn bounds(&self, slack: f32) -> (Vec3, Vec3) {
+        let pad = slack + 1e-3 * self.radius + 1e-5 * self.centre.abs().max_element();
+        let half = Vec3::splat(self.radius + pad);
+        (self.centre - half, self.centre + half)
+    }
+
     /// The disc's contribution of one segment, `φ / (π r²)` when it crosses the disc, else zero (section 1.2; additive over rays, equation 2.8).
     pub fn irradiance_of(&self, segment: &RaySegment, slack: f32) -> Rgb {
         if self.is_crossed_by(segment, slack) {
@@ -93,4 +100,29 @@ pub fn detp(scene: &Scene, rays: &RaySet, radius: f32) -> Result<VertexIrradianc
                 .collect()
         })
         .collect())
+}
+
+/// Whether `segment`, followed as far as any disc may see it (its length, or its hit plus its artifact-control extension, plus `slack`), passes through the box `lo..=hi` (slab test): false only when it crosses no disc whose [`Disc::bounds`] lie in the box, so a set of discs in a small region can skip every other segment (beyond the paper, section 2.5.2: the mobile object's discs against every ray).
+pub fn segment_meets_box(segment: &RaySegment, slack: f32, lo: Vec3, hi: Vec3) -> bool {
+    let reach = segment
+        .hit
+        .map_or(f32::INFINITY, |h| h.distance + segment.extension.max(0.0))
+        + slack;
+    let (mut t0, mut t1) = (0.0f32, reach);
+    for axis in 0..3 {
+        let (o, d) = (segment.origin[axis], segment.direction[axis]);
+        if d == 0.0 {
+            if o < lo[axis] || o > hi[axis] {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[axis] - o) / d, (hi[axis] - o) / d);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }

@@ -88,7 +88,7 @@ mod update;
 mod world;
 
 pub use accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, SegmentGrid};
-pub use detp::{Disc, detp};
+pub use detp::{Disc, detp, segment_meets_box};
 pub use error::{DensityError, Result};
 pub use impact_count::{impact_count, triangle_irradiance};
 pub use kdtree::KdTree;

@@ -11,6 +11,7 @@ use crate::VertexIrradiance;
 use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
 use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area_near};
 use crate::detp::Disc;
+use crate::detp::segment_meets_box;
 use crate::error::{DensityError, Result};
 use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
 use crate::points::{EstimationPoint, EstimationPoints};
@@ -438,16 +439,28 @@ impl QuasiStatic {
             _ => None,
         };
         let count = self.points.points.len();
+        // The box round the mobile discs: only the segments through it can cross one.
+        let mut region: Option<(Vec3, Vec3)> = None;
         if let (State::Detp { radius, .. }, Some((_, moving))) = (&self.state, &mut self.disc_sets)
         {
             let discs = self.points.points[first_mobile..count]
                 .iter()
                 .map(|p| point_disc(p, *radius))
                 .collect::<Vec<_>>();
+            for d in discs.iter().filter(|d| d.radius > 0.0) {
+                let (lo, hi) = d.bounds(self.slack);
+                region = Some(region.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))));
+            }
             moving.update_discs(&discs)?;
         }
-        let all: Vec<RaySegment> = match &self.state {
-            State::Detp { .. } if count > first_mobile => self.rays.segments().copied().collect(),
+        // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds nothing).
+        let all: Vec<RaySegment> = match (&self.state, region) {
+            (State::Detp { .. }, Some((lo, hi))) => self
+                .rays
+                .segments()
+                .filter(|s| segment_meets_box(s, self.slack, lo, hi))
+                .copied()
+                .collect(),
             _ => Vec::new(),
         };
         match &mut self.state {

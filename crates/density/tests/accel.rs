@@ -6,7 +6,7 @@ use glam::{DVec3, Vec3};
 use lustre_density::accel::{InvariantError, scene_discs, scene_slack};
 use lustre_density::{
     Acceleration, DensityError, Disc, DiscSet, DiscSetOptions, PreTest, RaySegment, RaySetOptions,
-    SegmentGrid, SegmentHit, trace_ray_set,
+    SegmentGrid, SegmentHit, segment_meets_box, trace_ray_set,
 };
 use lustre_geometry::meshing::subdivide;
 use lustre_geometry::{Aabb, Bvh, Rgb, Scene, builtin};
@@ -308,6 +308,36 @@ fn random_segments(
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+    /// A segment that crosses a disc meets the disc's box (the prefilter of the mobile discs' estimate), at any scale and far from the origin.
+    #[test]
+    fn a_crossing_segment_meets_the_disc_box(
+        seed in any::<u64>(),
+        kind in 0u32..4,
+        slack in prop::sample::select(vec![0.0f32, 1e-4, 0.01]),
+        scale in prop::sample::select(vec![1.0f32, 1e-3, 50.0]),
+        offset in prop::sample::select(vec![0.0f32, 100.0, -3000.0]),
+    ) {
+        let mut rng = Rng(seed);
+        let shift = Vec3::new(offset, -0.5 * offset, 0.25 * offset);
+        let discs: Vec<Disc> = random_discs(&mut rng, 20, kind)
+            .into_iter()
+            .map(|d| Disc { centre: d.centre * scale + shift, radius: d.radius * scale, ..d })
+            .collect();
+        let segments = random_segments(&mut rng, &discs, 400, scale, shift);
+        let mut crossings = 0;
+        for d in &discs {
+            let (lo, hi) = d.bounds(slack);
+            for s in &segments {
+                if d.is_crossed_by(s, slack) {
+                    crossings += 1;
+                    prop_assert!(segment_meets_box(s, slack, lo, hi), "{d:?} {s:?}");
+                }
+            }
+        }
+        // Half the segments are aimed at discs: the property is not vacuous.
+        prop_assert!(discs.is_empty() || crossings > 0);
+    }
 
     /// Every acceleration × pre-test finds the brute-force pairs and sums on random discs and segments.
     #[test]
