@@ -131,7 +131,7 @@ proptest! {
             }
             prop_assert_eq!(bvh.any_hit(&ray), expected.is_some());
             // Filtered: the even triangles only, beyond half the segment.
-            let accept = |id: u32, t: f32| id % 2 == 0 && t > 0.5 * t_max;
+            let accept = |id: u32, t: f32| id.is_multiple_of(2) && t > 0.5 * t_max;
             let filtered = tris.iter().enumerate().any(|(i, &tri)| {
                 intersect_triangle(&ray, tri).is_some_and(|h| accept(i as u32, h.t))
             });
