@@ -13,6 +13,17 @@ pub enum DensityError {
         /// What is wrong with it.
         message: String,
     },
+    /// The glossy vertices' ray lists would hold more rays than the caller allows (memory).
+    #[error(
+        "the glossy vertices' ray lists would hold about {rays} rays ({gib:.1} GiB), more than the limit of {limit}",
+        gib = (*rays as f64) * (crate::glossy::BYTES_PER_STORED_RAY as f64) / f64::from(1u32 << 30)
+    )]
+    TooManyRays {
+        /// Rays the lists would hold (estimated from a sample of the segments when far above the limit).
+        rays: u64,
+        /// The most allowed.
+        limit: u64,
+    },
     /// A scene change was refused (e.g. a non-finite object transform).
     #[error(transparent)]
     Geometry(#[from] lustre_geometry::GeometryError),

@@ -525,6 +525,9 @@ impl PartialEq for GlossyVertices {
     }
 }
 
+/// About how many bytes a ray costs in a glossy vertex's list while the lists are built: the 32-byte entry of the QuadTree, its share of leaf vectors and nodes, and the crossing's index (measured peaks of `dense_glossy` divided by its rays, rounded up).
+pub const BYTES_PER_STORED_RAY: usize = 80;
+
 impl GlossyVertices {
     /// Builds the ray lists of every vertex of the given meshes from the whole ray set (section 2.10, first frame), with discs of `radius` on the tangent planes of the meshes' world normals as [`crate::detp`] does; the crossing rays are found with disc indexing (section 2.7, [`DiscSet::crossings`]: exactly the rays [`Disc::is_crossed_by`] accepts), the stores built in parallel. Fails on a bad radius, mode or mesh id.
     pub fn build(
@@ -533,6 +536,18 @@ impl GlossyVertices {
         radius: f32,
         mode: GlossyMode,
         meshes: &[MeshId],
+    ) -> Result<Self> {
+        Self::build_limited(scene, rays, radius, mode, meshes, None)
+    }
+
+    /// [`GlossyVertices::build`] that fails with [`DensityError::TooManyRays`] before building any list when the lists would hold more than `max_rays` rays in all (a bound on memory, [`BYTES_PER_STORED_RAY`] each).
+    pub fn build_limited(
+        scene: &Scene,
+        rays: &RaySet,
+        radius: f32,
+        mode: GlossyMode,
+        meshes: &[MeshId],
+        max_rays: Option<u64>,
     ) -> Result<Self> {
         if !(radius > 0.0 && radius.is_finite()) {
             return Err(DensityError::InvalidOption {
@@ -584,7 +599,27 @@ impl GlossyVertices {
         } else {
             rays.segments().copied().collect()
         };
+        if let Some(limit) = max_rays {
+            // One segment in 64 first, so that lists far too large fail before their crossings are gathered (12 bytes each).
+            let sample: Vec<RaySegment> = segments.iter().step_by(64).copied().collect();
+            let estimate: u64 = 64
+                * set
+                    .crossings(&sample)?
+                    .iter()
+                    .map(|c| c.len() as u64)
+                    .sum::<u64>();
+            if estimate > 2 * limit {
+                return Err(DensityError::TooManyRays {
+                    rays: estimate,
+                    limit,
+                });
+            }
+        }
         let crossings = set.crossings(&segments)?;
+        let total: u64 = crossings.iter().map(|c| c.len() as u64).sum();
+        if let Some(limit) = max_rays.filter(|&limit| total > limit) {
+            return Err(DensityError::TooManyRays { rays: total, limit });
+        }
         let built = set
             .discs()
             .par_iter()

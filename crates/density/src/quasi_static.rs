@@ -66,6 +66,8 @@ pub struct QuasiStaticOptions {
     pub acceleration: Option<Acceleration>,
     /// DETP's pre-intersection test (section 2.8).
     pub pretest: PreTest,
+    /// Most rays the glossy vertices' lists may hold in all (a memory bound, [`crate::glossy::BYTES_PER_STORED_RAY`] each); more fails with [`DensityError::TooManyRays`] before the lists are built. `None`: no bound.
+    pub max_glossy_rays: Option<u64>,
 }
 
 impl QuasiStaticOptions {
@@ -82,6 +84,7 @@ impl QuasiStaticOptions {
             glossy: None,
             acceleration: None,
             pretest: PreTest::None,
+            max_glossy_rays: None,
         }
     }
 }
@@ -501,7 +504,14 @@ impl QuasiStatic {
             .into_iter()
             .filter(|&m| self.world.is_mobile_mesh(m) == mobile)
             .collect();
-        let mut vertices = GlossyVertices::build(&self.scene, &self.rays, radius, mode, &meshes)?;
+        let mut vertices = GlossyVertices::build_limited(
+            &self.scene,
+            &self.rays,
+            radius,
+            mode,
+            &meshes,
+            self.options.max_glossy_rays,
+        )?;
         if let Some(options) = self.options.artifact
             && !meshes.is_empty()
         {

@@ -685,6 +685,53 @@ fn glossy_vertices_of_a_scene() {
     }
 }
 
+/// A bound on the rays the lists may hold: under it the same vertices as without one; below the exact total a typed error with the total; far below it the sampled estimate refuses before the crossings are gathered.
+#[test]
+fn glossy_vertices_refuse_more_rays_than_allowed() {
+    let (scene, _, rays) = shared();
+    let meshes = glossy_meshes(scene);
+    let free = GlossyVertices::build(scene, rays, 0.3, GlossyMode::List, &meshes).unwrap();
+    let total: u64 = meshes
+        .iter()
+        .flat_map(|&m| free.vertices(m))
+        .flatten()
+        .map(|v| v.len() as u64)
+        .sum();
+    assert!(total > 1000, "{total}");
+    let bounded =
+        GlossyVertices::build_limited(scene, rays, 0.3, GlossyMode::List, &meshes, Some(total))
+            .unwrap();
+    assert_eq!(bounded, free);
+    let just_below =
+        GlossyVertices::build_limited(scene, rays, 0.3, GlossyMode::List, &meshes, Some(total - 1));
+    match just_below {
+        Err(DensityError::TooManyRays { rays, limit }) => {
+            assert_eq!(limit, total - 1);
+            // Exact, or the sampled estimate when that is already above twice the limit.
+            assert!(rays == total || rays > 2 * limit, "{rays} {total}");
+        }
+        other => panic!("expected TooManyRays, got {other:?}"),
+    }
+    let far_below = GlossyVertices::build_limited(
+        scene,
+        rays,
+        0.3,
+        GlossyMode::List,
+        &meshes,
+        Some(total / 10),
+    );
+    match far_below {
+        Err(DensityError::TooManyRays { rays, .. }) => {
+            // The estimate from one segment in 64: within a fifth of the total here.
+            assert!(
+                (rays as f64 / total as f64 - 1.0).abs() < 0.2,
+                "{rays} {total}"
+            );
+        }
+        other => panic!("expected TooManyRays, got {other:?}"),
+    }
+}
+
 /// The scene's glossy vertices, whose crossing rays disc indexing finds, hold exactly the rays that testing every segment against each vertex's disc finds (section 2.10), before and after a frame's Old and New Rays; the lobe radiance is the full radiance less the diffuse part `ρ/π E` on the same disc (the floor's `ρ` is 0.7 · white; the gold box has none).
 #[test]
 fn glossy_vertices_hold_the_rays_of_a_brute_force_search() {

@@ -34,6 +34,7 @@ fn with_artifact(estimator: Estimator, artifact: Option<ArtifactOptions>) -> Qua
         glossy: None,
         acceleration: None,
         pretest: PreTest::None,
+        max_glossy_rays: None,
         rays: RaySetOptions {
             photons: 4_000,
             seed: 3,

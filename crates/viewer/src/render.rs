@@ -589,6 +589,7 @@ impl RenderArgs {
             glossy: self.glossy_estimate,
             acceleration: self.detp_acceleration,
             pretest: self.pretest,
+            max_glossy_rays: crate::render_density::glossy_ray_limit(),
         }
     }
 }

@@ -133,6 +133,7 @@ pub fn vertex_radiance(
     settings: &DensitySettings,
 ) -> anyhow::Result<VertexRadiance> {
     let sim = QuasiStatic::new(scene.clone(), &[], settings.options(estimator))
+        .map_err(explain_too_many_rays)
         .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
     let first = sim.first_frame();
     let corners = corners(&sim)?;
@@ -143,6 +144,18 @@ pub fn vertex_radiance(
         ray_set_ms: first.photosimulation.as_secs_f64() * 1e3,
         estimate_ms: first.radiosity.as_secs_f64() * 1e3,
     })
+}
+
+/// A density error, with the options that lower its memory when the glossy lists would not fit.
+pub fn explain_too_many_rays(error: lustre_density::DensityError) -> anyhow::Error {
+    if matches!(error, lustre_density::DensityError::TooManyRays { .. }) {
+        anyhow::Error::new(error).context(
+            "not enough memory for the glossy estimate: give a smaller --glossy-radius, fewer \
+             --photons or --glossy-estimate none",
+        )
+    } else {
+        anyhow::Error::new(error)
+    }
 }
 
 /// How `lustre render` estimates glossy vertices (section 2.10); Impact Count and Photon Maps use their plain impact lists for every value but `none`.
@@ -264,6 +277,16 @@ pub struct DensitySettings {
     pub acceleration: DetpAcceleration,
     /// DETP's pre-intersection test (section 2.8).
     pub pretest: PreTestArg,
+    /// Most rays DETP's glossy vertices may keep ([`glossy_ray_limit`]); `None`: no bound.
+    pub max_glossy_rays: Option<u64>,
+}
+
+/// How many rays DETP's glossy lists may keep on this machine: four fifths of the memory Linux reports available (`MemAvailable`), [`lustre_density::glossy::BYTES_PER_STORED_RAY`] each; `None` where that is not known. Beyond it the render stops with an error naming the options to lower, rather than being killed for memory.
+pub fn glossy_ray_limit() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024 / 5 * 4 / lustre_density::glossy::BYTES_PER_STORED_RAY as u64)
 }
 
 impl DensitySettings {
@@ -278,6 +301,7 @@ impl DensitySettings {
             glossy: GlossyEstimate::Quadtree,
             acceleration: DetpAcceleration::DiscIndex,
             pretest: PreTestArg::None,
+            max_glossy_rays: None,
         }
     }
 
@@ -292,6 +316,7 @@ impl DensitySettings {
             options.glossy_radius = Some(self.glossy_radius);
             options.acceleration = acceleration(self.acceleration, radius);
             options.pretest = pretest(self.pretest);
+            options.max_glossy_rays = self.max_glossy_rays;
         }
         options
     }

@@ -155,6 +155,7 @@ pub fn run(
         &ids,
         args.density_settings(lengths).options(estimator),
     )
+    .map_err(crate::render_density::explain_too_many_rays)
     .with_context(|| format!("{} first frame", estimator.name()))?;
     let setup_ms = ms(start.elapsed());
     let first = sim.first_frame();
