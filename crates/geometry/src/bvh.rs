@@ -10,7 +10,7 @@ use obvhs::ray::RayHit;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use crate::ray::{Hit, Ray, intersect_triangle_a};
+use crate::ray::{Hit, LeanHit, Ray, intersect_triangle_a};
 use crate::scene::{Scene, TriangleId, WorldTriangle};
 
 /// A BVH over every triangle of a scene in world space.
@@ -111,8 +111,13 @@ impl Bvh {
         }
     }
 
-    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`.
+    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`: [`Bvh::closest_hit_lean`] and [`Bvh::hit_record`].
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_hit_lean(ray).map(|h| self.hit_record(ray, h))
+    }
+
+    /// The closest intersection's distance, triangle and barycentrics, without the shading record (CWBVH traversal, Ylitie et al. 2017, and Möller-Trumbore).
+    pub fn closest_hit_lean(&self, ray: &Ray) -> Option<LeanHit> {
         let bvh = self.cwbvh.as_ref()?;
         let mut hit = RayHit::none();
         let mut best = None;
@@ -130,24 +135,33 @@ impl Bvh {
             None => f32::INFINITY,
         });
         let (slot, h) = best?;
-        let id = bvh.primitive_indices[slot];
-        let tri = &self.triangles[id as usize];
-        let w = 1.0 - h.u - h.v;
-        let [p0, p1, p2] = tri.positions;
-        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        let shading = w * tri.normals[0] + h.u * tri.normals[1] + h.v * tri.normals[2];
-        Some(Hit {
-            triangle: id,
-            surface: tri.surface,
-            material: tri.material,
+        Some(LeanHit {
+            triangle: bvh.primitive_indices[slot],
             t: h.t,
             u: h.u,
             v: h.v,
-            position: ray.at(h.t),
+        })
+    }
+
+    /// The full hit record of `hit` on `ray` (a hit this BVH returned for that ray): position, geometric and interpolated shading normals, interpolated UVs, surface and material.
+    pub fn hit_record(&self, ray: &Ray, hit: LeanHit) -> Hit {
+        let tri = &self.triangles[hit.triangle as usize];
+        let w = 1.0 - hit.u - hit.v;
+        let [p0, p1, p2] = tri.positions;
+        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let shading = w * tri.normals[0] + hit.u * tri.normals[1] + hit.v * tri.normals[2];
+        Hit {
+            triangle: hit.triangle,
+            surface: tri.surface,
+            material: tri.material,
+            t: hit.t,
+            u: hit.u,
+            v: hit.v,
+            position: ray.at(hit.t),
             geometric_normal,
             shading_normal: shading.try_normalize().unwrap_or(geometric_normal),
-            uv: w * tri.uvs[0] + h.u * tri.uvs[1] + h.v * tri.uvs[2],
-        })
+            uv: w * tri.uvs[0] + hit.u * tri.uvs[1] + hit.v * tri.uvs[2],
+        }
     }
 
     /// Whether anything lies on the ray with `t` in `[ray.t_min, ray.t_max]` (shadow rays).

@@ -51,7 +51,7 @@ pub use material::{Material, MaterialId, MaterialModel};
 pub use mesh::{Mesh, MeshId, triangle_area};
 pub use obj::{LoadedScene, ObjOptions, load_obj, load_obj_with};
 pub use plane::Plane;
-pub use ray::{Hit, Ray, TriangleHit, intersect_triangle};
+pub use ray::{Hit, LeanHit, Ray, TriangleHit, intersect_triangle};
 pub use scene::{
     Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,
 };

@@ -101,6 +101,20 @@ pub(crate) fn intersect_triangle_a(
     (t >= t_min && t <= t_max).then_some(TriangleHit { t, u, v })
 }
 
+/// A closest hit without its shading record: the triangle, the distance and
+/// the barycentrics ([`crate::Bvh::hit_record`] builds the full [`Hit`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeanHit {
+    /// The triangle hit, as a scene-wide triangle id.
+    pub triangle: TriangleId,
+    /// Ray distance.
+    pub t: f32,
+    /// Barycentric weight of corner 1.
+    pub u: f32,
+    /// Barycentric weight of corner 2 (corner 0 weighs `1 - u - v`).
+    pub v: f32,
+}
+
 /// A closest-hit record.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
