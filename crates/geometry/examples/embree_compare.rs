@@ -14,8 +14,10 @@
 //! - `ours.json`: the settings and the wall time of every run of every query,
 //!   in nanoseconds, each run tracing all rays of a set on this one thread.
 //!
-//! The queries timed are [`Bvh::closest_hit`] (the full hit record) and
-//! [`Bvh::closest_hit_lean`] (distance, id and barycentrics only).
+//! The queries timed are [`Bvh::closest_hit`] (the full hit record),
+//! [`Bvh::closest_hit_lean`] (distance, id and barycentrics only), and the
+//! full record by the CWBVH traversal that answered before the four-wide BVH
+//! (`Bvh::closest_hit_cwbvh` and [`Bvh::hit_record`]).
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -170,26 +172,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )?;
         // Each query's runs interleave with the other's, so that a burst of
         // load on the machine touches both alike.
-        let (mut full, mut lean) = (Vec::new(), Vec::new());
+        let (mut full, mut lean, mut before) = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..runs {
             full.extend(time_runs(rays, 1, |r| bvh.closest_hit(r)));
             lean.extend(time_runs(rays, 1, |r| bvh.closest_hit_lean(r)));
+            before.extend(time_runs(rays, 1, |r| {
+                bvh.closest_hit_cwbvh(r).map(|h| bvh.hit_record(r, h))
+            }));
         }
         let list = |v: &[u128]| v.iter().map(u128::to_string).collect::<Vec<_>>().join(", ");
         let _ = write!(
             json,
-            "{}\"{name}\": {{\"rays\": {}, \"hits\": {}, \"full_ns\": [{}], \"lean_ns\": [{}]}}",
+            "{}\"{name}\": {{\"rays\": {}, \"hits\": {}, \"full_ns\": [{}], \"lean_ns\": [{}], \"cwbvh_full_ns\": [{}]}}",
             if k > 0 { ", " } else { "" },
             rays.len(),
             hits.iter().filter(|h| h.is_some()).count(),
             list(&full),
-            list(&lean)
+            list(&lean),
+            list(&before)
         );
         println!(
-            "{name}: {} rays, full record {:.2} M rays/s, lean {:.2} M rays/s (medians of {runs})",
+            "{name}: {} rays, full record {:.2} M rays/s, lean {:.2} M rays/s, CWBVH full record {:.2} M rays/s (medians of {runs})",
             rays.len(),
             rays.len() as f64 / median(&full) as f64 * 1e3,
             rays.len() as f64 / median(&lean) as f64 * 1e3,
+            rays.len() as f64 / median(&before) as f64 * 1e3,
         );
     }
     json.push_str("}}\n");

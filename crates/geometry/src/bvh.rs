@@ -4,12 +4,15 @@
 
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::ploc::PlocBuilder;
 use obvhs::ray::RayHit;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
+use crate::bvh4::Bvh4;
 use crate::ray::{Hit, LeanHit, Ray, intersect_triangle_a};
 use crate::scene::{Scene, TriangleId, WorldTriangle};
 
@@ -21,6 +24,8 @@ use crate::scene::{Scene, TriangleId, WorldTriangle};
 #[derive(Debug, Clone)]
 pub struct Bvh {
     cwbvh: Option<CwBvh>,
+    /// The four-wide BVH of the closest-hit queries (`None` when empty or too deep; the CWBVH answers then).
+    bvh4: Option<Bvh4>,
     /// Corner positions in BVH leaf order, for coherent memory access.
     ordered: Vec<[Vec3A; 3]>,
     /// The shading attributes, by scene-wide triangle id.
@@ -50,6 +55,7 @@ impl Bvh {
         if triangles.is_empty() {
             return Self {
                 cwbvh: None,
+                bvh4: None,
                 ordered: Vec::new(),
                 triangles,
             };
@@ -62,11 +68,20 @@ impl Bvh {
                 v2: t.positions[2].into(),
             })
             .collect();
-        let cwbvh = build_cwbvh_from_tris(
+        // obvhs' build_cwbvh_from_tris with its medium settings (no pre-split),
+        // keeping the binary tree for the four-wide BVH.
+        let params = BvhBuildParams::medium_build();
+        let mut bvh2 = PlocBuilder::with_capacity(tris.len()).build(
+            params.ploc_search_distance,
             &tris,
-            BvhBuildParams::medium_build(),
-            &mut std::time::Duration::default(),
+            (0..tris.len() as u32).collect(),
+            params.sort_precision,
+            params.search_depth_threshold,
         );
+        ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+        let cwbvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+        let corners: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.positions).collect();
+        let bvh4 = Bvh4::from_bvh2(&bvh2, &corners);
         let ordered = cwbvh
             .primitive_indices
             .iter()
@@ -74,6 +89,7 @@ impl Bvh {
             .collect();
         Self {
             cwbvh: Some(cwbvh),
+            bvh4,
             ordered,
             triangles,
         }
@@ -118,6 +134,24 @@ impl Bvh {
 
     /// The closest intersection's distance, triangle and barycentrics, without the shading record (CWBVH traversal, Ylitie et al. 2017, and Möller-Trumbore).
     pub fn closest_hit_lean(&self, ray: &Ray) -> Option<LeanHit> {
+        if let Some(bvh4) = &self.bvh4 {
+            // The direction as the CWBVH path gives it to the triangle test (-0.0 as +0.0).
+            let direction = Vec3A::from(ray.direction + Vec3::ZERO);
+            return bvh4
+                .closest_hit(ray, direction)
+                .map(|(triangle, h)| LeanHit {
+                    triangle,
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                });
+        }
+        self.closest_hit_cwbvh(ray)
+    }
+
+    /// [`Bvh::closest_hit_lean`] by the CWBVH (the fallback, and the reference the four-wide BVH is tested against).
+    #[doc(hidden)]
+    pub fn closest_hit_cwbvh(&self, ray: &Ray) -> Option<LeanHit> {
         let bvh = self.cwbvh.as_ref()?;
         let mut hit = RayHit::none();
         let mut best = None;

@@ -26,6 +26,7 @@ mod aabb;
 pub mod animation;
 pub mod builtin;
 mod bvh;
+mod bvh4;
 mod camera;
 mod error;
 pub mod light;

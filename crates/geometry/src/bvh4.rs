@@ -1,0 +1,311 @@
+//! A four-wide BVH with uncompressed `f32` boxes for closest-hit queries on
+//! one ray at a time: a binary PLOC BVH (obvhs) collapsed to four children
+//! per node (Wald et al. 2008, "Getting rid of packets"), children visited
+//! nearest first, leaves of up to four triangles stored side by side (a
+//! corner and two edges, by coordinate) and tested at once.
+//!
+//! Boxes are padded outward at build time and the slab test's far distance
+//! is widened (Ize 2013, "Robust BVH ray traversal"), so that a triangle the
+//! Möller-Trumbore test hits is never culled by a box that rounding made a
+//! hair too small: the closest hit is the one a test of every triangle finds.
+
+use glam::{Vec3, Vec3A, Vec4};
+use obvhs::bvh2::Bvh2;
+
+use crate::ray::{Ray, TriangleHit, Triangles4, intersect_triangles4};
+
+/// Children per node.
+const WIDTH: usize = 4;
+
+/// Largest number of triangles in a leaf (the lanes of [`Triangles4`]).
+const LEAF_MAX: u32 = 4;
+
+/// Entries of the traversal stack; a tree deeper than this allows is not built.
+const STACK: usize = 64;
+
+/// Relative outward padding of every box (about 16 units in the last place).
+const BOX_PAD: f32 = 1e-6;
+
+/// Relative widening of the slab test's far distance (more than Ize's 1 + 2γ₃).
+const FAR_WIDEN: f32 = 1e-6;
+
+/// One node: the boxes of its four children by axis (structure of arrays, so
+/// that the four slab tests run side by side), and what each child is.
+#[derive(Debug, Clone)]
+#[repr(align(64))]
+struct Node {
+    /// Lower corners of the children's boxes: `lo[axis]`, one child per lane; `+∞` for an empty slot.
+    lo: [Vec4; 3],
+    /// Upper corners of the children's boxes: `hi[axis]`, one child per lane; `-∞` for an empty slot.
+    hi: [Vec4; 3],
+    /// An inner child's node index, or a leaf's index in `leaves`.
+    child: [u32; WIDTH],
+    /// A leaf's triangle count; 0 for an inner child or an empty slot.
+    count: [u32; WIDTH],
+}
+
+/// A child to visit: node index or first slot, triangle count (0 for a node), and entry distance.
+#[derive(Debug, Clone, Copy, Default)]
+struct Entry {
+    child: u32,
+    count: u32,
+    t: f32,
+}
+
+/// The four-wide BVH.
+#[derive(Debug, Clone)]
+pub(crate) struct Bvh4 {
+    nodes: Vec<Node>,
+    /// The triangles of every leaf; unused lanes hold a triangle with zero edges, which nothing hits.
+    leaves: Vec<Triangles4>,
+    /// The scene-wide ids of every leaf's triangles, by lane.
+    ids: Vec<[u32; 4]>,
+}
+
+/// Builder state: the binary tree and its subtree triangle counts.
+struct Collapse<'a> {
+    bvh2: &'a Bvh2,
+    corners: &'a [[Vec3; 3]],
+    counts: Vec<u32>,
+    out: Bvh4,
+    depth: usize,
+}
+
+impl Collapse<'_> {
+    /// Triangles under the binary node `i`, written to `counts` for it and every node below (post-order).
+    fn count(&mut self, i: usize) -> u32 {
+        let node = &self.bvh2.nodes[i];
+        let n = if node.prim_count > 0 {
+            node.prim_count
+        } else {
+            let first = node.first_index as usize;
+            self.count(first) + self.count(first + 1)
+        };
+        self.counts[i] = n;
+        n
+    }
+
+    /// Appends the id of every triangle under the binary node `i` to `ids`.
+    fn gather(&self, i: usize, ids: &mut Vec<u32>) {
+        let node = &self.bvh2.nodes[i];
+        let first = node.first_index as usize;
+        if node.prim_count > 0 {
+            ids.extend_from_slice(
+                &self.bvh2.primitive_indices[first..first + node.prim_count as usize],
+            );
+        } else {
+            self.gather(first, ids);
+            self.gather(first + 1, ids);
+        }
+    }
+
+    /// Makes a leaf of the (at most four) triangles under the binary node `i` and returns its index.
+    fn leaf(&mut self, i: usize) -> (u32, u32) {
+        let mut ids = Vec::with_capacity(LEAF_MAX as usize);
+        self.gather(i, &mut ids);
+        let mut lanes = [[Vec3A::ZERO; 3]; 4];
+        let mut lane_ids = [u32::MAX; 4];
+        for (k, &id) in ids.iter().enumerate() {
+            let [p0, p1, p2] = self.corners[id as usize].map(Vec3A::from);
+            lanes[k] = [p0, p1 - p0, p2 - p0];
+            lane_ids[k] = id;
+        }
+        let by_axis =
+            |which: usize| [0, 1, 2].map(|axis| Vec4::from_array(lanes.map(|l| l[which][axis])));
+        self.out.leaves.push(Triangles4 {
+            p0: by_axis(0),
+            e1: by_axis(1),
+            e2: by_axis(2),
+        });
+        self.out.ids.push(lane_ids);
+        (self.out.leaves.len() as u32 - 1, ids.len() as u32)
+    }
+
+    /// Whether the binary node `i` becomes a leaf of the four-wide tree.
+    fn is_leaf(&self, i: usize) -> bool {
+        self.bvh2.nodes[i].prim_count > 0 || self.counts[i] <= LEAF_MAX
+    }
+
+    /// Builds the four-wide node for the binary node `i` (an inner node, or the root) and returns its index.
+    fn node(&mut self, i: usize, depth: usize) -> u32 {
+        self.depth = self.depth.max(depth);
+        // Open the largest inner candidate until four children are found.
+        let mut open = if self.bvh2.nodes[i].prim_count > 0 {
+            vec![i]
+        } else {
+            let first = self.bvh2.nodes[i].first_index as usize;
+            vec![first, first + 1]
+        };
+        while open.len() < WIDTH {
+            let largest = open
+                .iter()
+                .enumerate()
+                .filter(|&(_, &c)| !self.is_leaf(c))
+                .max_by(|a, b| {
+                    let area = |c: usize| self.bvh2.nodes[c].aabb.half_area();
+                    area(*a.1).total_cmp(&area(*b.1))
+                })
+                .map(|(k, _)| k);
+            let Some(k) = largest else { break };
+            let first = self.bvh2.nodes[open[k]].first_index as usize;
+            open[k] = first;
+            open.push(first + 1);
+        }
+        let index = self.out.nodes.len();
+        self.out.nodes.push(Node {
+            lo: [Vec4::INFINITY; 3],
+            hi: [Vec4::NEG_INFINITY; 3],
+            child: [0; WIDTH],
+            count: [0; WIDTH],
+        });
+        for (slot, &c) in open.iter().enumerate() {
+            let aabb = self.bvh2.nodes[c].aabb;
+            let pad = aabb.min.abs().max(aabb.max.abs()).max_element() * BOX_PAD;
+            let (lo, hi) = (aabb.min - pad, aabb.max + pad);
+            let (child, count) = if self.is_leaf(c) {
+                self.leaf(c)
+            } else {
+                (self.node(c, depth + 1), 0)
+            };
+            let node = &mut self.out.nodes[index];
+            for axis in 0..3 {
+                node.lo[axis][slot] = lo[axis];
+                node.hi[axis][slot] = hi[axis];
+            }
+            node.child[slot] = child;
+            node.count[slot] = count;
+        }
+        index as u32
+    }
+}
+
+impl Bvh4 {
+    /// Collapses the binary tree `bvh2` over the triangles `corners`; `None` when it is too deep for the traversal stack.
+    pub(crate) fn from_bvh2(bvh2: &Bvh2, corners: &[[Vec3; 3]]) -> Option<Self> {
+        if bvh2.nodes.is_empty() {
+            return None;
+        }
+        let mut c = Collapse {
+            bvh2,
+            corners,
+            counts: vec![0; bvh2.nodes.len()],
+            out: Bvh4 {
+                nodes: Vec::new(),
+                leaves: Vec::new(),
+                ids: Vec::new(),
+            },
+            depth: 0,
+        };
+        c.count(0);
+        c.node(0, 1);
+        // Each level pushes at most three entries.
+        ((WIDTH - 1) * c.depth < STACK).then_some(c.out)
+    }
+
+    /// The closest Möller-Trumbore hit with `t` in `[t_min, t_max]` and its triangle's scene-wide id; `direction` as the triangle test takes it.
+    #[inline]
+    pub(crate) fn closest_hit(&self, ray: &Ray, direction: Vec3A) -> Option<(u32, TriangleHit)> {
+        let origin = Vec3A::from(ray.origin);
+        // No zero component: ±f32::MAX keeps (box - origin) * inv free of NaN.
+        let inv = Vec3A::from_array(direction.to_array().map(|d| {
+            let inv = 1.0 / d;
+            if inv.is_finite() {
+                inv
+            } else {
+                f32::MAX.copysign(d)
+            }
+        }));
+        let negative = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
+        let (o, i) = (
+            origin.to_array().map(Vec4::splat),
+            inv.to_array().map(Vec4::splat),
+        );
+        let t_min4 = Vec4::splat(ray.t_min);
+        let (t_min, mut t_max) = (ray.t_min, ray.t_max);
+        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut stack = [Entry::default(); STACK];
+        let mut top = 0;
+        let mut current = Entry {
+            child: 0,
+            count: 0,
+            t: t_min,
+        };
+        loop {
+            if current.count == 0 {
+                let node = &self.nodes[current.child as usize];
+                let mut hits = [Entry::default(); WIDTH];
+                let mut n = 0;
+                let slab = |axis: usize, lo: bool| {
+                    let bound = if lo { node.lo[axis] } else { node.hi[axis] };
+                    (bound - o[axis]) * i[axis]
+                };
+                let near = [0, 1, 2].map(|axis| slab(axis, !negative[axis]));
+                let far = [0, 1, 2].map(|axis| slab(axis, negative[axis]));
+                let t_near = near[0].max(near[1]).max(near[2].max(t_min4));
+                let f = far[0].min(far[1]).min(far[2]);
+                // Widened away from zero either side, without NaN at ±∞.
+                let t_far = (f * (1.0 + FAR_WIDEN))
+                    .max(f * (1.0 - FAR_WIDEN))
+                    .min(Vec4::splat(t_max));
+                let hit = t_near.cmple(t_far).bitmask();
+                let t_near = t_near.to_array();
+                for k in 0..WIDTH {
+                    if hit & (1 << k) != 0 {
+                        // Insertion by distance, nearest first.
+                        let entry = Entry {
+                            child: node.child[k],
+                            count: node.count[k],
+                            t: t_near[k],
+                        };
+                        let mut j = n;
+                        while j > 0 && hits[j - 1].t > entry.t {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = entry;
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    for k in (1..n).rev() {
+                        stack[top] = hits[k];
+                        top += 1;
+                    }
+                    current = hits[0];
+                    continue;
+                }
+            } else {
+                let leaf = current.child as usize;
+                let (mut mask, t, u, v) =
+                    intersect_triangles4(origin, direction, t_min, t_max, &self.leaves[leaf]);
+                // Lane by lane, as one triangle after the other would.
+                while mask != 0 {
+                    let k = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if t[k] <= t_max {
+                        t_max = t[k];
+                        best = Some((
+                            self.ids[leaf][k],
+                            TriangleHit {
+                                t: t[k],
+                                u: u[k],
+                                v: v[k],
+                            },
+                        ));
+                    }
+                }
+            }
+            // The next entry not farther than the closest hit so far.
+            loop {
+                if top == 0 {
+                    return best;
+                }
+                top -= 1;
+                if stack[top].t <= t_max {
+                    current = stack[top];
+                    break;
+                }
+            }
+        }
+    }
+}
