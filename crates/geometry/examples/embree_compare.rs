@@ -16,7 +16,7 @@
 //!
 //! The queries timed are [`Bvh::closest_hit`] (the full hit record),
 //! [`Bvh::closest_hit_lean`] (distance, id and barycentrics only), and the
-//! full record by the CWBVH traversal that answered before the four-wide BVH
+//! full record by the CWBVH traversal that answered before the eight-wide BVH
 //! (`Bvh::closest_hit_cwbvh` and [`Bvh::hit_record`]).
 
 use std::fmt::Write as _;

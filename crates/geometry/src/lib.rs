@@ -26,7 +26,6 @@ mod aabb;
 pub mod animation;
 pub mod builtin;
 mod bvh;
-mod bvh4;
 mod camera;
 mod error;
 pub mod light;
@@ -40,6 +39,7 @@ mod ray;
 pub mod sampling;
 mod scene;
 pub mod shadow_volume;
+mod wide_bvh;
 
 pub use aabb::Aabb;
 pub use animation::{Keyframe, MobileObject, ObjectPath, PathEnd};

@@ -349,9 +349,9 @@ fn check_lean_hit(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> Result<(), TestCa
     }
     // Where the CWBVH traversal (the one before) hits and brute force's hit
     // lies beyond 1e-3 (the CWBVH culls boxes nearer than 1e-4), it found the
-    // same distance, so the four-wide BVH answers as it did. Not everywhere:
+    // same distance, so the eight-wide BVH answers as it did. Not everywhere:
     // on a grazing ray along a flat box's face the CWBVH can miss what brute
-    // force and the four-wide BVH hit (this test's regression seed: a ray
+    // force and the eight-wide BVH hit (this test's regression seed: a ray
     // along +y from (1, -0.75, 0), on the grid's edge x = 1, hits the plane
     // y = 0 at t = 0.75).
     let before = bvh.closest_hit_cwbvh(ray);

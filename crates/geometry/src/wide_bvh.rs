@@ -1,5 +1,5 @@
-//! A four-wide BVH with uncompressed `f32` boxes for closest-hit queries on
-//! one ray at a time: a binary PLOC BVH (obvhs) collapsed to four children
+//! An eight-wide BVH with uncompressed `f32` boxes for closest-hit queries on
+//! one ray at a time: a binary PLOC BVH (obvhs) collapsed to eight children
 //! per node (Wald et al. 2008, "Getting rid of packets"), children visited
 //! nearest first, leaves of up to four triangles stored side by side (a
 //! corner and two edges, by coordinate) and tested at once.
@@ -15,7 +15,10 @@ use obvhs::bvh2::Bvh2;
 use crate::ray::{Ray, TriangleHit, Triangles4, intersect_triangles4};
 
 /// Children per node.
-const WIDTH: usize = 4;
+const WIDTH: usize = 8;
+
+/// Groups of four children (one `Vec4` each) per node.
+const GROUPS: usize = WIDTH / 4;
 
 /// Largest number of triangles in a leaf (the lanes of [`Triangles4`]).
 const LEAF_MAX: u32 = 4;
@@ -29,37 +32,44 @@ const BOX_PAD: f32 = 1e-6;
 /// Relative widening of the slab test's far distance (more than Ize's 1 + 2γ₃).
 const FAR_WIDEN: f32 = 1e-6;
 
-/// One node: the boxes of its four children by axis (structure of arrays, so
-/// that the four slab tests run side by side), and what each child is.
+/// One node: the boxes of its eight children by axis (structure of arrays,
+/// so that the slab tests run four side by side), and what each child is.
 #[derive(Debug, Clone)]
 #[repr(align(64))]
 struct Node {
-    /// Lower corners of the children's boxes: `lo[axis]`, one child per lane; `+∞` for an empty slot.
-    lo: [Vec4; 3],
-    /// Upper corners of the children's boxes: `hi[axis]`, one child per lane; `-∞` for an empty slot.
-    hi: [Vec4; 3],
-    /// An inner child's node index, or a leaf's index in `leaves`.
+    /// Lower corners of the children's boxes: `lo[axis][child / 4][child % 4]`; `+∞` for an empty slot.
+    lo: [[Vec4; GROUPS]; 3],
+    /// Upper corners of the children's boxes, as `lo`; `-∞` for an empty slot.
+    hi: [[Vec4; GROUPS]; 3],
+    /// An inner child's node index, or a leaf's index in `leaves` with [`LEAF`] set.
     child: [u32; WIDTH],
-    /// A leaf's triangle count; 0 for an inner child or an empty slot.
-    count: [u32; WIDTH],
 }
 
-/// A child to visit: node index or first slot, triangle count (0 for a node), and entry distance.
+/// The bit of [`Node::child`] that marks a leaf.
+const LEAF: u32 = 1 << 31;
+
+/// A child to visit: as [`Node::child`] gives it, and its entry distance.
 #[derive(Debug, Clone, Copy, Default)]
 struct Entry {
     child: u32,
-    count: u32,
     t: f32,
 }
 
-/// The four-wide BVH.
+/// Up to four triangles; unused lanes hold a triangle with zero edges, which nothing hits.
 #[derive(Debug, Clone)]
-pub(crate) struct Bvh4 {
+struct Leaf {
+    /// The triangles side by side.
+    triangles: Triangles4,
+    /// Their scene-wide ids, by lane (beside them, in the cache lines the test reads).
+    ids: [u32; 4],
+}
+
+/// The wide BVH.
+#[derive(Debug, Clone)]
+pub(crate) struct WideBvh {
     nodes: Vec<Node>,
-    /// The triangles of every leaf; unused lanes hold a triangle with zero edges, which nothing hits.
-    leaves: Vec<Triangles4>,
-    /// The scene-wide ids of every leaf's triangles, by lane.
-    ids: Vec<[u32; 4]>,
+    /// The triangles of every leaf.
+    leaves: Vec<Leaf>,
 }
 
 /// Builder state: the binary tree and its subtree triangle counts.
@@ -67,7 +77,7 @@ struct Collapse<'a> {
     bvh2: &'a Bvh2,
     corners: &'a [[Vec3; 3]],
     counts: Vec<u32>,
-    out: Bvh4,
+    out: WideBvh,
     depth: usize,
 }
 
@@ -100,7 +110,7 @@ impl Collapse<'_> {
     }
 
     /// Makes a leaf of the (at most four) triangles under the binary node `i` and returns its index.
-    fn leaf(&mut self, i: usize) -> (u32, u32) {
+    fn leaf(&mut self, i: usize) -> u32 {
         let mut ids = Vec::with_capacity(LEAF_MAX as usize);
         self.gather(i, &mut ids);
         let mut lanes = [[Vec3A::ZERO; 3]; 4];
@@ -112,24 +122,26 @@ impl Collapse<'_> {
         }
         let by_axis =
             |which: usize| [0, 1, 2].map(|axis| Vec4::from_array(lanes.map(|l| l[which][axis])));
-        self.out.leaves.push(Triangles4 {
-            p0: by_axis(0),
-            e1: by_axis(1),
-            e2: by_axis(2),
+        self.out.leaves.push(Leaf {
+            triangles: Triangles4 {
+                p0: by_axis(0),
+                e1: by_axis(1),
+                e2: by_axis(2),
+            },
+            ids: lane_ids,
         });
-        self.out.ids.push(lane_ids);
-        (self.out.leaves.len() as u32 - 1, ids.len() as u32)
+        self.out.leaves.len() as u32 - 1
     }
 
-    /// Whether the binary node `i` becomes a leaf of the four-wide tree.
+    /// Whether the binary node `i` becomes a leaf of the wide tree.
     fn is_leaf(&self, i: usize) -> bool {
         self.bvh2.nodes[i].prim_count > 0 || self.counts[i] <= LEAF_MAX
     }
 
-    /// Builds the four-wide node for the binary node `i` (an inner node, or the root) and returns its index.
+    /// Builds the wide node for the binary node `i` (an inner node, or the root) and returns its index.
     fn node(&mut self, i: usize, depth: usize) -> u32 {
         self.depth = self.depth.max(depth);
-        // Open the largest inner candidate until four children are found.
+        // Open the largest inner candidate until WIDTH children are found.
         let mut open = if self.bvh2.nodes[i].prim_count > 0 {
             vec![i]
         } else {
@@ -153,33 +165,31 @@ impl Collapse<'_> {
         }
         let index = self.out.nodes.len();
         self.out.nodes.push(Node {
-            lo: [Vec4::INFINITY; 3],
-            hi: [Vec4::NEG_INFINITY; 3],
+            lo: [[Vec4::INFINITY; GROUPS]; 3],
+            hi: [[Vec4::NEG_INFINITY; GROUPS]; 3],
             child: [0; WIDTH],
-            count: [0; WIDTH],
         });
         for (slot, &c) in open.iter().enumerate() {
             let aabb = self.bvh2.nodes[c].aabb;
             let pad = aabb.min.abs().max(aabb.max.abs()).max_element() * BOX_PAD;
             let (lo, hi) = (aabb.min - pad, aabb.max + pad);
-            let (child, count) = if self.is_leaf(c) {
-                self.leaf(c)
+            let child = if self.is_leaf(c) {
+                self.leaf(c) | LEAF
             } else {
-                (self.node(c, depth + 1), 0)
+                self.node(c, depth + 1)
             };
             let node = &mut self.out.nodes[index];
             for axis in 0..3 {
-                node.lo[axis][slot] = lo[axis];
-                node.hi[axis][slot] = hi[axis];
+                node.lo[axis][slot / 4][slot % 4] = lo[axis];
+                node.hi[axis][slot / 4][slot % 4] = hi[axis];
             }
             node.child[slot] = child;
-            node.count[slot] = count;
         }
         index as u32
     }
 }
 
-impl Bvh4 {
+impl WideBvh {
     /// Collapses the binary tree `bvh2` over the triangles `corners`; `None` when it is too deep for the traversal stack.
     pub(crate) fn from_bvh2(bvh2: &Bvh2, corners: &[[Vec3; 3]]) -> Option<Self> {
         if bvh2.nodes.is_empty() {
@@ -189,10 +199,9 @@ impl Bvh4 {
             bvh2,
             corners,
             counts: vec![0; bvh2.nodes.len()],
-            out: Bvh4 {
+            out: WideBvh {
                 nodes: Vec::new(),
                 leaves: Vec::new(),
-                ids: Vec::new(),
             },
             depth: 0,
         };
@@ -222,39 +231,42 @@ impl Bvh4 {
         );
         let t_min4 = Vec4::splat(ray.t_min);
         let (t_min, mut t_max) = (ray.t_min, ray.t_max);
-        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut best: Option<((usize, usize), TriangleHit)> = None;
         let mut stack = [Entry::default(); STACK];
         let mut top = 0;
-        let mut current = Entry {
-            child: 0,
-            count: 0,
-            t: t_min,
-        };
+        let mut current = Entry { child: 0, t: t_min };
         loop {
-            if current.count == 0 {
+            if current.child & LEAF == 0 {
                 let node = &self.nodes[current.child as usize];
                 let mut hits = [Entry::default(); WIDTH];
                 let mut n = 0;
-                let slab = |axis: usize, lo: bool| {
-                    let bound = if lo { node.lo[axis] } else { node.hi[axis] };
-                    (bound - o[axis]) * i[axis]
-                };
-                let near = [0, 1, 2].map(|axis| slab(axis, !negative[axis]));
-                let far = [0, 1, 2].map(|axis| slab(axis, negative[axis]));
-                let t_near = near[0].max(near[1]).max(near[2].max(t_min4));
-                let f = far[0].min(far[1]).min(far[2]);
-                // Widened away from zero either side, without NaN at ±∞.
-                let t_far = (f * (1.0 + FAR_WIDEN))
-                    .max(f * (1.0 - FAR_WIDEN))
-                    .min(Vec4::splat(t_max));
-                let hit = t_near.cmple(t_far).bitmask();
-                let t_near = t_near.to_array();
+                let mut hit = 0;
+                let mut t_near = [0.0; WIDTH];
+                for g in 0..GROUPS {
+                    let slab = |axis: usize, lo: bool| {
+                        let bound = if lo {
+                            node.lo[axis][g]
+                        } else {
+                            node.hi[axis][g]
+                        };
+                        (bound - o[axis]) * i[axis]
+                    };
+                    let near = [0, 1, 2].map(|axis| slab(axis, !negative[axis]));
+                    let far = [0, 1, 2].map(|axis| slab(axis, negative[axis]));
+                    let t_n = near[0].max(near[1]).max(near[2].max(t_min4));
+                    let f = far[0].min(far[1]).min(far[2]);
+                    // Widened away from zero either side, without NaN at ±∞.
+                    let t_far = (f * (1.0 + FAR_WIDEN))
+                        .max(f * (1.0 - FAR_WIDEN))
+                        .min(Vec4::splat(t_max));
+                    hit |= t_n.cmple(t_far).bitmask() << (4 * g);
+                    t_near[4 * g..4 * g + 4].copy_from_slice(&t_n.to_array());
+                }
                 for k in 0..WIDTH {
                     if hit & (1 << k) != 0 {
                         // Insertion by distance, nearest first.
                         let entry = Entry {
                             child: node.child[k],
-                            count: node.count[k],
                             t: t_near[k],
                         };
                         let mut j = n;
@@ -275,9 +287,14 @@ impl Bvh4 {
                     continue;
                 }
             } else {
-                let leaf = current.child as usize;
-                let (mut mask, t, u, v) =
-                    intersect_triangles4(origin, direction, t_min, t_max, &self.leaves[leaf]);
+                let leaf = (current.child & !LEAF) as usize;
+                let (mut mask, t, u, v) = intersect_triangles4(
+                    origin,
+                    direction,
+                    t_min,
+                    t_max,
+                    &self.leaves[leaf].triangles,
+                );
                 // Lane by lane, as one triangle after the other would.
                 while mask != 0 {
                     let k = mask.trailing_zeros() as usize;
@@ -285,7 +302,7 @@ impl Bvh4 {
                     if t[k] <= t_max {
                         t_max = t[k];
                         best = Some((
-                            self.ids[leaf][k],
+                            (leaf, k),
                             TriangleHit {
                                 t: t[k],
                                 u: u[k],
@@ -298,7 +315,8 @@ impl Bvh4 {
             // The next entry not farther than the closest hit so far.
             loop {
                 if top == 0 {
-                    return best;
+                    // The id once, for the closest hit only.
+                    return best.map(|((leaf, k), h)| (self.leaves[leaf].ids[k], h));
                 }
                 top -= 1;
                 if stack[top].t <= t_max {
