@@ -1,8 +1,8 @@
 //! An eight-wide BVH with uncompressed `f32` boxes for closest-hit queries on
 //! one ray at a time: a binary PLOC BVH (obvhs) collapsed to eight children
 //! per node (Wald et al. 2008, "Getting rid of packets"), children visited
-//! nearest first, leaves of up to four triangles stored side by side (a
-//! corner and two edges, by coordinate) and tested at once.
+//! nearest first, leaves of one or two blocks of four triangles stored side
+//! by side (a corner and two edges, by coordinate) and tested four at once.
 //!
 //! Boxes are padded outward at build time and the slab test's far distance
 //! is widened (Ize 2013, "Robust BVH ray traversal"), so that a triangle the
@@ -20,10 +20,14 @@ const WIDTH: usize = 8;
 /// Groups of four children (one `Vec4` each) per node.
 const GROUPS: usize = WIDTH / 4;
 
-/// Largest number of triangles in a leaf (the lanes of [`Triangles4`]).
-const LEAF_MAX: u32 = 4;
+/// Largest number of triangles in a leaf (lanes of its [`Triangles4`] blocks).
+const LEAF_MAX: u32 = 4 * LEAF_BLOCKS;
 
-/// Entries of the traversal stack; a tree deeper than this allows is not built.
+/// Largest number of blocks of four triangles in a leaf.
+const LEAF_BLOCKS: u32 = 2;
+
+/// Entries of the traversal stack kept in an array; more (a tree deeper than
+/// `STACK / (WIDTH - 1)` levels may need them) go to a vector.
 const STACK: usize = 64;
 
 /// Relative outward padding of every box (about 16 units in the last place).
@@ -48,6 +52,9 @@ struct Node {
 /// The bit of [`Node::child`] that marks a leaf.
 const LEAF: u32 = 1 << 31;
 
+/// Where a leaf's [`Node::child`] keeps its block count less one (below it, the first block's index).
+const BLOCKS_SHIFT: u32 = 28;
+
 /// A child to visit: as [`Node::child`] gives it, and its entry distance.
 #[derive(Debug, Clone, Copy, Default)]
 struct Entry {
@@ -55,8 +62,11 @@ struct Entry {
     t: f32,
 }
 
-/// Up to four triangles; unused lanes hold a triangle with zero edges, which nothing hits.
+/// A block of up to four triangles (a leaf has one or two); unused lanes hold
+/// a triangle with zero edges, which nothing hits. 160 bytes on 32-byte
+/// boundaries: three cache lines, never four.
 #[derive(Debug, Clone)]
+#[repr(align(32))]
 struct Leaf {
     /// The triangles side by side.
     triangles: Triangles4,
@@ -78,7 +88,6 @@ struct Collapse<'a> {
     corners: &'a [[Vec3; 3]],
     counts: Vec<u32>,
     out: WideBvh,
-    depth: usize,
 }
 
 impl Collapse<'_> {
@@ -113,24 +122,29 @@ impl Collapse<'_> {
     fn leaf(&mut self, i: usize) -> u32 {
         let mut ids = Vec::with_capacity(LEAF_MAX as usize);
         self.gather(i, &mut ids);
-        let mut lanes = [[Vec3A::ZERO; 3]; 4];
-        let mut lane_ids = [u32::MAX; 4];
-        for (k, &id) in ids.iter().enumerate() {
-            let [p0, p1, p2] = self.corners[id as usize].map(Vec3A::from);
-            lanes[k] = [p0, p1 - p0, p2 - p0];
-            lane_ids[k] = id;
+        let first = self.out.leaves.len() as u32;
+        for chunk in ids.chunks(4) {
+            let mut lanes = [[Vec3A::ZERO; 3]; 4];
+            let mut lane_ids = [u32::MAX; 4];
+            for (k, &id) in chunk.iter().enumerate() {
+                let [p0, p1, p2] = self.corners[id as usize].map(Vec3A::from);
+                lanes[k] = [p0, p1 - p0, p2 - p0];
+                lane_ids[k] = id;
+            }
+            let by_axis = |which: usize| {
+                [0, 1, 2].map(|axis| Vec4::from_array(lanes.map(|l| l[which][axis])))
+            };
+            self.out.leaves.push(Leaf {
+                triangles: Triangles4 {
+                    p0: by_axis(0),
+                    e1: by_axis(1),
+                    e2: by_axis(2),
+                },
+                ids: lane_ids,
+            });
         }
-        let by_axis =
-            |which: usize| [0, 1, 2].map(|axis| Vec4::from_array(lanes.map(|l| l[which][axis])));
-        self.out.leaves.push(Leaf {
-            triangles: Triangles4 {
-                p0: by_axis(0),
-                e1: by_axis(1),
-                e2: by_axis(2),
-            },
-            ids: lane_ids,
-        });
-        self.out.leaves.len() as u32 - 1
+        // The block count less one above the first block's index.
+        first | ((self.out.leaves.len() as u32 - first - 1) << BLOCKS_SHIFT)
     }
 
     /// Whether the binary node `i` becomes a leaf of the wide tree.
@@ -139,8 +153,7 @@ impl Collapse<'_> {
     }
 
     /// Builds the wide node for the binary node `i` (an inner node, or the root) and returns its index.
-    fn node(&mut self, i: usize, depth: usize) -> u32 {
-        self.depth = self.depth.max(depth);
+    fn node(&mut self, i: usize) -> u32 {
         // Open the largest inner candidate until WIDTH children are found.
         let mut open = if self.bvh2.nodes[i].prim_count > 0 {
             vec![i]
@@ -176,7 +189,7 @@ impl Collapse<'_> {
             let child = if self.is_leaf(c) {
                 self.leaf(c) | LEAF
             } else {
-                self.node(c, depth + 1)
+                self.node(c)
             };
             let node = &mut self.out.nodes[index];
             for axis in 0..3 {
@@ -190,7 +203,7 @@ impl Collapse<'_> {
 }
 
 impl WideBvh {
-    /// Collapses the binary tree `bvh2` over the triangles `corners`; `None` when it is too deep for the traversal stack.
+    /// Collapses the binary tree `bvh2` over the triangles `corners`; `None` when it has 2²⁸ leaf blocks or more.
     pub(crate) fn from_bvh2(bvh2: &Bvh2, corners: &[[Vec3; 3]]) -> Option<Self> {
         if bvh2.nodes.is_empty() {
             return None;
@@ -203,12 +216,11 @@ impl WideBvh {
                 nodes: Vec::new(),
                 leaves: Vec::new(),
             },
-            depth: 0,
         };
         c.count(0);
-        c.node(0, 1);
-        // Each level pushes at most three entries.
-        ((WIDTH - 1) * c.depth < STACK).then_some(c.out)
+        c.node(0);
+        // Block indices fit below BLOCKS_SHIFT.
+        (c.out.leaves.len() < 1 << BLOCKS_SHIFT).then_some(c.out)
     }
 
     /// The closest Möller-Trumbore hit with `t` in `[t_min, t_max]` and its triangle's scene-wide id; `direction` as the triangle test takes it.
@@ -233,6 +245,7 @@ impl WideBvh {
         let (t_min, mut t_max) = (ray.t_min, ray.t_max);
         let mut best: Option<((usize, usize), TriangleHit)> = None;
         let mut stack = [Entry::default(); STACK];
+        let mut overflow: Vec<Entry> = Vec::new();
         let mut top = 0;
         let mut current = Entry { child: 0, t: t_min };
         loop {
@@ -280,35 +293,42 @@ impl WideBvh {
                 }
                 if n > 0 {
                     for k in (1..n).rev() {
-                        stack[top] = hits[k];
+                        if top < STACK {
+                            stack[top] = hits[k];
+                        } else {
+                            overflow.push(hits[k]);
+                        }
                         top += 1;
                     }
                     current = hits[0];
                     continue;
                 }
             } else {
-                let leaf = (current.child & !LEAF) as usize;
-                let (mut mask, t, u, v) = intersect_triangles4(
-                    origin,
-                    direction,
-                    t_min,
-                    t_max,
-                    &self.leaves[leaf].triangles,
-                );
-                // Lane by lane, as one triangle after the other would.
-                while mask != 0 {
-                    let k = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if t[k] <= t_max {
-                        t_max = t[k];
-                        best = Some((
-                            (leaf, k),
-                            TriangleHit {
-                                t: t[k],
-                                u: u[k],
-                                v: v[k],
-                            },
-                        ));
+                let first = (current.child & ((1 << BLOCKS_SHIFT) - 1)) as usize;
+                let blocks = ((current.child & !LEAF) >> BLOCKS_SHIFT) as usize + 1;
+                for leaf in first..first + blocks {
+                    let (mut mask, t, u, v) = intersect_triangles4(
+                        origin,
+                        direction,
+                        t_min,
+                        t_max,
+                        &self.leaves[leaf].triangles,
+                    );
+                    // Lane by lane, as one triangle after the other would.
+                    while mask != 0 {
+                        let k = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        if t[k] <= t_max {
+                            t_max = t[k];
+                            best = Some((
+                                (leaf, k),
+                                TriangleHit {
+                                    t: t[k],
+                                    u: u[k],
+                                    v: v[k],
+                                },
+                            ));
+                        }
                     }
                 }
             }
@@ -319,11 +339,102 @@ impl WideBvh {
                     return best.map(|((leaf, k), h)| (self.leaves[leaf].ids[k], h));
                 }
                 top -= 1;
-                if stack[top].t <= t_max {
-                    current = stack[top];
+                let entry = if top < STACK {
+                    stack[top]
+                } else {
+                    match overflow.pop() {
+                        Some(entry) => entry,
+                        None => continue,
+                    }
+                };
+                if entry.t <= t_max {
+                    current = entry;
                     break;
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ray::intersect_triangle;
+    use obvhs::aabb::Aabb;
+    use obvhs::bvh2::node::Bvh2Node;
+
+    #[test]
+    fn a_deep_tree_overflows_the_stack_array_and_still_finds_the_closest_hit() {
+        // 400 squares' halves across the z axis at z = 0..400, in a binary
+        // chain whose leaf at each level is the farthest square left: a ray
+        // along +z meets every box and pushes seven entries per wide level.
+        let n = 400;
+        let corners: Vec<[Vec3; 3]> = (0..n)
+            .map(|k| {
+                let z = k as f32;
+                [
+                    Vec3::new(-1.0, -1.0, z),
+                    Vec3::new(1.0, -1.0, z),
+                    Vec3::new(0.0, 1.0, z),
+                ]
+            })
+            .collect();
+        let bounds = |from: usize, to: usize| {
+            Aabb::new(
+                Vec3A::new(-1.0, -1.0, from as f32),
+                Vec3A::new(1.0, 1.0, to as f32),
+            )
+        };
+        let mut bvh2 = Bvh2::default();
+        // Node 0: the chain over squares 0..n; inner node at 2j+1 covers 0..n-1-j.
+        bvh2.nodes.push(Bvh2Node {
+            aabb: bounds(0, n - 1),
+            prim_count: 0,
+            first_index: 1,
+            ..Bvh2Node::default()
+        });
+        for j in 0..n - 1 {
+            let far = n - 1 - j;
+            bvh2.nodes.push(Bvh2Node {
+                aabb: bounds(far, far),
+                prim_count: 1,
+                first_index: far as u32,
+                ..Bvh2Node::default()
+            });
+            let rest = if far == 1 {
+                Bvh2Node {
+                    aabb: bounds(0, 0),
+                    prim_count: 1,
+                    first_index: 0,
+                    ..Bvh2Node::default()
+                }
+            } else {
+                Bvh2Node {
+                    aabb: bounds(0, far - 1),
+                    prim_count: 0,
+                    first_index: 2 * j as u32 + 3,
+                    ..Bvh2Node::default()
+                }
+            };
+            bvh2.nodes.push(rest);
+        }
+        bvh2.primitive_indices = (0..n as u32).collect();
+        let wide = WideBvh::from_bvh2(&bvh2, &corners).unwrap();
+        for (origin, direction) in [
+            (Vec3::new(0.0, 0.0, -1.0), Vec3::Z),
+            (Vec3::new(0.1, 0.2, 150.5), Vec3::Z),
+            (Vec3::new(0.1, 0.2, 420.0), -Vec3::Z),
+        ] {
+            let ray = Ray::new(origin, direction);
+            let expected = corners
+                .iter()
+                .enumerate()
+                .filter_map(|(i, &t)| intersect_triangle(&ray, t).map(|h| (i as u32, h.t)))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            let got = wide
+                .closest_hit(&ray, Vec3A::from(direction))
+                .map(|(id, h)| (id, h.t));
+            assert_eq!(got, expected, "{ray:?}");
         }
     }
 }
