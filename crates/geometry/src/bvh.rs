@@ -1,19 +1,16 @@
-//! Ray queries on a binary PLOC BVH (Meister & Bittner 2018, obvhs) in two
-//! wide forms: closest hits on our eight-wide BVH with `f32` boxes
-//! ([`crate::wide_bvh`]), any hits and box queries on obvhs' compressed wide
-//! BVH (Ylitie et al. 2017); single rays and rayon-parallel batches.
+//! Ray queries on a binary PLOC BVH (Meister & Bittner 2018, built by obvhs)
+//! collapsed to eight children per node with `f32` boxes and leaves of
+//! triangles tested four at once ([`crate::wide_bvh`]): closest hit and any
+//! hit, single rays and rayon-parallel batches, and box queries.
 
-use glam::{UVec2, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance};
-use obvhs::ray::RayHit;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use crate::ray::{Hit, LeanHit, Ray, intersect_triangle_a};
+use crate::ray::{Hit, LeanHit, Ray};
 use crate::scene::{Scene, TriangleId, WorldTriangle};
 use crate::wide_bvh::WideBvh;
 
@@ -24,25 +21,17 @@ use crate::wide_bvh::WideBvh;
 /// [`Bvh::build`] (a full PLOC rebuild is cheap at the sizes the papers use).
 #[derive(Debug, Clone)]
 pub struct Bvh {
-    cwbvh: Option<CwBvh>,
-    /// The eight-wide BVH of the closest-hit queries (`None` when empty or too deep; the CWBVH answers then).
+    /// The eight-wide BVH (`None` when there is no triangle).
     wide: Option<WideBvh>,
-    /// Corner positions in BVH leaf order, for coherent memory access.
-    ordered: Vec<[Vec3A; 3]>,
     /// The shading attributes, by scene-wide triangle id.
     triangles: Vec<WorldTriangle>,
 }
 
-fn to_obvhs(ray: &Ray) -> obvhs::ray::Ray {
-    // obvhs picks the traversal octant from the direction's comparison with
-    // zero but inverts -0.0 to -∞, so a -0.0 component makes it miss: adding
-    // +0.0 turns -0.0 into +0.0 and leaves every other value alone.
-    obvhs::ray::Ray::new(
-        Vec3A::from(ray.origin),
-        Vec3A::from(ray.direction + Vec3::ZERO),
-        ray.t_min,
-        ray.t_max,
-    )
+/// The ray direction the triangle test takes: -0.0 components as +0.0, as
+/// the obvhs traversal before the eight-wide BVH needed them (bit-identical
+/// distances and barycentrics to those it gave).
+fn test_direction(ray: &Ray) -> Vec3A {
+    Vec3A::from(ray.direction + Vec3::ZERO)
 }
 
 impl Bvh {
@@ -52,12 +41,12 @@ impl Bvh {
     }
 
     /// Builds the BVH over world-space triangles (scene-wide ids are their indices).
+    ///
+    /// Panics with a billion triangles or more (the leaf encoding's limit).
     pub fn from_triangles(triangles: Vec<WorldTriangle>) -> Self {
         if triangles.is_empty() {
             return Self {
-                cwbvh: None,
                 wide: None,
-                ordered: Vec::new(),
                 triangles,
             };
         }
@@ -69,10 +58,10 @@ impl Bvh {
                 v2: t.positions[2].into(),
             })
             .collect();
-        // obvhs' build_cwbvh_from_tris (no pre-split) with a wider PLOC search
-        // and more reinsertion than its medium settings (about 10% faster
-        // incoherent closest hits on the Embree comparison's scene, about 25%
-        // longer builds), keeping the binary tree for the eight-wide BVH.
+        // obvhs' binary build (PLOC, then reinsertion; no pre-split) with a
+        // wider PLOC search and more reinsertion than its medium settings:
+        // about 10% faster incoherent closest hits on the Embree comparison's
+        // scene for about twice the reinsertion time.
         let params = BvhBuildParams {
             ploc_search_distance: PlocSearchDistance::High,
             reinsertion_batch_ratio: 0.2,
@@ -86,18 +75,9 @@ impl Bvh {
             params.search_depth_threshold,
         );
         ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-        let cwbvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
         let corners: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.positions).collect();
-        let wide = WideBvh::from_bvh2(&bvh2, &corners);
-        let ordered = cwbvh
-            .primitive_indices
-            .iter()
-            .map(|&i| triangles[i as usize].positions.map(Vec3A::from))
-            .collect();
         Self {
-            cwbvh: Some(cwbvh),
-            wide,
-            ordered,
+            wide: WideBvh::from_bvh2(&bvh2, &corners),
             triangles,
         }
     }
@@ -117,20 +97,15 @@ impl Bvh {
         &self.triangles
     }
 
-    /// Checks the BVH's invariants (every primitive reachable once, child
-    /// bounds inside parents); panics with obvhs' message if one fails.
+    /// Checks the BVH's invariants (every triangle in exactly one leaf, child
+    /// boxes inside their parents, triangles inside their leaves' boxes);
+    /// panics with the first violation found.
     pub fn validate(&self) {
-        if let Some(bvh) = &self.cwbvh {
-            let tris: Vec<Triangle> = self
-                .triangles
-                .iter()
-                .map(|t| Triangle {
-                    v0: t.positions[0].into(),
-                    v1: t.positions[1].into(),
-                    v2: t.positions[2].into(),
-                })
-                .collect();
-            bvh.validate(&tris, false);
+        if let Some(wide) = &self.wide {
+            let corners: Vec<[Vec3; 3]> = self.triangles.iter().map(|t| t.positions).collect();
+            if let Err(why) = wide.validate(&corners) {
+                panic!("invalid BVH: {why}");
+            }
         }
     }
 
@@ -139,45 +114,11 @@ impl Bvh {
         self.closest_hit_lean(ray).map(|h| self.hit_record(ray, h))
     }
 
-    /// The closest intersection's distance, triangle and barycentrics, without the shading record (CWBVH traversal, Ylitie et al. 2017, and Möller-Trumbore).
+    /// The closest intersection's distance, triangle and barycentrics, without the shading record (eight-wide BVH traversal, children nearest first, and Möller-Trumbore four triangles at a time).
     pub fn closest_hit_lean(&self, ray: &Ray) -> Option<LeanHit> {
-        if let Some(wide) = &self.wide {
-            // The direction as the CWBVH path gives it to the triangle test (-0.0 as +0.0).
-            let direction = Vec3A::from(ray.direction + Vec3::ZERO);
-            return wide
-                .closest_hit(ray, direction)
-                .map(|(triangle, h)| LeanHit {
-                    triangle,
-                    t: h.t,
-                    u: h.u,
-                    v: h.v,
-                });
-        }
-        self.closest_hit_cwbvh(ray)
-    }
-
-    /// [`Bvh::closest_hit_lean`] by the CWBVH (the fallback, and the reference the eight-wide BVH is tested against).
-    #[doc(hidden)]
-    pub fn closest_hit_cwbvh(&self, ray: &Ray) -> Option<LeanHit> {
-        let bvh = self.cwbvh.as_ref()?;
-        let mut hit = RayHit::none();
-        let mut best = None;
-        bvh.ray_traverse(to_obvhs(ray), &mut hit, |r, id| match intersect_triangle_a(
-            r.origin,
-            r.direction,
-            r.tmin,
-            r.tmax,
-            &self.ordered[id],
-        ) {
-            Some(h) => {
-                best = Some((id, h));
-                h.t
-            }
-            None => f32::INFINITY,
-        });
-        let (slot, h) = best?;
+        let (triangle, h) = self.wide.as_ref()?.closest_hit(ray, test_direction(ray))?;
         Some(LeanHit {
-            triangle: bvh.primitive_indices[slot],
+            triangle,
             t: h.t,
             u: h.u,
             v: h.v,
@@ -205,39 +146,24 @@ impl Bvh {
         }
     }
 
-    /// Whether anything lies on the ray with `t` in `[ray.t_min, ray.t_max]` (shadow rays).
+    /// Whether anything lies on the ray with `t` in `[ray.t_min, ray.t_max)` (shadow rays; a hit exactly at `t_max` does not count).
     pub fn any_hit(&self, ray: &Ray) -> bool {
-        let Some(bvh) = &self.cwbvh else {
-            return false;
-        };
-        !bvh.ray_traverse_miss(to_obvhs(ray), |r, id| {
-            intersect_triangle_a(r.origin, r.direction, r.tmin, r.tmax, &self.ordered[id])
-                .map_or(f32::INFINITY, |h| h.t)
-        })
+        self.wide
+            .as_ref()
+            .is_some_and(|wide| wide.any_hit(ray, test_direction(ray)))
     }
 
     /// Calls `f` with the scene-wide id of every triangle whose bounding box overlaps the box `min..=max` (each once, in no particular order).
     pub fn overlapping(&self, min: Vec3, max: Vec3, mut f: impl FnMut(TriangleId)) {
-        let Some(bvh) = &self.cwbvh else {
+        let Some(wide) = &self.wide else {
             return;
         };
-        let query = obvhs::aabb::Aabb::new(Vec3A::from(min), Vec3A::from(max));
-        let (min, max) = (Vec3A::from(min), Vec3A::from(max));
-        let mut state = bvh.new_traversal(Vec3A::ONE);
-        let mut node;
-        obvhs::traverse!(
-            bvh,
-            node,
-            state,
-            node.intersect_aabb(&query, state.oct_inv4),
-            {
-                let slot = state.primitive_id as usize;
-                let [a, b, c] = self.ordered[slot];
-                if a.min(b).min(c).cmple(max).all() && a.max(b).max(c).cmpge(min).all() {
-                    f(bvh.primitive_indices[slot]);
-                }
+        wide.overlapping(Vec3A::from(min), Vec3A::from(max), |id| {
+            let [a, b, c] = self.triangles[id as usize].positions;
+            if a.min(b).min(c).cmple(max).all() && a.max(b).max(c).cmpge(min).all() {
+                f(id);
             }
-        );
+        });
     }
 
     /// Closest hits of many rays, in parallel.

@@ -53,7 +53,7 @@ struct Node {
 const LEAF: u32 = 1 << 31;
 
 /// Where a leaf's [`Node::child`] keeps its block count less one (below it, the first block's index).
-const BLOCKS_SHIFT: u32 = 28;
+const BLOCKS_SHIFT: u32 = 30;
 
 /// A child to visit: as [`Node::child`] gives it, and its entry distance.
 #[derive(Debug, Clone, Copy, Default)]
@@ -203,7 +203,9 @@ impl Collapse<'_> {
 }
 
 impl WideBvh {
-    /// Collapses the binary tree `bvh2` over the triangles `corners`; `None` when it has 2²⁸ leaf blocks or more.
+    /// Collapses the binary tree `bvh2` over the triangles `corners`; `None` when empty.
+    ///
+    /// Panics with 2³⁰ leaf blocks or more (a billion triangles at least).
     pub(crate) fn from_bvh2(bvh2: &Bvh2, corners: &[[Vec3; 3]]) -> Option<Self> {
         if bvh2.nodes.is_empty() {
             return None;
@@ -219,13 +221,149 @@ impl WideBvh {
         };
         c.count(0);
         c.node(0);
-        // Block indices fit below BLOCKS_SHIFT.
-        (c.out.leaves.len() < 1 << BLOCKS_SHIFT).then_some(c.out)
+        assert!(
+            c.out.leaves.len() <= 1 << BLOCKS_SHIFT,
+            "{} triangles are more than the BVH's leaf encoding holds",
+            corners.len()
+        );
+        Some(c.out)
     }
 
     /// The closest Möller-Trumbore hit with `t` in `[t_min, t_max]` and its triangle's scene-wide id; `direction` as the triangle test takes it.
     #[inline]
     pub(crate) fn closest_hit(&self, ray: &Ray, direction: Vec3A) -> Option<(u32, TriangleHit)> {
+        let mut best: Option<((usize, usize), TriangleHit)> = None;
+        self.traverse::<true>(ray, direction, |block, mask, t, u, v, t_max| {
+            // Lane by lane, as one triangle after the other would.
+            let mut mask = mask;
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if t[k] <= *t_max {
+                    *t_max = t[k];
+                    best = Some((
+                        (block, k),
+                        TriangleHit {
+                            t: t[k],
+                            u: u[k],
+                            v: v[k],
+                        },
+                    ));
+                }
+            }
+            false
+        });
+        // The id once, for the closest hit only.
+        best.map(|((block, k), h)| (self.leaves[block].ids[k], h))
+    }
+
+    /// Whether a Möller-Trumbore hit lies at `t` in `[t_min, t_max)` (the CWBVH's any-hit test: `t_max` itself excluded).
+    #[inline]
+    pub(crate) fn any_hit(&self, ray: &Ray, direction: Vec3A) -> bool {
+        let mut found = false;
+        self.traverse::<false>(ray, direction, |_, mask, t, _, _, t_max| {
+            found = (0..4).any(|k| mask & (1 << k) != 0 && t[k] < *t_max);
+            found
+        });
+        found
+    }
+
+    /// Calls `f` with the scene-wide id of every triangle in a leaf whose box overlaps `min..=max` (a superset of the triangles whose own boxes do; each once).
+    pub(crate) fn overlapping(&self, min: Vec3A, max: Vec3A, mut f: impl FnMut(u32)) {
+        let (lo, hi) = (
+            min.to_array().map(Vec4::splat),
+            max.to_array().map(Vec4::splat),
+        );
+        let mut stack = vec![0u32];
+        while let Some(child) = stack.pop() {
+            if child & LEAF != 0 {
+                let first = (child & ((1 << BLOCKS_SHIFT) - 1)) as usize;
+                let blocks = ((child & !LEAF) >> BLOCKS_SHIFT) as usize + 1;
+                for leaf in &self.leaves[first..first + blocks] {
+                    leaf.ids
+                        .iter()
+                        .filter(|&&id| id != u32::MAX)
+                        .for_each(|&id| f(id));
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            for g in 0..GROUPS {
+                let mut overlap = 0xf;
+                for axis in 0..3 {
+                    overlap &= (node.lo[axis][g].cmple(hi[axis])
+                        & node.hi[axis][g].cmpge(lo[axis]))
+                    .bitmask();
+                }
+                for k in 0..4 {
+                    if overlap & (1 << k) != 0 {
+                        stack.push(node.child[4 * g + k]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Checks that every id in `0..count` sits in exactly one leaf lane and that every box holds
+    /// what lies under it (`corners` by id); the first violation found, in words.
+    pub(crate) fn validate(&self, corners: &[[Vec3; 3]]) -> Result<(), String> {
+        let mut seen = vec![false; corners.len()];
+        let mut stack = vec![(0u32, Vec3A::NEG_INFINITY, Vec3A::INFINITY)];
+        while let Some((child, lo, hi)) = stack.pop() {
+            let inside = |p: Vec3A| p.cmpge(lo).all() && p.cmple(hi).all();
+            if child & LEAF != 0 {
+                let first = (child & ((1 << BLOCKS_SHIFT) - 1)) as usize;
+                let blocks = ((child & !LEAF) >> BLOCKS_SHIFT) as usize + 1;
+                for leaf in self
+                    .leaves
+                    .get(first..first + blocks)
+                    .ok_or("leaf out of range")?
+                {
+                    for &id in leaf.ids.iter().filter(|&&id| id != u32::MAX) {
+                        let tri = corners
+                            .get(id as usize)
+                            .ok_or(format!("id {id} out of range"))?;
+                        if std::mem::replace(&mut seen[id as usize], true) {
+                            return Err(format!("triangle {id} in two leaves"));
+                        }
+                        if !tri.iter().all(|&p| inside(p.into())) {
+                            return Err(format!("triangle {id} outside its leaf's box"));
+                        }
+                    }
+                }
+                continue;
+            }
+            let node = self.nodes.get(child as usize).ok_or("node out of range")?;
+            for k in 0..WIDTH {
+                let corner = |b: &[[Vec4; GROUPS]; 3]| {
+                    Vec3A::new(b[0][k / 4][k % 4], b[1][k / 4][k % 4], b[2][k / 4][k % 4])
+                };
+                let (clo, chi) = (corner(&node.lo), corner(&node.hi));
+                if clo.cmpgt(chi).any() {
+                    continue; // an empty slot
+                }
+                if !(inside(clo) && inside(chi)) {
+                    return Err(format!("a child box of node {child} outside its parent's"));
+                }
+                stack.push((node.child[k], clo, chi));
+            }
+        }
+        match seen.iter().position(|s| !s) {
+            Some(id) => Err(format!("triangle {id} in no leaf")),
+            None => Ok(()),
+        }
+    }
+
+    /// Visits the leaf blocks the ray reaches, nearest child first when `SORTED`; `leaf` gets the
+    /// block's index, its Möller-Trumbore hit mask, `t`, `u`, `v` and the current `t_max` (which
+    /// it may lower), and ends the traversal by returning `true`.
+    #[inline(always)]
+    fn traverse<const SORTED: bool>(
+        &self,
+        ray: &Ray,
+        direction: Vec3A,
+        mut leaf: impl FnMut(usize, u32, [f32; 4], [f32; 4], [f32; 4], &mut f32) -> bool,
+    ) {
         let origin = Vec3A::from(ray.origin);
         // No zero component: ±f32::MAX keeps (box - origin) * inv free of NaN.
         let inv = Vec3A::from_array(direction.to_array().map(|d| {
@@ -243,7 +381,6 @@ impl WideBvh {
         );
         let t_min4 = Vec4::splat(ray.t_min);
         let (t_min, mut t_max) = (ray.t_min, ray.t_max);
-        let mut best: Option<((usize, usize), TriangleHit)> = None;
         let mut stack = [Entry::default(); STACK];
         let mut overflow: Vec<Entry> = Vec::new();
         let mut top = 0;
@@ -277,13 +414,13 @@ impl WideBvh {
                 }
                 for k in 0..WIDTH {
                     if hit & (1 << k) != 0 {
-                        // Insertion by distance, nearest first.
                         let entry = Entry {
                             child: node.child[k],
                             t: t_near[k],
                         };
                         let mut j = n;
-                        while j > 0 && hits[j - 1].t > entry.t {
+                        // Insertion by distance, nearest first.
+                        while SORTED && j > 0 && hits[j - 1].t > entry.t {
                             hits[j] = hits[j - 1];
                             j -= 1;
                         }
@@ -306,37 +443,23 @@ impl WideBvh {
             } else {
                 let first = (current.child & ((1 << BLOCKS_SHIFT) - 1)) as usize;
                 let blocks = ((current.child & !LEAF) >> BLOCKS_SHIFT) as usize + 1;
-                for leaf in first..first + blocks {
-                    let (mut mask, t, u, v) = intersect_triangles4(
+                for block in first..first + blocks {
+                    let (mask, t, u, v) = intersect_triangles4(
                         origin,
                         direction,
                         t_min,
                         t_max,
-                        &self.leaves[leaf].triangles,
+                        &self.leaves[block].triangles,
                     );
-                    // Lane by lane, as one triangle after the other would.
-                    while mask != 0 {
-                        let k = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        if t[k] <= t_max {
-                            t_max = t[k];
-                            best = Some((
-                                (leaf, k),
-                                TriangleHit {
-                                    t: t[k],
-                                    u: u[k],
-                                    v: v[k],
-                                },
-                            ));
-                        }
+                    if mask != 0 && leaf(block, mask, t, u, v, &mut t_max) {
+                        return;
                     }
                 }
             }
             // The next entry not farther than the closest hit so far.
             loop {
                 if top == 0 {
-                    // The id once, for the closest hit only.
-                    return best.map(|((leaf, k), h)| (self.leaves[leaf].ids[k], h));
+                    return;
                 }
                 top -= 1;
                 let entry = if top < STACK {
@@ -419,7 +542,16 @@ mod tests {
             bvh2.nodes.push(rest);
         }
         bvh2.primitive_indices = (0..n as u32).collect();
-        let wide = WideBvh::from_bvh2(&bvh2, &corners).unwrap();
+        let mut wide = WideBvh::from_bvh2(&bvh2, &corners).unwrap();
+        assert_eq!(wide.validate(&corners), Ok(()));
+        // A triangle moved out of its leaf's box, and one listed twice.
+        let mut moved = corners.clone();
+        moved[7][1].x = 5.0;
+        assert!(wide.validate(&moved).unwrap_err().contains("outside"));
+        let saved = wide.leaves[0].ids;
+        wide.leaves[0].ids[1] = wide.leaves[0].ids[0];
+        assert!(wide.validate(&corners).is_err());
+        wide.leaves[0].ids = saved;
         for (origin, direction) in [
             (Vec3::new(0.0, 0.0, -1.0), Vec3::Z),
             (Vec3::new(0.1, 0.2, 150.5), Vec3::Z),
