@@ -36,17 +36,20 @@ const BOX_PAD: f32 = 1e-6;
 /// Relative widening of the slab test's far distance (more than Ize's 1 + 2γ₃).
 const FAR_WIDEN: f32 = 1e-6;
 
-/// One node: the boxes of its eight children by axis (structure of arrays,
-/// so that the slab tests run four side by side), and what each child is.
+/// One node: what each of its eight children is and their boxes by axis
+/// (structure of arrays, so that the slab tests run four side by side).
+/// 224 bytes in four cache lines, the child indices first: the box test
+/// reads all four lines at once, so that the indices it picks from are never
+/// a second wait.
 #[derive(Debug, Clone)]
-#[repr(align(64))]
+#[repr(C, align(64))]
 struct Node {
+    /// An inner child's node index, or a leaf's index in `leaves` with [`LEAF`] set.
+    child: [u32; WIDTH],
     /// Lower corners of the children's boxes: `lo[axis][child / 4][child % 4]`; `+∞` for an empty slot.
     lo: [[Vec4; GROUPS]; 3],
     /// Upper corners of the children's boxes, as `lo`; `-∞` for an empty slot.
     hi: [[Vec4; GROUPS]; 3],
-    /// An inner child's node index, or a leaf's index in `leaves` with [`LEAF`] set.
-    child: [u32; WIDTH],
 }
 
 /// The bit of [`Node::child`] that marks a leaf.
