@@ -4,8 +4,9 @@
 //! per-vertex normals and UVs, plain-data materials, objects with rigid
 //! transforms, surfaces in the papers' sense, lights with emission and
 //! direct-lighting sampling, a pinhole camera with a mirror transform,
-//! OBJ/MTL loading, BVH ray queries (obvhs), sampling, mesh utilities, the
-//! built-in scenes and the Mitsuba 3 export.
+//! OBJ/MTL loading, BVH ray queries (obvhs PLOC build, eight-wide
+//! traversal), sampling, mesh utilities, the built-in scenes and the
+//! Mitsuba 3 export.
 //!
 //! Conventions (DESIGN.md): right-handed, +Y up, metres; radiometric units
 //! W, W/m², W/(m² sr); colour is linear Rec.709 RGB in `f32`.
