@@ -29,9 +29,10 @@ struct Measurement {
 /// Runs every bench (or only those whose target matches `filter`) and
 /// rewrites BENCHMARKS.md: the CPU tables from criterion's medians (kept as
 /// they were when the filter ran none of their benches), the marker-delimited
-/// sections other subcommands own, and the `splat` section
+/// sections other subcommands own, the `splat` section
 /// ([`SPLAT_SECTION`]) from the splat bench's results and the JSON files it
-/// writes beside them.
+/// writes beside them, and the `embree` section (our BVH against Embree,
+/// [`crate::embree::run`]) when the filter matches `embree`.
 pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     let selected = |bench: &str| filter.is_none_or(|f| bench.contains(f));
     // Only results this run wrote count: criterion keeps every earlier run's
@@ -90,6 +91,11 @@ pub fn run(filter: Option<&str>) -> anyhow::Result<()> {
     )?;
     if density_ran && !density.is_empty() {
         text = replace_section(&text, DENSITY_SECTION, density.trim_start_matches('\n'));
+    }
+    // Our BVH against Embree: its own section, rewritten whenever it ran.
+    if selected("embree") {
+        let body = crate::embree::run()?;
+        text = replace_section(&text, crate::embree::SECTION, &body);
     }
     let tmp = path.with_extension("md.tmp");
     std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
@@ -269,8 +275,9 @@ fn render(results: &[Measurement]) -> String {
          256×256 image; incoherent rays start at random points inside the scene's bounds in \
          uniformly random directions. `spheres-516k` is 64 UV spheres of 8,064 triangles \
          (516,096 triangles). `coherent-obvhs-baseline` traces the same coherent rays with obvhs \
-         alone (its own triangle test, returning only the distance): the ratio to `coherent` is \
-         what our hit records (barycentrics, normals, UVs, surface and material ids) cost.\n"
+         alone (its CWBVH traversal and its own triangle test, returning only the distance); ours \
+         (`coherent`) runs on our eight-wide BVH and returns full hit records (barycentrics, \
+         normals, UVs, surface and material ids). The `embree` section compares with Embree.\n"
     );
     let _ = writeln!(s, "| benchmark | median time per batch | rays/s |");
     let _ = writeln!(s, "|---|---:|---:|");

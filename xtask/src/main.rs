@@ -5,6 +5,7 @@ mod bench;
 mod ci;
 mod converge;
 mod density_errors;
+mod embree;
 mod golden;
 mod ray;
 mod reference;
@@ -53,9 +54,9 @@ enum Command {
     Reference(reference::Args),
     /// Render every technique on every scene with a reference and hold relMSE, FLIP (mean, p99) and the mean luminance to per-case bounds.
     ReferenceCheck(reference_check::Args),
-    /// Run the criterion benches and write BENCHMARKS.md from their medians.
+    /// Run the criterion benches and our BVH against Embree (`embree`; creates .bench-venv) and write BENCHMARKS.md from their medians.
     Bench {
-        /// Only the bench targets whose name contains this.
+        /// Only the bench targets whose name contains this (`embree` for the Embree comparison alone).
         filter: Option<String>,
     },
     /// Render the golden-image cases with `lustre render` and compare them with tests/goldens by FLIP.

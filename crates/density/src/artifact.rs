@@ -61,7 +61,7 @@ use crate::triangle_grid::TriangleGrid;
 /// Most triangles of the own mesh a query steps through before it gives up.
 const MAX_STEPS: usize = 256;
 
-/// How far behind a visibility path's start its BVH queries begin (m): obvhs 0.4's wide-BVH traversal clamps each child box's entry distance to at least `10⁻⁴` (`cwbvh::node::EPSILON`), so a thin box, such as a wall's, that the ray leaves within `10⁻⁴` of its origin is culled and a wall that close is missed; paths start `offset · r` from walls through the vertex (`5 · 10⁻⁵` at `r` = 0.05), which with discs of 0.04 m let half of a corner's blocked paths through. Querying from further back keeps every hit of the path past that clamp.
+/// How far behind a visibility path's start its BVH queries begin (m): obvhs 0.4's compressed wide BVH, which lustre-geometry used before its eight-wide one, clamped each child box's entry distance to at least `10⁻⁴`, so a thin box, such as a wall's, that the ray left within `10⁻⁴` of its origin was culled and a wall that close was missed; paths start `offset · r` from walls through the vertex (`5 · 10⁻⁵` at `r` = 0.05), which with discs of 0.04 m let half of a corner's blocked paths through. The eight-wide traversal has no such clamp; querying from further back is kept because it changes no result and guards against any traversal that skips hits near the origin.
 const BACK_OFF: f32 = 4e-4;
 
 /// Settings of Artifact Control (section 1.2.1).

@@ -4,8 +4,9 @@
 //! per-vertex normals and UVs, plain-data materials, objects with rigid
 //! transforms, surfaces in the papers' sense, lights with emission and
 //! direct-lighting sampling, a pinhole camera with a mirror transform,
-//! OBJ/MTL loading, BVH ray queries (obvhs), sampling, mesh utilities, the
-//! built-in scenes and the Mitsuba 3 export.
+//! OBJ/MTL loading, BVH ray queries (obvhs PLOC build, eight-wide
+//! traversal), sampling, mesh utilities, the built-in scenes and the
+//! Mitsuba 3 export.
 //!
 //! Conventions (DESIGN.md): right-handed, +Y up, metres; radiometric units
 //! W, W/m², W/(m² sr); colour is linear Rec.709 RGB in `f32`.
@@ -39,6 +40,7 @@ mod ray;
 pub mod sampling;
 mod scene;
 pub mod shadow_volume;
+mod wide_bvh;
 
 pub use aabb::Aabb;
 pub use animation::{Keyframe, MobileObject, ObjectPath, PathEnd};
@@ -51,7 +53,7 @@ pub use material::{Material, MaterialId, MaterialModel};
 pub use mesh::{Mesh, MeshId, triangle_area};
 pub use obj::{LoadedScene, ObjOptions, load_obj, load_obj_with};
 pub use plane::Plane;
-pub use ray::{Hit, Ray, TriangleHit, intersect_triangle};
+pub use ray::{Hit, LeanHit, Ray, TriangleHit, intersect_triangle};
 pub use scene::{
     Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,
 };

@@ -312,3 +312,104 @@ fn rebuild_after_moving_an_object_sees_the_new_pose() {
     );
     let _ = DVec3::ZERO;
 }
+
+/// Unit squares, two triangles each, on the integer grid of an axis plane (shared edges and corners, boxes flat in one axis).
+fn axis_plane_grid(axis: usize, offset: f32, n: i32) -> Vec<[Vec3; 3]> {
+    let point = |a: i32, b: i32| {
+        let mut p = Vec3::splat(offset);
+        p[(axis + 1) % 3] = a as f32 * 0.25;
+        p[(axis + 2) % 3] = b as f32 * 0.25;
+        p
+    };
+    let mut out = Vec::new();
+    for a in -n..n {
+        for b in -n..n {
+            out.push([point(a, b), point(a + 1, b), point(a + 1, b + 1)]);
+            out.push([point(a, b), point(a + 1, b + 1), point(a, b + 1)]);
+        }
+    }
+    out
+}
+
+/// The lean closest hit against brute force (same distance, the same triangle or one at the same distance) and against the full record.
+fn check_lean_hit(bvh: &Bvh, tris: &[[Vec3; 3]], ray: &Ray) -> Result<(), TestCaseError> {
+    let expected = brute_closest(ray, tris);
+    let got = bvh.closest_hit_lean(ray);
+    match (expected, got) {
+        (None, None) => {}
+        (Some((i, t)), Some(h)) => {
+            prop_assert_eq!(h.t, t);
+            if h.triangle as usize != i {
+                prop_assert_eq!(
+                    intersect_triangle(ray, tris[h.triangle as usize]).map(|x| x.t),
+                    Some(t)
+                );
+            }
+            let full = bvh.closest_hit(ray).unwrap();
+            prop_assert_eq!(
+                (full.triangle, full.t, full.u, full.v),
+                (h.triangle, h.t, h.u, h.v)
+            );
+        }
+        (e, g) => prop_assert!(false, "brute force {e:?} but the BVH {g:?} for {ray:?}"),
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn lean_closest_hit_matches_brute_force_on_axis_plane_grids(
+        axes in prop::collection::vec((0usize..3, -4i32..4), 1..4),
+        rays in prop::collection::vec((vec3(), direction(), any::<bool>()), 1..40),
+    ) {
+        let tris: Vec<[Vec3; 3]> = axes
+            .iter()
+            .flat_map(|&(axis, k)| axis_plane_grid(axis, k as f32 * 0.25, 4))
+            .collect();
+        let bvh = Bvh::from_triangles(world(&tris));
+        for (origin, dir, snap) in rays {
+            // Origins on the grid's lines and planes too, where slabs are flat.
+            let origin = if snap { (origin * 8.0).round() * 0.25 } else { origin * 2.0 };
+            check_lean_hit(&bvh, &tris, &Ray::new(origin, dir))?;
+        }
+    }
+}
+
+#[test]
+fn lean_closest_hit_matches_brute_force_on_thousands_of_triangles() {
+    // A deterministic cloud of small triangles (several BVH levels), random rays.
+    let mut state = 0x1234_5678_9abc_def0u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    };
+    let mut tris = Vec::new();
+    while tris.len() < 4000 {
+        let c = Vec3::new(next(), next(), next()) * 3.0;
+        let t = [
+            c,
+            c + Vec3::new(next(), next(), next()) * 0.2,
+            c + Vec3::new(next(), next(), next()) * 0.2,
+        ];
+        if (t[1] - t[0]).cross(t[2] - t[0]).length() > 1e-4 {
+            tris.push(t);
+        }
+    }
+    let bvh = Bvh::from_triangles(world(&tris));
+    let mut hits = 0;
+    for _ in 0..1500 {
+        let origin = Vec3::new(next(), next(), next()) * 3.5;
+        let dir = Vec3::new(next(), next(), next());
+        if dir.length() < 0.1 {
+            continue;
+        }
+        let ray = Ray::new(origin, dir.normalize());
+        check_lean_hit(&bvh, &tris, &ray).unwrap();
+        hits += usize::from(bvh.closest_hit_lean(&ray).is_some());
+    }
+    assert!(hits > 300, "{hits} hits");
+}
