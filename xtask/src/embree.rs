@@ -11,14 +11,25 @@
 //! and the ratios.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, ensure};
 use serde_json::Value;
+
+use crate::venv::{Venv, checked};
 
 /// The embreex release (Embree 4.4.0 inside) the comparison is made with.
 pub const EMBREEX_VERSION: &str = "4.4.0.post1";
+
+/// `.bench-venv` with embreex [`EMBREEX_VERSION`].
+const BENCH_VENV: Venv = Venv {
+    dir: ".bench-venv",
+    package: "embreex",
+    version: EMBREEX_VERSION,
+    probe: "import embreex.rtcore_scene; from importlib.metadata import version; print(version('embreex'))",
+    user: "bench",
+};
 
 /// Name of the BENCHMARKS.md section this writes.
 pub const SECTION: &str = "embree";
@@ -32,72 +43,6 @@ const ROUNDS: usize = 3;
 
 /// Relative distance tolerance, `|t_ours - t_embree| <= TOLERANCE * max(1, t)`, for two hits to agree.
 const TOLERANCE: f32 = 1e-5;
-
-/// The Python of `.bench-venv`.
-fn venv_python(root: &Path) -> PathBuf {
-    root.join(".bench-venv").join("bin").join("python")
-}
-
-/// embreex's version in the venv, or why it cannot be imported.
-fn venv_embreex(python: &Path) -> std::result::Result<String, String> {
-    let output = Command::new(python)
-        .args([
-            "-c",
-            "import embreex.rtcore_scene; from importlib.metadata import version; print(version('embreex'))",
-        ])
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", python.display()))?;
-    if !output.status.success() {
-        return Err(format!("{} cannot import embreex", python.display()));
-    }
-    Ok(String::from_utf8_lossy(&output.stdout).trim().to_owned())
-}
-
-/// Makes sure `.bench-venv` imports embreex [`EMBREEX_VERSION`], installing it when missing.
-fn ensure_venv(root: &Path) -> Result<PathBuf> {
-    let venv = root.join(".bench-venv");
-    let python = venv_python(root);
-    if !python.exists() {
-        eprintln!("bench: creating the Python environment {}", venv.display());
-        checked(Command::new("python3").args(["-m", "venv"]).arg(&venv)).context(
-            "creating the virtual environment for Embree (is python3 with the venv module \
-             installed? `apt-get install python3-venv`)",
-        )?;
-    }
-    match venv_embreex(&python) {
-        Ok(version) if version == EMBREEX_VERSION => return Ok(python),
-        Ok(version) => eprintln!(
-            "bench: {} has embreex {version}; installing {EMBREEX_VERSION}",
-            venv.display()
-        ),
-        Err(why) => eprintln!("bench: {why}; installing embreex=={EMBREEX_VERSION}"),
-    }
-    checked(Command::new(&python).args([
-        "-m",
-        "pip",
-        "install",
-        "-q",
-        &format!("embreex=={EMBREEX_VERSION}"),
-    ]))
-    .with_context(|| format!("installing embreex=={EMBREEX_VERSION} with pip"))?;
-    match venv_embreex(&python) {
-        Ok(version) if version == EMBREEX_VERSION => Ok(python),
-        Ok(version) => bail!(
-            "{} has embreex {version} after pip install",
-            python.display()
-        ),
-        Err(why) => bail!("{why} after pip install"),
-    }
-}
-
-/// Runs a command with inherited output and fails on a non-zero exit.
-fn checked(command: &mut Command) -> Result<()> {
-    let status = command
-        .status()
-        .with_context(|| format!("starting {command:?}"))?;
-    ensure!(status.success(), "{command:?} failed ({status})");
-    Ok(())
-}
 
 /// Reads a file of little-endian 32-bit words.
 fn read_words(path: &Path) -> Result<Vec<[u8; 4]>> {
@@ -226,7 +171,7 @@ fn hits(dir: &Path, set: &str, side: &str) -> Result<(Vec<f32>, Vec<i32>)> {
 /// Runs both sides and returns the BENCHMARKS.md section's body.
 pub fn run() -> Result<String> {
     let root = crate::workspace_root();
-    let python = ensure_venv(&root)?;
+    let python = BENCH_VENV.ensure(&root)?;
     let load = std::fs::read_to_string("/proc/loadavg")
         .ok()
         .and_then(|l| l.split_whitespace().next().map(str::to_owned))

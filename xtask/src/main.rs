@@ -12,6 +12,7 @@ mod reference;
 mod reference_check;
 mod render;
 mod surfaces;
+mod venv;
 
 pub use reference::workspace_root;
 

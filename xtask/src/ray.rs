@@ -7,13 +7,24 @@
 //! `lustre trace` of the same run; then renders two frames from it as tasks
 //! and holds them to the same renders run directly. `cargo xtask ci` runs it.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, ensure};
+
+use crate::venv::{Venv, checked};
 
 /// The Ray release the driver is checked with.
 pub const RAY_VERSION: &str = "2.60.0";
+
+/// `.ray-venv` with Ray [`RAY_VERSION`].
+const RAY_VENV: Venv = Venv {
+    dir: ".ray-venv",
+    package: "ray",
+    version: RAY_VERSION,
+    probe: "import ray; print(ray.__version__)",
+    user: "ray",
+};
 
 /// Options of `cargo xtask ray`.
 #[derive(Debug, clap::Args)]
@@ -26,72 +37,12 @@ pub struct Args {
 /// Runs `cargo xtask ray`.
 pub fn run(args: Args) -> Result<()> {
     let root = crate::workspace_root();
-    let python = ensure_venv(&root)?;
+    let python = RAY_VENV.ensure(&root)?;
     if args.install_only {
         println!("ray: {} has Ray {RAY_VERSION}", python.display());
         return Ok(());
     }
     check(&root, &python)
-}
-
-/// The Python of `.ray-venv`.
-fn venv_python(root: &Path) -> PathBuf {
-    root.join(".ray-venv").join("bin").join("python")
-}
-
-/// Ray's version in the venv, or why it cannot be imported.
-fn venv_ray(python: &Path) -> std::result::Result<String, String> {
-    let output = Command::new(python)
-        .args(["-c", "import ray; print(ray.__version__)"])
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", python.display()))?;
-    if !output.status.success() {
-        return Err(format!("{} cannot import ray", python.display()));
-    }
-    Ok(String::from_utf8_lossy(&output.stdout).trim().to_owned())
-}
-
-/// Makes sure `.ray-venv` imports Ray [`RAY_VERSION`], installing it when missing.
-fn ensure_venv(root: &Path) -> Result<PathBuf> {
-    let venv = root.join(".ray-venv");
-    let python = venv_python(root);
-    if !python.exists() {
-        eprintln!("ray: creating the Python environment {}", venv.display());
-        checked(Command::new("python3").args(["-m", "venv"]).arg(&venv)).context(
-            "creating the virtual environment (is python3 with the venv module installed? \
-             `apt-get install python3-venv`)",
-        )?;
-    }
-    match venv_ray(&python) {
-        Ok(version) if version == RAY_VERSION => return Ok(python),
-        Ok(version) => eprintln!(
-            "ray: {} has Ray {version}; installing {RAY_VERSION}",
-            venv.display()
-        ),
-        Err(why) => eprintln!("ray: {why}; installing ray=={RAY_VERSION}"),
-    }
-    checked(Command::new(&python).args([
-        "-m",
-        "pip",
-        "install",
-        "-q",
-        &format!("ray=={RAY_VERSION}"),
-    ]))
-    .with_context(|| format!("installing ray=={RAY_VERSION} with pip"))?;
-    match venv_ray(&python) {
-        Ok(version) if version == RAY_VERSION => Ok(python),
-        Ok(version) => bail!("{} has Ray {version} after pip install", python.display()),
-        Err(why) => bail!("{why} after pip install"),
-    }
-}
-
-/// Runs a command with inherited output and fails on a non-zero exit.
-fn checked(command: &mut Command) -> Result<()> {
-    let status = command
-        .status()
-        .with_context(|| format!("starting {command:?}"))?;
-    ensure!(status.success(), "{command:?} failed ({status})");
-    Ok(())
 }
 
 /// The check of the module documentation.

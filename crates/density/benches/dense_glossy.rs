@@ -16,6 +16,8 @@
 // criterion_group! generates an undocumented function.
 #![allow(missing_docs)]
 
+mod common;
+
 use std::f32::consts::PI;
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
@@ -172,17 +174,7 @@ fn bench(c: &mut Criterion) {
     });
     options.glossy_radius = Some(3.0 * radius);
 
-    let criterion = std::env::var_os("CRITERION_HOME")
-        .map(std::path::PathBuf::from)
-        .or_else(|| {
-            std::env::var_os("CARGO_TARGET_DIR")
-                .map(|t| std::path::PathBuf::from(t).join("criterion"))
-        })
-        .unwrap_or_else(|| {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/criterion")
-        });
-    let out = criterion.join("dense_glossy");
-    let _ = std::fs::create_dir_all(&out);
+    let out = common::results_dir("dense_glossy");
 
     let mut group = c.benchmark_group("dense_glossy");
     group

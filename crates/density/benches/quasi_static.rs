@@ -5,6 +5,8 @@
 // criterion_group! generates an undocumented function.
 #![allow(missing_docs)]
 
+mod common;
+
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -35,18 +37,7 @@ fn bench(c: &mut Criterion) {
     let mobile = scene.mobile_objects()[0].clone();
     let poses: Vec<Affine3A> = mobile.path.frames(FRAMES);
     let ids: Vec<ObjectId> = vec![mobile.object];
-    // Beside criterion's own results: $CRITERION_HOME, else $CARGO_TARGET_DIR/criterion, else the workspace's target/criterion.
-    let criterion = std::env::var_os("CRITERION_HOME")
-        .map(std::path::PathBuf::from)
-        .or_else(|| {
-            std::env::var_os("CARGO_TARGET_DIR")
-                .map(|t| std::path::PathBuf::from(t).join("criterion"))
-        })
-        .unwrap_or_else(|| {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/criterion")
-        });
-    let out = criterion.join("quasi_static_tree");
-    let _ = std::fs::create_dir_all(&out);
+    let out = common::results_dir("quasi_static_tree");
     let mut group = c.benchmark_group("quasi_static_tree");
     group
         .sample_size(10)

@@ -11,10 +11,10 @@
 //!
 //! Why our own traversal rather than obvhs' compressed wide BVH, which
 //! lustre-geometry used before: on a 516,096-triangle scene, one thread,
-//! that one reached 0.37 (camera rays) and 0.39 (random rays) of Embree's
-//! rays per second with its full hit records, and it missed hits closer than
-//! `10⁻⁴` to the origin and some grazing hits along flat boxes; this one
-//! reaches 0.93 and 0.58 with full records, 1.33 and 0.91 with
+//! that one reached about 0.37 (camera rays) and 0.38 (random rays) of
+//! Embree's rays per second with its full hit records, and it missed hits
+//! closer than `10⁻⁴` to the origin and some grazing hits along flat boxes;
+//! this one reaches about 0.9 and 0.6 with full records, 1.3 and 0.9 with
 //! [`crate::Bvh::closest_hit_lean`] (BENCHMARKS.md, `cargo xtask bench embree`).
 //! obvhs still builds the binary tree.
 

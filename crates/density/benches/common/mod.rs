@@ -1,0 +1,18 @@
+//! What the density benches share.
+
+use std::path::PathBuf;
+
+/// The directory for a bench's extra results, beside criterion's own: `$CRITERION_HOME`, else `$CARGO_TARGET_DIR/criterion`, else the workspace's `target/criterion`, then `group` (created).
+pub fn results_dir(group: &str) -> PathBuf {
+    let criterion = std::env::var_os("CRITERION_HOME")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR").map(|t| PathBuf::from(t).join("criterion"))
+        })
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/criterion")
+        });
+    let out = criterion.join(group);
+    let _ = std::fs::create_dir_all(&out);
+    out
+}
