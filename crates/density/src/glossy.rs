@@ -525,7 +525,7 @@ impl PartialEq for GlossyVertices {
     }
 }
 
-/// About how many bytes a ray costs in a glossy vertex's list while the lists are built: the 32-byte entry of the QuadTree, its share of leaf vectors and nodes, and the crossing's index (measured peaks of `dense_glossy` divided by its rays, rounded up).
+/// About how many bytes a ray costs in a glossy vertex's list while the lists are built: the 32-byte entry of the QuadTree, its share of leaf vectors and nodes, and the crossing's index. Measured: `lustre render --technique detp` of `dense_glossy`'s blob peaks 2.1 GB higher with the QuadTree estimate than without, for 31.7 M rays, 66 bytes a ray; rounded up.
 pub const BYTES_PER_STORED_RAY: usize = 80;
 
 impl GlossyVertices {

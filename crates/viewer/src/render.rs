@@ -802,8 +802,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .per_vertex()
         .then(|| args.density_lengths(&scene, loaded.studio.as_ref()))
         .transpose()?;
-    let density = lengths.map(|l| args.technique.estimator(l.radius, args.k));
-    let density = density.flatten();
+    let density = lengths.and_then(|l| args.technique.estimator(l.radius, args.k));
     // Section 3: one point light of equal power for both phases; with more
     // light samples the photons leave the area light itself and only the
     // direct light uses its jittered point lights.
