@@ -148,12 +148,10 @@ impl Bvh {
 
     /// Whether anything lies on the ray with `t` in `[ray.t_min, ray.t_max)` (shadow rays; a hit exactly at `t_max` does not count).
     pub fn any_hit(&self, ray: &Ray) -> bool {
-        self.wide
-            .as_ref()
-            .is_some_and(|wide| wide.any_hit(ray, test_direction(ray)))
+        self.any_hit_where(ray, |_, _| true)
     }
 
-    /// Whether a triangle that `accept` takes lies on the ray with `t` in `[ray.t_min, ray.t_max]`: `accept` gets each triangle met (scene-wide id, distance) in traversal order until it takes one, so triangles it refuses, such as a path's own mesh, cost no further query.
+    /// Whether a triangle that `accept` takes lies on the ray with `t` in `[ray.t_min, ray.t_max)`: `accept` gets each triangle met (scene-wide id, distance) in traversal order until it takes one, so triangles it refuses, such as a path's own mesh, cost no further query.
     pub fn any_hit_where(&self, ray: &Ray, accept: impl FnMut(TriangleId, f32) -> bool) -> bool {
         self.wide
             .as_ref()

@@ -273,18 +273,8 @@ impl WideBvh {
         best.map(|((block, k), h)| (self.leaves[block].ids[k], h))
     }
 
-    /// Whether a Möller-Trumbore hit lies at `t` in `[t_min, t_max)` (the CWBVH's any-hit test: `t_max` itself excluded).
+    /// Whether a Möller-Trumbore hit at `t` in `[t_min, t_max)` (the CWBVH's any-hit interval: `t_max` itself excluded) is one `accept` takes (scene-wide id, distance); each hit met is offered until one is taken.
     #[inline]
-    pub(crate) fn any_hit(&self, ray: &Ray, direction: Vec3A) -> bool {
-        let mut found = false;
-        self.traverse::<false>(ray, direction, |_, mask, t, _, _, t_max| {
-            found = (0..4).any(|k| mask & (1 << k) != 0 && t[k] < *t_max);
-            found
-        });
-        found
-    }
-
-    /// Whether a Möller-Trumbore hit at `t` in `[t_min, t_max)` is one `accept` takes (scene-wide id, distance); each hit met is offered until one is taken.
     pub(crate) fn any_hit_where(
         &self,
         ray: &Ray,
@@ -293,8 +283,9 @@ impl WideBvh {
     ) -> bool {
         let mut found = false;
         self.traverse::<false>(ray, direction, |block, mask, t, _, _, t_max| {
-            let ids = &self.leaves[block].ids;
-            found = (0..4).any(|k| mask & (1 << k) != 0 && t[k] < *t_max && accept(ids[k], t[k]));
+            found = (0..4).any(|k| {
+                mask & (1 << k) != 0 && t[k] < *t_max && accept(self.leaves[block].ids[k], t[k])
+            });
             found
         });
         found
