@@ -268,7 +268,7 @@ impl Node {
         (self.count, self.power, self.lo, self.hi) = (count, power, lo, hi);
     }
 
-    /// The subtree of `cell` over `entries` (in any order) with the shape [`Node::split`] gives a key-sorted leaf, and each leaf's rays in key order: the rays are partitioned among the children level by level through `scratch` (as long as `entries`), and each is copied once into its leaf, sorted there. Splitting one sorted leaf moved every ray into a new vector at each level and sorted them all first, a third of a dense glossy model's estimate.
+    /// The subtree of `cell` over `entries` (in any order), by the canonical shape rule: a leaf while it holds at most `capacity` rays or lies at `max_depth`, else four children by quadrant; each leaf's rays in key order. The rays are partitioned among the children level by level through `scratch` (as long as `entries`) and copied once into their leaf, sorted there (sorting all of them first and moving them into new vectors at every level was a third of a dense glossy model's estimate).
     fn build(
         entries: &mut [Entry],
         scratch: &mut [Entry],
@@ -312,7 +312,7 @@ impl Node {
         node
     }
 
-    /// Splits a leaf that holds too many rays, recursively (the canonical shape rule).
+    /// Splits a leaf that holds too many rays, recursively: the leaf becomes the subtree [`Node::build`] makes of its rays.
     fn split(&mut self, cell: Cell, options: &QuadTreeOptions) {
         if self.count <= options.capacity || cell.depth >= options.max_depth {
             return;
@@ -320,21 +320,9 @@ impl Node {
         let Kind::Leaf(entries) = &mut self.kind else {
             return;
         };
-        // Each child's share counted first, so that each is allocated once (growing four vectors per level cost a tenth of a dense glossy model's estimate).
-        let mut counts = [0usize; 4];
-        for e in entries.iter() {
-            counts[cell.child_of(e.uv)] += 1;
-        }
-        let mut parts: [Vec<Entry>; 4] = counts.map(Vec::with_capacity);
-        for e in entries.drain(..) {
-            parts[cell.child_of(e.uv)].push(e);
-        }
-        let mut children = parts.map(Node::leaf);
-        for (i, c) in children.iter_mut().enumerate() {
-            c.split(cell.child(i), options);
-        }
-        self.kind = Kind::Inner(Box::new(children));
-        self.refresh();
+        let mut entries = std::mem::take(entries);
+        let mut scratch = entries.clone();
+        *self = Self::build(&mut entries, &mut scratch, cell, options);
     }
 
     fn insert(&mut self, cell: Cell, entry: Entry, options: &QuadTreeOptions) {
