@@ -27,11 +27,10 @@ use glam::{Quat, Vec3};
 use lustre_density::artifact::ArtifactOptions;
 use lustre_density::glossy::GlossyMode;
 use lustre_density::quadtree::QuadTreeOptions;
-use lustre_density::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions};
+use lustre_density::{Estimator, FrameStats, QuasiStatic, QuasiStaticOptions, vertex_lit_scene};
+use lustre_geometry::ObjectId;
 use lustre_geometry::animation::{Keyframe, ObjectPath, PathEnd};
-use lustre_geometry::meshing::subdivide;
 use lustre_geometry::obj::load_obj;
-use lustre_geometry::{ObjectId, Scene};
 
 /// Rings and segments of the blob's sphere (71,820 triangles).
 const RINGS: usize = 190;
@@ -119,22 +118,6 @@ fn ball_path() -> ObjectPath {
         .expect("the ball's path is valid")
 }
 
-/// The scene as `lustre render` meshes it: every non-emissive mesh subdivided to `edge`.
-fn meshed(scene: &Scene, edge: f32) -> Scene {
-    let meshes = scene
-        .meshes()
-        .iter()
-        .map(|mesh| {
-            if scene.materials()[mesh.material as usize].is_emissive() {
-                mesh.clone()
-            } else {
-                subdivide(mesh, edge).expect("subdivision")
-            }
-        })
-        .collect();
-    scene.with_meshes(meshes).expect("meshed scene")
-}
-
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
@@ -158,10 +141,11 @@ fn bench(c: &mut Criterion) {
     let _ = std::fs::remove_dir_all(&dir);
     let size = loaded.studio.expect("a studio").model_size;
     let (radius, edge) = (0.025 * size, 0.05 * size);
-    let scene = meshed(
+    let scene = vertex_lit_scene(
         &loaded.scene.with_mobile("ball", ball_path()).expect("ball"),
         edge,
-    );
+    )
+    .expect("meshed scene");
     let ball: ObjectId = scene.object_by_name("ball").expect("ball");
     let poses = scene.mobile_objects()[0].path.frames(FRAMES);
     let eye = scene.camera().position;

@@ -85,6 +85,7 @@ pub mod radiance;
 mod ray_set;
 pub mod triangle_grid;
 mod update;
+mod vertex_lit;
 mod world;
 
 pub use accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, SegmentGrid};
@@ -103,6 +104,7 @@ pub use ray_set::{
     PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set, trace_ray_set_in,
 };
 pub use update::{RayUpdate, update_ray_set};
+pub use vertex_lit::vertex_lit_scene;
 pub use world::{World, WorldHit};
 
 /// Irradiance `E` (W/m², RGB) at each vertex of each mesh, indexed `[mesh][vertex]` (section 2.4.1, figure 2.3: one value per vertex).

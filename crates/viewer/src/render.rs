@@ -810,7 +810,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         scene = with_point_lights(&scene)?;
     }
     if let Some(lengths) = &lengths {
-        scene = vertex_lit_scene(&scene, lengths.mesh_edge)?;
+        scene = vertex_lit_scene(&scene, lengths.mesh_edge).with_context(|| {
+            format!(
+                "cannot mesh `{}` to {} edges for per-vertex lighting",
+                scene.name, lengths.mesh_edge
+            )
+        })?;
     }
     let (width, height) = args.size;
     scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));

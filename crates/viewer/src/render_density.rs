@@ -11,7 +11,6 @@ use lustre_density::glossy::GlossyMode;
 use lustre_density::quadtree::QuadTreeOptions;
 use lustre_density::{Acceleration, PreTest, QuasiStatic, QuasiStaticOptions};
 use lustre_geometry::Scene;
-use lustre_geometry::meshing::subdivide;
 use lustre_geometry::obj::Studio;
 use lustre_mpr::passes::gouraud::corner_radiance;
 
@@ -89,7 +88,7 @@ impl DensityLengths {
     }
 }
 
-pub use lustre_density::Estimator;
+pub use lustre_density::{Estimator, vertex_lit_scene};
 
 /// Per-corner radiance for the Gouraud pass and what producing it cost.
 #[derive(Debug, Clone)]
@@ -104,26 +103,6 @@ pub struct VertexRadiance {
     pub ray_set_ms: f64,
     /// Time of the estimator over every vertex (section 2.4.1), ms.
     pub estimate_ms: f64,
-}
-
-/// `scene` with every non-emissive mesh subdivided regularly to edges of at most `edge` m (section 2.9); emissive meshes keep their shape, so area lights stay the rectangles they were.
-pub fn vertex_lit_scene(scene: &Scene, edge: f32) -> anyhow::Result<Scene> {
-    let meshes = scene
-        .meshes()
-        .iter()
-        .map(|mesh| {
-            if scene.materials()[mesh.material as usize].is_emissive() {
-                Ok(mesh.clone())
-            } else {
-                subdivide(mesh, edge).with_context(|| {
-                    format!("cannot subdivide mesh `{}` to {edge} m edges", mesh.name)
-                })
-            }
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    scene
-        .with_meshes(meshes)
-        .with_context(|| format!("scene `{}` after subdivision", scene.name))
 }
 
 /// Traces the ray set of `photons` photons (section 2.3, figure 2.1) and runs `estimator` at every vertex (section 2.4.1, figure 2.3), returning `L_r = ρ/π E` per triangle corner with the time of each phase. Every object is static here; `--frames` moves the mobile ones ([`crate::render_frames`]).
@@ -326,16 +305,6 @@ impl DensitySettings {
 mod tests {
     use super::*;
     use lustre_geometry::builtin;
-
-    #[test]
-    fn subdivision_keeps_the_light_a_rectangle_and_refines_the_rest() {
-        let scene = builtin("cornell").unwrap();
-        let fine = vertex_lit_scene(&scene, 0.5).unwrap();
-        assert_eq!(fine.lights().len(), scene.lights().len());
-        assert_eq!(fine.lights()[0].power(), scene.lights()[0].power());
-        assert!(fine.triangle_count() > 10 * scene.triangle_count());
-        assert!((fine.bounds().extent() - scene.bounds().extent()).length() < 1e-6);
-    }
 
     /// `scene` with every length multiplied by `factor`: vertices, object translations and the camera; area lights keep their radiance, so every irradiance is unchanged.
     fn scaled(scene: &Scene, factor: f32) -> Scene {
