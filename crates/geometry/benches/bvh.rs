@@ -5,55 +5,21 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use glam::{Vec2, Vec3};
-use lustre_geometry::sampling::sample_uniform_sphere;
-use lustre_geometry::{Bvh, Camera, Ray, builtin};
+use glam::Vec3;
+use lustre_geometry::{Bvh, Camera, builtin};
 use rayon::prelude::*;
 
+#[path = "common/rays.rs"]
+mod rays;
 #[path = "common/sphere_grid.rs"]
 mod sphere_grid;
 use sphere_grid::sphere_grid;
 
+/// Side of the image whose pixels the coherent rays pass through.
+const SIDE: u32 = 256;
+
 /// Rays per batch in every benchmark.
-const RAYS: u32 = 256 * 256;
-
-/// A deterministic stream of numbers in [0, 1) (SplitMix64) for ray generation.
-struct Stream(u64);
-impl Stream {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
-/// One ray per pixel of a 256×256 image.
-fn primary_rays(camera: &Camera) -> Vec<Ray> {
-    (0..RAYS)
-        .map(|i| {
-            camera.primary_ray(Camera::pixel_ndc(
-                i % 256,
-                i / 256,
-                256,
-                256,
-                Vec2::splat(0.5),
-            ))
-        })
-        .collect()
-}
-
-/// Rays from random points inside `lo..hi` in uniformly random directions.
-fn random_rays(lo: Vec3, hi: Vec3, seed: u64) -> Vec<Ray> {
-    let mut s = Stream(seed);
-    (0..RAYS)
-        .map(|_| {
-            let o = lo + (hi - lo) * Vec3::new(s.next(), s.next(), s.next());
-            Ray::new(o, sample_uniform_sphere(Vec2::new(s.next(), s.next())))
-        })
-        .collect()
-}
+const RAYS: u32 = SIDE * SIDE;
 
 fn bench(c: &mut Criterion) {
     let cornell = builtin("cornell").unwrap();
@@ -71,14 +37,14 @@ fn bench(c: &mut Criterion) {
         (
             "cornell",
             &cornell_bvh,
-            primary_rays(cornell.camera()),
-            random_rays(Vec3::splat(-0.95), Vec3::splat(0.95), 1),
+            rays::primary_rays(cornell.camera(), SIDE),
+            rays::random_rays(Vec3::splat(-0.95), Vec3::splat(0.95), RAYS, 1),
         ),
         (
             "spheres-516k",
             &spheres_bvh,
-            primary_rays(&spheres_camera),
-            random_rays(Vec3::splat(-1.0), Vec3::splat(8.5), 2),
+            rays::primary_rays(&spheres_camera, SIDE),
+            rays::random_rays(Vec3::splat(-1.0), Vec3::splat(8.5), RAYS, 2),
         ),
     ];
     let mut group = c.benchmark_group("bvh-closest-hit");
@@ -113,7 +79,7 @@ fn bench(c: &mut Criterion) {
         .iter()
         .map(|&i| tris[i as usize])
         .collect();
-    let raw_rays: Vec<obvhs::ray::Ray> = primary_rays(&spheres_camera)
+    let raw_rays: Vec<obvhs::ray::Ray> = rays::primary_rays(&spheres_camera, SIDE)
         .iter()
         .map(|r| obvhs::ray::Ray::new_inf(r.origin.into(), r.direction.into()))
         .collect();

@@ -25,56 +25,17 @@ use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use glam::{Vec2, Vec3};
-use lustre_geometry::sampling::sample_uniform_sphere;
+use glam::Vec3;
 use lustre_geometry::{Bvh, Camera, Hit, LeanHit, Ray, WorldTriangle, intersect_triangle};
 use obvhs::cwbvh::CwBvh;
 
+#[path = "../benches/common/rays.rs"]
+mod rays;
 #[path = "../benches/common/sphere_grid.rs"]
 mod sphere_grid;
 
 /// Image side of the coherent rays (one ray per pixel).
 const SIDE: u32 = 1000;
-
-/// A deterministic stream of numbers in [0, 1) (SplitMix64) for ray generation.
-struct Stream(u64);
-
-impl Stream {
-    /// The next number of the SplitMix64 sequence (Steele et al. 2014), 24 bits in [0, 1).
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
-/// One primary ray per pixel of a `SIDE`×`SIDE` image, row by row.
-fn coherent_rays(camera: &Camera) -> Vec<Ray> {
-    (0..SIDE * SIDE)
-        .map(|i| {
-            camera.primary_ray(Camera::pixel_ndc(
-                i % SIDE,
-                i / SIDE,
-                SIDE,
-                SIDE,
-                Vec2::splat(0.5),
-            ))
-        })
-        .collect()
-}
-
-/// `SIDE`² rays from random points inside `lo..hi` in uniformly random directions.
-fn incoherent_rays(lo: Vec3, hi: Vec3, seed: u64) -> Vec<Ray> {
-    let mut s = Stream(seed);
-    (0..SIDE * SIDE)
-        .map(|_| {
-            let o = lo + (hi - lo) * Vec3::new(s.next(), s.next(), s.next());
-            Ray::new(o, sample_uniform_sphere(Vec2::new(s.next(), s.next())))
-        })
-        .collect()
-}
 
 /// The closest-hit query before the eight-wide BVH, rebuilt from public parts.
 struct Before {
@@ -200,10 +161,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         45.0,
     );
     let sets = [
-        ("coherent", coherent_rays(&camera)),
+        ("coherent", rays::primary_rays(&camera, SIDE)),
         (
             "incoherent",
-            incoherent_rays(Vec3::splat(-1.0), Vec3::splat(8.5), 2),
+            rays::random_rays(Vec3::splat(-1.0), Vec3::splat(8.5), SIDE * SIDE, 2),
         ),
     ];
     let mut json = String::new();
