@@ -32,6 +32,8 @@ use lustre_geometry::ObjectId;
 use lustre_geometry::animation::{Keyframe, ObjectPath, PathEnd};
 use lustre_geometry::obj::load_obj;
 
+use common::{median, ms};
+
 /// Rings and segments of the blob's sphere (71,820 triangles).
 const RINGS: usize = 190;
 /// Frames per loop of the ball's path.
@@ -116,15 +118,6 @@ fn ball_path() -> ObjectPath {
     ObjectPath::new(keys, PathEnd::Loop)
         .and_then(|p| p.with_pivot(Vec3::new(0.0, 0.15, 1.6)))
         .expect("the ball's path is valid")
-}
-
-fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
 }
 
 fn bench(c: &mut Criterion) {

@@ -16,17 +16,10 @@ use lustre_density::{
 };
 use lustre_geometry::{ObjectId, builtin};
 
+use common::{median, ms};
+
 /// Frames per loop of the ball's path.
 const FRAMES: usize = 32;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
-}
-
-fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
-}
 
 fn bench(c: &mut Criterion) {
     let max: u64 = std::env::var("LUSTRE_BENCH_DENSITY_MAX")

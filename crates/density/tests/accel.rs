@@ -306,6 +306,29 @@ fn random_segments(
     out
 }
 
+/// Random discs (of radii `kind`, as [`random_discs`]) and segments for them ([`random_segments`]), scaled by `scale` and moved by `(1, -0.5, 0.25) · offset` away from the origin, where f32 rounding of the crossing test is coarse.
+fn random_scene(
+    seed: u64,
+    n_discs: usize,
+    n_segments: usize,
+    kind: u32,
+    scale: f32,
+    offset: f32,
+) -> (Vec<Disc>, Vec<RaySegment>) {
+    let mut rng = Rng(seed);
+    let shift = Vec3::new(offset, -0.5 * offset, 0.25 * offset);
+    let discs: Vec<Disc> = random_discs(&mut rng, n_discs, kind)
+        .into_iter()
+        .map(|d| Disc {
+            centre: d.centre * scale + shift,
+            radius: d.radius * scale,
+            ..d
+        })
+        .collect();
+    let segments = random_segments(&mut rng, &discs, n_segments, scale, shift);
+    (discs, segments)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
 
@@ -318,13 +341,7 @@ proptest! {
         scale in prop::sample::select(vec![1.0f32, 1e-3, 50.0]),
         offset in prop::sample::select(vec![0.0f32, 100.0, -3000.0]),
     ) {
-        let mut rng = Rng(seed);
-        let shift = Vec3::new(offset, -0.5 * offset, 0.25 * offset);
-        let discs: Vec<Disc> = random_discs(&mut rng, 20, kind)
-            .into_iter()
-            .map(|d| Disc { centre: d.centre * scale + shift, radius: d.radius * scale, ..d })
-            .collect();
-        let segments = random_segments(&mut rng, &discs, 400, scale, shift);
+        let (discs, segments) = random_scene(seed, 20, 400, kind, scale, offset);
         let mut crossings = 0;
         for d in &discs {
             let (lo, hi) = d.bounds(slack);
@@ -350,14 +367,7 @@ proptest! {
         scale in prop::sample::select(vec![1.0f32, 1e-3, 50.0]),
         offset in prop::sample::select(vec![0.0f32, 100.0, -3000.0]),
     ) {
-        let mut rng = Rng(seed);
-        // Scaled and moved away from the origin, where f32 rounding of the crossing test is coarse.
-        let shift = Vec3::new(offset, -0.5 * offset, 0.25 * offset);
-        let discs: Vec<Disc> = random_discs(&mut rng, n_discs, kind)
-            .into_iter()
-            .map(|d| Disc { centre: d.centre * scale + shift, radius: d.radius * scale, ..d })
-            .collect();
-        let segments = random_segments(&mut rng, &discs, n_segments, scale, shift);
+        let (discs, segments) = random_scene(seed, n_discs, n_segments, kind, scale, offset);
         let slack = slack * scale;
         prop_assert_eq!(check_all(&discs, &segments, slack), Ok(()));
         // The ray cache's hierarchy after every query.
