@@ -72,7 +72,7 @@ use serde_json::json;
 
 use crate::render_density::{
     DEFAULT_PHOTONMAP_K, DensityLengths, DensitySettings, DetpAcceleration, Estimator,
-    GlossyEstimate, PreTestArg, vertex_lit_scene, vertex_radiance,
+    GlossyEstimate, PreTestArg, check_lengths, vertex_lit_scene, vertex_radiance,
 };
 use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
 use crate::scene_arg;
@@ -769,15 +769,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.technique == Technique::Photonmap && args.k == 0 {
         bail!("--k 0: Photon Maps needs at least one nearest impact");
     }
-    for (option, value) in [
-        ("--radius", args.radius),
-        ("--glossy-radius", args.glossy_radius),
-        ("--mesh-edge", args.mesh_edge),
-    ] {
-        if let Some(v) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
-            bail!("{option} {v}: must be positive and finite");
-        }
-    }
+    // Given lengths are checked before anything is loaded.
+    check_lengths(args.radius, args.glossy_radius, args.mesh_edge)?;
     let mut timings = serde_json::Map::new();
     let start = Instant::now();
     let loaded = scene_arg::load(&args.scene)?;

@@ -75,17 +75,31 @@ impl DensityLengths {
             glossy_radius: glossy_radius.unwrap_or(DEFAULT_GLOSSY_RADIUS_FACTOR * radius),
             mesh_edge,
         };
-        for (option, value) in [
-            ("--radius", lengths.radius),
-            ("--glossy-radius", lengths.glossy_radius),
-            ("--mesh-edge", lengths.mesh_edge),
-        ] {
-            if !(value > 0.0 && value.is_finite()) {
-                anyhow::bail!("{option} {value}: must be positive and finite");
-            }
-        }
+        check_lengths(
+            Some(lengths.radius),
+            Some(lengths.glossy_radius),
+            Some(lengths.mesh_edge),
+        )?;
         Ok(lengths)
     }
+}
+
+/// Fails naming the first of `--radius`, `--glossy-radius` and `--mesh-edge` that is given and not a positive finite length.
+pub fn check_lengths(
+    radius: Option<f32>,
+    glossy_radius: Option<f32>,
+    mesh_edge: Option<f32>,
+) -> anyhow::Result<()> {
+    for (option, value) in [
+        ("--radius", radius),
+        ("--glossy-radius", glossy_radius),
+        ("--mesh-edge", mesh_edge),
+    ] {
+        if let Some(v) = value.filter(|v| !(*v > 0.0 && v.is_finite())) {
+            anyhow::bail!("{option} {v}: must be positive and finite");
+        }
+    }
+    Ok(())
 }
 
 pub use lustre_density::{Estimator, vertex_lit_scene};
