@@ -9,6 +9,8 @@ use glam::Vec3;
 use lustre_geometry::{Bvh, Camera, builtin};
 use rayon::prelude::*;
 
+#[path = "common/cwbvh.rs"]
+mod cwbvh;
 #[path = "common/rays.rs"]
 mod rays;
 #[path = "common/sphere_grid.rs"]
@@ -61,24 +63,7 @@ fn bench(c: &mut Criterion) {
     // Baseline: obvhs alone on the same triangles and coherent rays, with its
     // own Möller-Trumbore test and no hit record, to show what our wrapper costs.
     let spheres = sphere_grid();
-    let tris: Vec<obvhs::triangle::Triangle> = spheres
-        .iter()
-        .map(|t| obvhs::triangle::Triangle {
-            v0: t.positions[0].into(),
-            v1: t.positions[1].into(),
-            v2: t.positions[2].into(),
-        })
-        .collect();
-    let raw = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-        &tris,
-        obvhs::BvhBuildParams::medium_build(),
-        &mut std::time::Duration::default(),
-    );
-    let ordered: Vec<_> = raw
-        .primitive_indices
-        .iter()
-        .map(|&i| tris[i as usize])
-        .collect();
+    let (raw, ordered) = cwbvh::cwbvh(&spheres);
     let raw_rays: Vec<obvhs::ray::Ray> = rays::primary_rays(&spheres_camera, SIDE)
         .iter()
         .map(|r| obvhs::ray::Ray::new_inf(r.origin.into(), r.direction.into()))

@@ -29,6 +29,8 @@ use glam::Vec3;
 use lustre_geometry::{Bvh, Camera, Hit, LeanHit, Ray, WorldTriangle, intersect_triangle};
 use obvhs::cwbvh::CwBvh;
 
+#[path = "../benches/common/cwbvh.rs"]
+mod cwbvh;
 #[path = "../benches/common/rays.rs"]
 mod rays;
 #[path = "../benches/common/sphere_grid.rs"]
@@ -47,23 +49,10 @@ struct Before {
 impl Before {
     /// obvhs' CWBVH over the triangles with the medium settings, as `Bvh::from_triangles` built it before.
     fn new(triangles: &[WorldTriangle]) -> Self {
-        let tris: Vec<obvhs::triangle::Triangle> = triangles
+        let (cwbvh, ordered) = cwbvh::cwbvh(triangles);
+        let ordered = ordered
             .iter()
-            .map(|t| obvhs::triangle::Triangle {
-                v0: t.positions[0].into(),
-                v1: t.positions[1].into(),
-                v2: t.positions[2].into(),
-            })
-            .collect();
-        let cwbvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            &tris,
-            obvhs::BvhBuildParams::medium_build(),
-            &mut std::time::Duration::default(),
-        );
-        let ordered = cwbvh
-            .primitive_indices
-            .iter()
-            .map(|&i| triangles[i as usize].positions)
+            .map(|t| [t.v0, t.v1, t.v2].map(Vec3::from))
             .collect();
         Self { cwbvh, ordered }
     }
