@@ -11,8 +11,8 @@ The image is the mean of ceil(spp / spp_per_pass) renders with seeds S, S+1,
 ... (an exact split for a box filter; with a Gaussian filter each pass is
 normalised on its own); it is written as linear float32 RGB OpenEXR to a
 temporary name and renamed. Progress goes to stderr; the last stdout line is
-a JSON object with the settings, the Mitsuba version, the render time and the
-per-channel image mean.
+a JSON object with the settings, the Mitsuba version, the scene's load time,
+the render time and the per-channel image mean.
 """
 
 import argparse
@@ -56,12 +56,16 @@ def main():
             d["integrator"]["max_depth"] = args.max_depth
         if args.spp:
             d["sensor"]["sampler"]["sample_count"] = args.spp
+        load_start = time.time()
         scene = mi.load_dict(d)
+        load_seconds = time.time() - load_start
         source = "mi.cornell_box()"
     else:
         if args.width or args.height or args.max_depth is not None:
             ap.error("--width, --height and --max-depth apply to --cornell-box only (the XML holds them)")
+        load_start = time.time()
         scene = mi.load_file(args.scene)
+        load_seconds = time.time() - load_start
         source = args.scene
 
     sensor = scene.sensors()[0]
@@ -128,6 +132,7 @@ def main():
             "spp_per_pass": per_pass,
             "passes": passes,
             "seed": args.seed,
+            "load_seconds": round(load_seconds, 3),
             "render_seconds": round(seconds, 3),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "mean": [float(v) for v in image.reshape(-1, 3).mean(axis=0)],

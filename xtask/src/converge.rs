@@ -5,6 +5,12 @@
 //! mean FLIP against `tests/references/<scene>.exr`, prints the table and
 //! writes it into BENCHMARKS.md between `<!-- converge:start -->` and
 //! `<!-- converge:end -->`.
+//!
+//! Beside them, in the same run on the same machine, Mitsuba's path tracer
+//! renders each scene at several sample counts (`--path-tracer-spp`,
+//! [`crate::path_tracer`]), and each of our renders is set beside the path
+//! tracer's relMSE at the same time and the time it takes to reach the same
+//! relMSE (issue 15, "Error at equal time").
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -14,6 +20,7 @@ use lustre_image::metrics::{self, PIXELS_PER_DEGREE, RELATIVE_MSE_EPSILON};
 use lustre_image::{Image, read_exr};
 use serde_json::Value;
 
+use crate::path_tracer::{self, Curve, Estimate};
 use crate::render::{Lustre, Render, Scratch};
 use crate::surfaces::{SurfaceMap, relative_mse_over};
 
@@ -52,6 +59,17 @@ pub struct Args {
     /// Heading of that section.
     #[arg(long, default_value = "Convergence to the path-traced references")]
     title: String,
+    /// Samples per pixel of the path tracer's renders beside ours (comma-separated; each
+    /// scene rendered as its reference was, with another seed).
+    #[arg(
+        long = "path-tracer-spp",
+        value_delimiter = ',',
+        default_value = "1,4,16,64,256,1024,4096"
+    )]
+    path_tracer_spp: Vec<u32>,
+    /// Render no path-traced curve: no comparison at equal time.
+    #[arg(long)]
+    no_path_tracer: bool,
 }
 
 /// A path-traced reference and what its sidecar says about it.
@@ -64,6 +82,8 @@ pub(crate) struct Reference {
     pub spp: Option<u64>,
     /// The renderer, from the sidecar (e.g. "Mitsuba 3").
     pub renderer: String,
+    /// The whole sidecar (how the reference was rendered).
+    pub sidecar: Value,
 }
 
 /// One measured render.
@@ -119,6 +139,7 @@ pub(crate) fn load_reference(dir: &Path, scene: &str) -> Result<Reference> {
             .as_str()
             .unwrap_or("unknown renderer")
             .to_owned(),
+        sidecar,
     })
 }
 
@@ -200,8 +221,106 @@ fn table_row(row: &Row) -> String {
     )
 }
 
-/// The BENCHMARKS.md section (between its markers) for `rows`.
-fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -> String {
+/// An estimate read off the path tracer's curve, `*` when extrapolated.
+fn estimate(e: Option<Estimate>, digits: usize) -> String {
+    e.map_or("–".to_owned(), |e| {
+        format!(
+            "{:.digits$}{}",
+            e.value,
+            if e.extrapolated { "*" } else { "" }
+        )
+    })
+}
+
+/// The path tracer's curve on one scene and each of our renders beside it, in Markdown.
+fn equal_time(curve: &Curve, rows: &[&Row]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Mitsuba's path tracer on the same machine in this run ({} spp, seed {}; its relMSE \
+         fits c (1/N + 1/N_ref) with c = {:.3}, so the reference's own noise is c / N_ref = {:.5}; \
+         time {:.2} s + {:.4} s per spp):\n",
+        curve
+            .points
+            .iter()
+            .map(|p| thousands(u64::from(p.spp)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        path_tracer::SEED,
+        curve.variance,
+        curve.reference_noise(),
+        curve.setup_seconds,
+        curve.seconds_per_spp,
+    );
+    let _ = writeln!(s, "| spp | time (s) | relMSE |\n|---:|---:|---:|");
+    for p in &curve.points {
+        let _ = writeln!(
+            s,
+            "| {} | {:.2} | {:.5} |",
+            thousands(u64::from(p.spp)),
+            p.seconds,
+            p.rel_mse
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nAt equal time: the path tracer's relMSE after our render's time, our relMSE over it \
+         (below 1: ours is better), the same without the reference's noise (c / N_ref taken \
+         from both), and the path tracer's time to our relMSE over our time (above 1: ours is \
+         faster). `*`: beyond the measured spp, from the fit; –: below the reference's noise.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| technique | photons | C | support | time (s) | relMSE | path tracer's relMSE | ratio | ratio without reference noise | path tracer's time (s) | its time / ours |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|");
+    for row in rows {
+        let Some(ms) = row.time_ms else { continue };
+        let seconds = ms / 1000.0;
+        let at = curve.rel_mse_at(seconds);
+        let noise = curve.reference_noise();
+        let ratio = at.map(|a| Estimate {
+            value: row.rel_mse / a.value,
+            ..a
+        });
+        let clean = at.and_then(|a| {
+            (a.value > noise).then(|| Estimate {
+                value: (row.rel_mse - noise).max(0.0) / (a.value - noise),
+                ..a
+            })
+        });
+        let time = curve.seconds_for(row.rel_mse);
+        let speed = time.map(|t| Estimate {
+            value: t.value / seconds,
+            ..t
+        });
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {seconds:.1} | {:.5} | {} | {} | {} | {} | {} |",
+            row.technique,
+            thousands(row.photons),
+            row.kernel_c,
+            row.support,
+            row.rel_mse,
+            estimate(at, 5),
+            estimate(ratio, 2),
+            estimate(clean, 2),
+            estimate(time, 1),
+            estimate(speed, 2),
+        );
+    }
+    s
+}
+
+/// The BENCHMARKS.md section (between its markers) for `rows`, with the
+/// path tracer's curve of each reference where one was measured.
+fn section(
+    references: &[Reference],
+    rows: &[Row],
+    curves: &[Option<Curve>],
+    machine: &str,
+    title: &str,
+) -> String {
     let mut adapters: Vec<&str> = rows.iter().map(|r| r.adapter.as_str()).collect();
     adapters.sort_unstable();
     adapters.dedup();
@@ -231,7 +350,7 @@ fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -
             adapters.join("; ")
         }
     );
-    for reference in references {
+    for (i, reference) in references.iter().enumerate() {
         let _ = writeln!(
             s,
             "### {} (reference: {}, {} spp, {}x{}, `tests/references/{}.exr`)\n",
@@ -255,10 +374,15 @@ fn section(references: &[Reference], rows: &[Row], machine: &str, title: &str) -
             "|---|---:|---:|---|---:|{}---:|---:|---:|",
             "---:|".repeat(PER_SURFACE.len())
         );
-        for row in rows.iter().filter(|r| r.scene == reference.scene) {
+        let scene_rows: Vec<&Row> = rows.iter().filter(|r| r.scene == reference.scene).collect();
+        for row in &scene_rows {
             let _ = writeln!(s, "{}", table_row(row));
         }
         s.push('\n');
+        if let Some(Some(curve)) = curves.get(i) {
+            s.push_str(&equal_time(curve, &scene_rows));
+            s.push('\n');
+        }
     }
     s
 }
@@ -340,6 +464,10 @@ pub fn run(args: Args) -> Result<()> {
     if args.photons.contains(&0) {
         bail!("--photons must be positive");
     }
+    if !args.no_path_tracer && (args.path_tracer_spp.len() < 2 || args.path_tracer_spp.contains(&0))
+    {
+        bail!("--path-tracer-spp needs at least two positive sample counts (or --no-path-tracer)");
+    }
     let lustre = Lustre::build()?;
     let scratch = Scratch::new("converge")?;
     let references_dir = references_dir();
@@ -347,7 +475,21 @@ pub fn run(args: Args) -> Result<()> {
     if failures > 0 {
         bail!("{failures} render(s) failed; BENCHMARKS.md left as it was");
     }
-    let text = section(&references, &rows, &crate::bench::machine(), &args.title);
+    let curves = if args.no_path_tracer {
+        vec![None; references.len()]
+    } else {
+        references
+            .iter()
+            .map(|r| path_tracer::measure(r, &args.path_tracer_spp, scratch.path()).map(Some))
+            .collect::<Result<Vec<_>>>()?
+    };
+    let text = section(
+        &references,
+        &rows,
+        &curves,
+        &crate::bench::machine(),
+        &args.title,
+    );
     println!("\n{text}");
     crate::bench::write_section(&args.section, &text)
 }
@@ -412,6 +554,8 @@ mod tests {
             support: vec!["glossy-silverman".into()],
             section: "converge".into(),
             title: "Convergence".into(),
+            path_tracer_spp: vec![1, 4],
+            no_path_tracer: true,
         };
         let (references, rows, failures) = converge(&lustre, dir, &args, dir).unwrap();
         assert_eq!(failures, 0);
@@ -419,9 +563,21 @@ mod tests {
         assert!(rows.iter().all(|r| r.rel_mse == 0.0
             && r.flip_mean.abs() < 1e-6
             && r.surface_rel_mse.iter().all(|s| *s == Some(0.0))));
+        // A path tracer whose relMSE is 2 (1/N + 1/4096) after 0.001 N s: at our
+        // 12.5 ms it has 12.5 spp, relMSE 0.16049.
+        let points = [1u32, 4, 16, 64]
+            .iter()
+            .map(|&spp| path_tracer::Point {
+                spp,
+                seconds: 0.001 * f64::from(spp),
+                rel_mse: 2.0 * (1.0 / f64::from(spp) + 1.0 / 4096.0),
+            })
+            .collect();
+        let curve = Curve::new(points, 4096).unwrap();
         let text = section(
             &references,
             &rows,
+            &[Some(curve)],
             "Test CPU, 2 cores available",
             "Convergence",
         );
@@ -440,6 +596,13 @@ mod tests {
             "{text}"
         );
         assert!(!text.contains("converge:start"));
+        assert!(text.contains("| 64 | 0.06 | 0.03174 |"), "{text}");
+        // Our error is zero: ratio 0, and the path tracer never gets there.
+        assert!(
+            text.contains("| splat | 1,000 | 16 | glossy-silverman | 0.0 | 0.00000 | 0.16"),
+            "{text}"
+        );
+        assert!(text.contains("| 0.00 | 0.00 | – | – |"), "{text}");
 
         // A failing renderer is counted, not fatal to the other rows.
         let broken = fake_lustre(dir, &dir.join("glosbox.exr"), 1);

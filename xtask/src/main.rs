@@ -7,6 +7,7 @@ mod converge;
 mod density_errors;
 mod embree;
 mod golden;
+mod path_tracer;
 mod ray;
 mod reference;
 mod reference_check;

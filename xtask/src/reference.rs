@@ -336,6 +336,79 @@ fn render_scene(
     Ok(())
 }
 
+/// How a committed reference was rendered, read back from its sidecar
+/// (`tests/references/<scene>.json`): the export options and Mitsuba
+/// variant that render the scene as the reference did, at `spp` samples with
+/// `seed` (for renders to set beside it: `cargo xtask converge`'s path-tracer
+/// curve).
+pub fn export_like(
+    sidecar: &serde_json::Value,
+    spp: u32,
+    seed: u32,
+) -> Result<(ExportOptions, String)> {
+    let field = |name: &str| {
+        sidecar
+            .get(name)
+            .with_context(|| format!("the reference's sidecar has no `{name}`"))
+    };
+    let size = |name: &str| -> Result<u32> {
+        let value = field(name)?;
+        value
+            .as_u64()
+            .and_then(|v| u32::try_from(v).ok())
+            .filter(|&v| v > 0)
+            .with_context(|| format!("the reference's `{name}` is {value}, not a positive size"))
+    };
+    let integrator = match field("integrator")?.as_str() {
+        Some("path") => Integrator::Path,
+        Some("ptracer") => Integrator::ParticleTracer,
+        other => bail!("the reference's integrator {other:?} is neither `path` nor `ptracer`"),
+    };
+    let max_depth = field("max_depth")?
+        .as_i64()
+        .and_then(|d| i32::try_from(d).ok())
+        .context("the reference's `max_depth` is not an integer")?;
+    let filter = match field("rfilter")?.as_str() {
+        Some("box") => ReconstructionFilter::Box,
+        Some(text) if text.starts_with("gaussian") => ReconstructionFilter::Gaussian {
+            stddev: text
+                .trim_start_matches("gaussian (stddev ")
+                .trim_end_matches(')')
+                .parse()
+                .with_context(|| {
+                    format!("the reference's filter {text:?} names no standard deviation")
+                })?,
+        },
+        other => bail!("the reference's filter {other:?} is neither box nor gaussian"),
+    };
+    let point_light_radius = match sidecar.get("point_light_radius") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(r) => Some(
+            r.as_f64()
+                .filter(|r| r.is_finite() && *r > 0.0)
+                .with_context(|| {
+                    format!("the reference's point_light_radius {r} is not a positive radius")
+                })? as f32,
+        ),
+    };
+    let variant = field("variant")?
+        .as_str()
+        .context("the reference's `variant` is not a string")?
+        .to_owned();
+    let options = ExportOptions {
+        width: size("width")?,
+        height: size("height")?,
+        spp,
+        seed,
+        integrator,
+        max_depth,
+        filter,
+        point_light_radius,
+        ..ExportOptions::default()
+    };
+    Ok((options, variant))
+}
+
 /// Runs the Python helper with `args`, passing its stderr (progress) through,
 /// and returns the JSON object on the last line of its stdout.
 pub fn run_helper(python: &Path, root: &Path, args: &[&str]) -> Result<serde_json::Value> {
@@ -393,7 +466,7 @@ fn venv_mitsuba(python: &Path) -> std::result::Result<String, String> {
 /// Makes sure `.mitsuba-venv` exists and imports Mitsuba [`MITSUBA_VERSION`]
 /// and numpy, installing them with pip when missing and reinstalling
 /// Mitsuba when the venv has another version; returns its Python.
-fn ensure_venv(root: &Path) -> Result<PathBuf> {
+pub(crate) fn ensure_venv(root: &Path) -> Result<PathBuf> {
     let venv = root.join(".mitsuba-venv");
     let python = venv_python(root);
     if !python.exists() {
@@ -463,7 +536,7 @@ fn run_checked(command: &mut Command) -> Result<()> {
 }
 
 /// The path as UTF-8, for the helper's command line.
-fn path_str(path: &Path) -> Result<&str> {
+pub(crate) fn path_str(path: &Path) -> Result<&str> {
     path.to_str()
         .with_context(|| format!("{} is not valid UTF-8", path.display()))
 }
@@ -482,6 +555,65 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn references_are_rendered_again_as_their_sidecars_say() {
+        let dir = workspace_root().join("tests").join("references");
+        let read = |scene: &str| -> serde_json::Value {
+            serde_json::from_str(
+                &std::fs::read_to_string(dir.join(format!("{scene}.json"))).unwrap(),
+            )
+            .unwrap()
+        };
+        let (options, variant) = export_like(&read("glosbox"), 16, 1000).unwrap();
+        assert_eq!(
+            (options.width, options.height, options.spp, options.seed),
+            (256, 256, 16, 1000)
+        );
+        assert_eq!(
+            (options.integrator, options.max_depth),
+            (Integrator::Path, -1)
+        );
+        assert_eq!(options.filter, ReconstructionFilter::Box);
+        assert_eq!(
+            (options.point_light_radius, variant.as_str()),
+            (None, "llvm_ad_rgb")
+        );
+        let (options, _) = export_like(&read("cardioid"), 1, 0).unwrap();
+        assert_eq!(options.point_light_radius, Some(0.02));
+        let (options, _) = export_like(&read("stained-glass"), 1, 0).unwrap();
+        assert_eq!(options.integrator, Integrator::ParticleTracer);
+
+        let mut gaussian = read("glosbox");
+        gaussian["rfilter"] = "gaussian (stddev 0.5)".into();
+        let (options, _) = export_like(&gaussian, 1, 0).unwrap();
+        assert_eq!(
+            options.filter,
+            ReconstructionFilter::Gaussian { stddev: 0.5 }
+        );
+        for (key, bad) in [
+            ("integrator", serde_json::json!("bdpt")),
+            ("width", serde_json::json!(0)),
+            ("rfilter", serde_json::json!("tent")),
+            ("point_light_radius", serde_json::json!(-1.0)),
+        ] {
+            let mut sidecar = read("glosbox");
+            sidecar[key] = bad;
+            let error = export_like(&sidecar, 1, 0).unwrap_err().to_string();
+            assert!(
+                error.contains(key) || error.contains("filter"),
+                "{key}: {error}"
+            );
+        }
+        let mut missing = read("glosbox");
+        missing.as_object_mut().unwrap().remove("max_depth");
+        assert!(
+            export_like(&missing, 1, 0)
+                .unwrap_err()
+                .to_string()
+                .contains("max_depth")
+        );
+    }
 
     #[test]
     fn the_pinned_mitsuba_is_the_one_the_references_name() {
