@@ -436,10 +436,7 @@ impl GlossyVertex {
                 stats.missing = old.iter().filter(|r| !l.remove(r)).count();
                 new.into_iter().for_each(|r| l.insert(r));
             }
-            Store::Tree(t, _) => {
-                stats.missing = old.iter().filter(|r| !t.remove(r)).count();
-                new.into_iter().for_each(|r| t.insert(r));
-            }
+            Store::Tree(t, _) => stats.missing = t.update(&old, &new),
             Store::Summary(s) => s.update(&old, &new)?,
         }
         stats.removed -= stats.missing;
@@ -676,27 +673,53 @@ impl GlossyVertices {
 
     /// One frame's update of every vertex's list from the frame's Old and New Rays (section 2.10), in parallel; the statistics are summed over vertices. The Old Rays must be the segments exactly as they were inserted (same direction, power and extension). On an error (a summary losing more rays than it holds) the other vertices keep their update.
     pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
+        self.update_listing(old, new).map(|(stats, _)| stats)
+    }
+
+    /// [`GlossyVertices::update`], also listing the vertices whose lists changed (an Old or New Ray crossed their disc), as `(mesh, vertex)` in mesh and vertex order: the others keep their radiance towards any eye.
+    pub fn update_listing(
+        &mut self,
+        old: &[RaySegment],
+        new: &[RaySegment],
+    ) -> Result<(UpdateStats, Vec<(MeshId, u32)>)> {
         // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept.
         let old_crossing = self.discs.crossings(old)?;
         let new_crossing = self.discs.crossings(new)?;
-        let per_vertex: Vec<UpdateStats> = self
+        let per_vertex: Vec<(UpdateStats, (MeshId, u32))> = self
             .meshes
             .par_iter_mut()
             .zip(self.disc_of.par_iter())
-            .flat_map(|(v, d)| v.par_iter_mut().zip(d.par_iter()))
-            .filter_map(|(v, d)| {
+            .enumerate()
+            .flat_map(|(m, (v, d))| {
+                v.par_iter_mut()
+                    .zip(d.par_iter())
+                    .enumerate()
+                    .map(move |(i, vd)| ((m as MeshId, i as u32), vd))
+            })
+            .filter_map(|(id, (v, d))| {
                 let (v, &Some(d)) = (v.as_mut()?, d) else {
                     return None;
                 };
-                Some(v.update_crossing(
-                    old_crossing[d as usize].iter().map(|&i| &old[i as usize]),
-                    new_crossing[d as usize].iter().map(|&i| &new[i as usize]),
-                ))
+                let (old_in, new_in) = (&old_crossing[d as usize], &new_crossing[d as usize]);
+                if old_in.is_empty() && new_in.is_empty() {
+                    return None;
+                }
+                Some(
+                    v.update_crossing(
+                        old_in.iter().map(|&i| &old[i as usize]),
+                        new_in.iter().map(|&i| &new[i as usize]),
+                    )
+                    .map(|stats| (stats, id)),
+                )
             })
             .collect::<Result<_>>()?;
         let mut total = UpdateStats::default();
-        per_vertex.into_iter().for_each(|s| total += s);
-        Ok(total)
+        let mut changed = Vec::with_capacity(per_vertex.len());
+        for (stats, id) in per_vertex {
+            total += stats;
+            changed.push(id);
+        }
+        Ok((total, changed))
     }
 
     /// Uses per-vertex areas (e.g. [`crate::artifact::reachable_areas`], section 1.2.1) instead of `π r²`; a zero area leaves `π r²`. Fails when the shape does not match or an area is negative or not finite.
@@ -728,6 +751,46 @@ impl GlossyVertices {
         self.per_vertex(brdfs, |v, brdf, diffuse| {
             v.lobe_estimate(brdf, eye - v.disc().centre, diffuse).value
         })
+    }
+
+    /// [`GlossyVertices::lobe_radiance`] of the listed `(mesh, vertex)` only, in their order (zero for a vertex without a list). Fails when a vertex does not exist or a mesh's material has no BRDF.
+    pub fn lobe_radiance_of(
+        &self,
+        brdfs: &[BoxedBrdf],
+        eye: Vec3,
+        vertices: &[(MeshId, u32)],
+    ) -> Result<Vec<Rgb>> {
+        vertices
+            .par_iter()
+            .map(|&(m, v)| {
+                let slot = self
+                    .meshes
+                    .get(m as usize)
+                    .and_then(|vs| vs.get(v as usize))
+                    .ok_or_else(|| DensityError::InvalidOption {
+                        option: "vertices",
+                        message: format!("no vertex {v} in mesh {m}"),
+                    })?;
+                let Some(vertex) = slot else {
+                    return Ok(Rgb::ZERO);
+                };
+                let material = self.materials[m as usize];
+                let brdf =
+                    brdfs
+                        .get(material as usize)
+                        .ok_or_else(|| DensityError::InvalidOption {
+                            option: "brdfs",
+                            message: format!("no BRDF for material {material}"),
+                        })?;
+                Ok(vertex
+                    .lobe_estimate(
+                        brdf.as_ref(),
+                        eye - vertex.disc().centre,
+                        self.diffuse[m as usize],
+                    )
+                    .value)
+            })
+            .collect()
     }
 
     /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex, zero for a vertex without one.

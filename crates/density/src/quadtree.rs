@@ -221,6 +221,8 @@ struct Node {
     power: DVec3,
     lo: Vec2,
     hi: Vec2,
+    /// Rays were inserted or removed below since the sums and shape were last restored ([`Node::normalise`]); false in every canonical tree.
+    dirty: bool,
     kind: Kind,
 }
 
@@ -237,6 +239,7 @@ impl Node {
             power: DVec3::ZERO,
             lo: Vec2::INFINITY,
             hi: Vec2::NEG_INFINITY,
+            dirty: false,
             kind: Kind::Leaf(entries),
         };
         node.refresh();
@@ -369,6 +372,76 @@ impl Node {
             }
         }
         found
+    }
+
+    /// Inserts into the leaf `entry` maps to, in key order, leaving the sums and the shape for [`Node::normalise`].
+    fn insert_raw(&mut self, mut cell: Cell, entry: Entry) {
+        let mut node = self;
+        loop {
+            node.dirty = true;
+            match &mut node.kind {
+                Kind::Leaf(entries) => {
+                    let key = entry.key();
+                    let at = entries.partition_point(|e| e.key() <= key);
+                    entries.insert(at, entry);
+                    return;
+                }
+                Kind::Inner(children) => {
+                    let i = cell.child_of(entry.uv);
+                    cell = cell.child(i);
+                    node = &mut children[i];
+                }
+            }
+        }
+    }
+
+    /// Removes one copy of `entry` from the leaf it maps to, leaving the sums and the shape for [`Node::normalise`]; `false` when it is not there.
+    fn remove_raw(&mut self, mut cell: Cell, entry: &Entry) -> bool {
+        let mut node = self;
+        loop {
+            node.dirty = true;
+            match &mut node.kind {
+                Kind::Leaf(entries) => {
+                    let key = entry.key();
+                    return match entries.binary_search_by(|e| e.key().cmp(&key)) {
+                        Ok(i) => {
+                            entries.remove(i);
+                            true
+                        }
+                        Err(_) => false,
+                    };
+                }
+                Kind::Inner(children) => {
+                    let i = cell.child_of(entry.uv);
+                    cell = cell.child(i);
+                    node = &mut children[i];
+                }
+            }
+        }
+    }
+
+    /// Restores the sums and the canonical shape of the dirty cells (those a raw insertion or removal passed since the tree was last canonical), children first: an overfull leaf becomes the subtree [`Node::build`] makes, an inner node with at most `capacity` rays becomes one leaf. The other cells kept their rays, so the whole tree is canonical again.
+    fn normalise(&mut self, cell: Cell, options: &QuadTreeOptions) {
+        if !self.dirty {
+            return;
+        }
+        self.dirty = false;
+        if let Kind::Inner(children) = &mut self.kind {
+            for (i, child) in children.iter_mut().enumerate() {
+                child.normalise(cell.child(i), options);
+            }
+        }
+        self.refresh();
+        match self.kind {
+            Kind::Inner(_) if self.count <= options.capacity => {
+                let mut entries = Vec::with_capacity(self.count);
+                self.collect(&mut entries);
+                entries.sort_by(|a, b| key_order(&a.ray, &b.ray));
+                *self = Node::leaf(entries);
+            }
+            Kind::Leaf(_) => self.split(cell, options),
+            Kind::Inner(_) => {}
+        }
     }
 
     fn collect(&self, out: &mut Vec<Entry>) {
@@ -533,6 +606,19 @@ impl QuadTree {
     pub fn remove(&mut self, ray: &IncidentRay) -> bool {
         self.root
             .remove(Cell::ROOT, &Entry::new(*ray), &self.options)
+    }
+
+    /// A frame's update (section 2.10.1): removes one copy of each Old Ray, then inserts the New Rays, and returns how many Old Rays were not in the tree. The tree equals the one [`QuadTree::remove`] and [`QuadTree::insert`] make one ray at a time, bit for bit, but each touched cell's sums and shape are restored once for the whole batch instead of after every ray (a leaf that a removal empties below the capacity and an insertion refills is not merged and split again; on a dense glossy model that churn was a seventh of the frame).
+    pub fn update(&mut self, old: &[IncidentRay], new: &[IncidentRay]) -> usize {
+        let missing = old
+            .iter()
+            .filter(|ray| !self.root.remove_raw(Cell::ROOT, &Entry::new(**ray)))
+            .count();
+        for ray in new {
+            self.root.insert_raw(Cell::ROOT, Entry::new(*ray));
+        }
+        self.root.normalise(Cell::ROOT, &self.options);
+        missing
     }
 
     /// Number of rays.

@@ -1,5 +1,6 @@
 //! The quasi-static loop of section 2: a first frame traced and estimated in full (figures 2.1 and 2.3), then, each time the mobile objects move, the ray set recalculated (figure 2.2) and the irradiance updated incrementally on static vertices (equations 2.4–2.15; figure 2.4 for Impact Count) and in full on the mobile objects' vertices (section 2.5.2).
 
+use std::sync::{Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, DVec3, Vec3};
@@ -103,6 +104,69 @@ pub struct FrameStats {
     pub recalculated: usize,
 }
 
+/// The static glossy vertices' lobe radiance towards the last eye asked for, and which vertices' lists changed since (beyond the paper: section 2.10 recomputes the view-dependent radiance when the camera moves; while it rests, a frame recomputes only the vertices an Old or New Ray crossed, and the others keep theirs exactly). Behind a lock so that [`QuasiStatic::glossy_radiance`] can fill it through `&self`.
+#[derive(Debug, Default)]
+struct LobeCache(Mutex<Option<CachedLobe>>);
+
+#[derive(Debug, Clone)]
+struct CachedLobe {
+    eye: Vec3,
+    lobe: Vec<Vec<Rgb>>,
+    stale: Vec<(MeshId, u32)>,
+}
+
+impl Clone for LobeCache {
+    fn clone(&self) -> Self {
+        Self(Mutex::new(self.lock().clone()))
+    }
+}
+
+impl LobeCache {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Option<CachedLobe>> {
+        // The cache is only ever replaced whole, so a panic elsewhere leaves it consistent.
+        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Marks vertices whose lists changed.
+    fn mark_stale(&mut self, changed: &[(MeshId, u32)]) {
+        let cache = self.0.get_mut().unwrap_or_else(PoisonError::into_inner);
+        if let Some(cache) = cache {
+            cache.stale.extend_from_slice(changed);
+        }
+    }
+
+    /// The lobe radiance towards `eye`: the cached one with its stale vertices recomputed by `some`, or all of it from `all` when the eye moved.
+    fn get(
+        &self,
+        eye: Vec3,
+        all: impl FnOnce() -> Result<Vec<Vec<Rgb>>>,
+        some: impl FnOnce(&[(MeshId, u32)]) -> Result<Vec<Rgb>>,
+    ) -> Result<Vec<Vec<Rgb>>> {
+        let mut guard = self.lock();
+        match guard.as_mut() {
+            Some(cache) if cache.eye == eye => {
+                cache.stale.sort_unstable();
+                cache.stale.dedup();
+                let values = some(&cache.stale)?;
+                for (&(m, v), value) in cache.stale.iter().zip(values) {
+                    cache.lobe[m as usize][v as usize] = value;
+                }
+                cache.stale.clear();
+                Ok(cache.lobe.clone())
+            }
+            _ => {
+                let lobe = all()?;
+                *guard = Some(CachedLobe {
+                    eye,
+                    lobe: lobe.clone(),
+                    stale: Vec::new(),
+                });
+                Ok(lobe)
+            }
+        }
+    }
+}
+
 /// What each estimator keeps between frames.
 #[derive(Debug, Clone)]
 enum State {
@@ -140,6 +204,8 @@ pub struct QuasiStatic {
     impact_map: Option<ImpactMap>,
     /// DETP's discs at the static points (fixed) and at the mobile points (moved each frame), with their acceleration structures.
     disc_sets: Option<(DiscSet, DiscSet)>,
+    /// The static glossy vertices' lobe radiance towards the last eye.
+    lobe_cache: LobeCache,
 }
 
 impl QuasiStatic {
@@ -229,6 +295,7 @@ impl QuasiStatic {
             triangle_impacts: None,
             impact_map: None,
             disc_sets: None,
+            lobe_cache: LobeCache::default(),
         };
         let t1 = Instant::now();
         if let State::Detp { radius, .. } = sim.state {
@@ -319,7 +386,14 @@ impl QuasiStatic {
         if self.glossy.is_some() {
             let moving = self.build_glossy(true)?;
             if let Some((fixed, mobile)) = &mut self.glossy {
-                fixed.update(&update.old, &update.new)?;
+                match fixed.update_listing(&update.old, &update.new) {
+                    Ok((_, changed)) => self.lobe_cache.mark_stale(&changed),
+                    Err(error) => {
+                        // Some vertices may have changed: forget every cached radiance.
+                        self.lobe_cache = LobeCache::default();
+                        return Err(error);
+                    }
+                }
                 *mobile = moving;
             }
         }
@@ -560,7 +634,11 @@ impl QuasiStatic {
             return Ok(None);
         };
         // ρ/π E on the diffuse discs plus the non-diffuse part on the glossy discs.
-        let a = fixed.lobe_radiance(&brdfs, eye)?;
+        let a = self.lobe_cache.get(
+            eye,
+            || fixed.lobe_radiance(&brdfs, eye),
+            |stale| fixed.lobe_radiance_of(&brdfs, eye, stale),
+        )?;
         let b = moving.lobe_radiance(&brdfs, eye)?;
         let irradiance = self.irradiance();
         Ok(Some(

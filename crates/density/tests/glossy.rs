@@ -318,6 +318,63 @@ fn insertions_and_removals_equal_a_rebuild() {
 }
 
 #[test]
+fn batched_updates_equal_one_ray_at_a_time() {
+    let rays = disc_rays();
+    for options in [
+        QuadTreeOptions::default(),
+        QuadTreeOptions {
+            capacity: 2,
+            max_depth: 5,
+        },
+    ] {
+        let mut rng = Pcg32::new(17, 3);
+        let mut current: Vec<IncidentRay> = rays[..rays.len() / 2].to_vec();
+        let mut batched = QuadTree::from_rays(options, &current).unwrap();
+        let mut single = batched.clone();
+        for frame in 0..40 {
+            // Frames from a few rays to most of the tree, so that leaves empty, refill, merge and split.
+            let size = 1 + (rng.next_u32() as usize) % if frame % 4 == 0 { 800 } else { 40 };
+            let mut old = Vec::new();
+            for _ in 0..size.min(current.len()) {
+                let i = (rng.next_u32() as usize) % current.len();
+                old.push(current.swap_remove(i));
+            }
+            // Some Old Rays that are not there, and a removed ray inserted again.
+            let absent = IncidentRay {
+                wi: Vec3::Z,
+                power: Rgb::splat(-1.0),
+            };
+            if frame % 3 == 0 {
+                old.push(absent);
+            }
+            let mut new: Vec<IncidentRay> = (0..size)
+                .map(|_| rays[(rng.next_u32() as usize) % rays.len()])
+                .collect();
+            if let Some(&first) = old.first() {
+                new.push(first);
+            }
+            let mut missing = 0;
+            for ray in &old {
+                missing += usize::from(!single.remove(ray));
+            }
+            for &ray in &new {
+                single.insert(ray);
+            }
+            assert_eq!(batched.update(&old, &new), missing, "frame {frame}");
+            assert_eq!(missing, usize::from(frame % 3 == 0));
+            current.extend(new);
+            batched.validate().unwrap();
+            assert_eq!(batched, single, "{options:?}, frame {frame}");
+        }
+        assert_eq!(batched, QuadTree::from_rays(options, &current).unwrap());
+        // One batch that empties the tree.
+        let all = batched.rays();
+        assert_eq!(batched.update(&all, &[]), 0);
+        assert_eq!(batched, QuadTree::new(options).unwrap());
+    }
+}
+
+#[test]
 fn vertex_updates_equal_a_rebuild() {
     let (_, _, rays) = shared();
     let (scene, _, _) = shared();

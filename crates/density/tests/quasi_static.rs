@@ -4,6 +4,7 @@ use glam::{Affine3A, DVec3, Quat, Vec3};
 use lustre_density::PreTest;
 use lustre_density::artifact::ArtifactOptions;
 use lustre_density::glossy::GlossyMode;
+use lustre_density::quadtree::QuadTreeOptions;
 use lustre_density::{
     Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, photon_maps,
     photon_maps_radiance, trace_ray_set_in,
@@ -332,6 +333,60 @@ fn refused_input_leaves_the_simulation_unchanged() {
         options(Estimator::Detp { radius: -1.0 }),
     );
     assert!(bad.is_err());
+}
+
+/// The glossy radiance towards a resting eye, recomputed each frame only for the vertices whose lists changed, equals the radiance computed for every vertex, bit for bit, also after the eye moves away and back.
+#[test]
+fn glossy_radiance_of_a_resting_eye_equals_a_full_recomputation() {
+    let scene = glosbox(0.4);
+    let small = scene.object_by_name("small-box").expect("object");
+    let rest = scene.objects()[small as usize].transform;
+    let mut options = options(Estimator::Detp { radius: 0.2 });
+    options.glossy = Some(GlossyMode::QuadTree {
+        options: QuadTreeOptions::default(),
+        tolerance: 0.01,
+    });
+    let mut cached = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let mut full = cached.clone();
+    let never = Vec3::new(9.0, 9.0, 9.0);
+    let eye = scene.camera().position;
+    let elsewhere = eye + Vec3::new(0.4, -0.2, 0.3);
+    let radiance = |sim: &QuasiStatic, eye: Vec3| {
+        sim.glossy_radiance(eye)
+            .expect("radiance")
+            .expect("glossy on")
+    };
+    let mut previous = radiance(&cached, eye);
+    let (mut kept, mut changed) = (0, 0);
+    for (frame, (dx, dz, degrees)) in [(-0.3, 0.1, 20.0), (0.2, -0.1, -40.0), (0.1, 0.2, 10.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let pose = [(small, motion(rest, dx, dz, degrees))];
+        cached.set_pose(&pose).expect("frame");
+        full.set_pose(&pose).expect("frame");
+        if frame == 1 {
+            // The eye moves away and back: everything is computed again, then kept.
+            assert_eq!(radiance(&cached, elsewhere), radiance(&full, elsewhere));
+        }
+        let got = radiance(&cached, eye);
+        // `full`'s cache is never at this eye when asked, so it computes every vertex.
+        let expected = radiance(&full, eye);
+        radiance(&full, never);
+        assert_eq!(got, expected, "frame {frame}");
+        for (a, b) in got.iter().flatten().zip(previous.iter().flatten()) {
+            if a == b {
+                kept += 1;
+            } else {
+                changed += 1;
+            }
+        }
+        previous = got;
+    }
+    assert!(
+        changed > 50 && kept > 50,
+        "{changed} glossy vertices changed and {kept} kept their radiance: the test proves little"
+    );
 }
 
 /// Glossy vertices (section 2.10): the ray lists of static glossy vertices updated with OldRays and NewRays give the radiance that lists built from scratch at the new pose give.
