@@ -529,14 +529,21 @@ impl QuasiStatic {
             }
             moving.update_discs(&discs)?;
         }
-        // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds nothing).
+        // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds nothing); gathered in parallel, in order.
         let all: Vec<RaySegment> = match (&self.state, region) {
-            (State::Detp { .. }, Some((lo, hi))) => self
-                .rays
-                .segments()
-                .filter(|s| segment_meets_box(s, self.slack, lo, hi))
-                .copied()
-                .collect(),
+            (State::Detp { .. }, Some((lo, hi))) => {
+                let slack = self.slack;
+                self.rays
+                    .rays
+                    .par_iter()
+                    .flat_map_iter(|r| {
+                        r.segments
+                            .iter()
+                            .filter(move |s| segment_meets_box(s, slack, lo, hi))
+                            .copied()
+                    })
+                    .collect()
+            }
             _ => Vec::new(),
         };
         match &mut self.state {
