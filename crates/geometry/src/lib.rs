@@ -4,7 +4,7 @@
 //! per-vertex normals and UVs, plain-data materials, objects with rigid
 //! transforms, surfaces in the papers' sense, lights with emission and
 //! direct-lighting sampling, a pinhole camera with a mirror transform,
-//! OBJ/MTL loading, BVH ray queries (obvhs PLOC build, eight-wide
+//! OBJ/MTL and glTF 2.0 loading, BVH ray queries (obvhs PLOC build, eight-wide
 //! traversal), sampling, mesh utilities, the built-in scenes and the
 //! Mitsuba 3 export.
 //!
@@ -29,6 +29,7 @@ pub mod builtin;
 mod bvh;
 mod camera;
 mod error;
+pub mod gltf;
 pub mod light;
 pub mod material;
 mod mesh;

@@ -1,12 +1,13 @@
-//! Scene arguments: a built-in name or a path to an OBJ file.
+//! Scene arguments: a built-in name or a path to an OBJ or glTF 2.0 (`.gltf`, `.glb`) file.
 
 use std::path::Path;
 
 use anyhow::{Context, bail};
 use lustre_geometry::builtin::BUILTIN_SCENES;
+use lustre_geometry::gltf::load_gltf;
 use lustre_geometry::obj::{LoadedScene, load_obj};
 
-/// Loads a built-in scene by name, or an OBJ file by path.
+/// Loads a built-in scene by name, or an OBJ or glTF file by path (by its extension: `.gltf` and `.glb` are glTF, anything else OBJ).
 pub fn load(arg: &str) -> anyhow::Result<LoadedScene> {
     if BUILTIN_SCENES.contains(&arg) {
         return Ok(LoadedScene {
@@ -23,5 +24,14 @@ pub fn load(arg: &str) -> anyhow::Result<LoadedScene> {
             BUILTIN_SCENES.join(", ")
         );
     }
-    load_obj(path).with_context(|| format!("cannot load `{arg}`"))
+    let gltf = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+    if gltf {
+        load_gltf(path)
+    } else {
+        load_obj(path)
+    }
+    .with_context(|| format!("cannot load `{arg}`"))
 }

@@ -601,3 +601,91 @@ fn a_model_without_light_or_mtl_renders_in_a_default_studio() {
     let mean = lustre_image::metrics::mean(&image);
     assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
 }
+
+/// A glTF 2.0 model (a pyramid in a `.gltf` with its buffer in a `.bin` beside it, no light): `info` lists it and `render` draws it in the default studio.
+#[test]
+fn gltf_models_are_listed_and_rendered() {
+    let dir = scratch("gltf");
+    let positions: [[f32; 3]; 5] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0],
+        [0.5, 0.8, 0.5],
+    ];
+    // Counter-clockwise seen from outside: the sides, then the base facing down.
+    let indices: [u16; 18] = [0, 4, 1, 1, 4, 2, 2, 4, 3, 3, 4, 0, 0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.join("pyramid.bin"), &bin).unwrap();
+    let gltf = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "pyramid", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{"name": "clay", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.5, 0.3, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}}],
+        "buffers": [{"uri": "pyramid.bin", "byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 60},
+            {"buffer": 0, "byteOffset": 60, "byteLength": 36}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 5, "type": "VEC3", "min": [0, 0, 0], "max": [1, 0.8, 1]},
+            {"bufferView": 1, "componentType": 5123, "count": 18, "type": "SCALAR"}
+        ]
+    });
+    let path = dir.join("pyramid.gltf");
+    std::fs::write(&path, serde_json::to_vec(&gltf).unwrap()).unwrap();
+    let info = lustre(&["info", path.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    for needle in ["pyramid", "clay", "default studio", "diffuse"] {
+        assert!(stdout.contains(needle), "{needle}: {stdout}");
+    }
+    // Six triangles of the pyramid, four of the studio's two quads.
+    assert!(stdout.contains("triangles   10"), "{stdout}");
+    let out_path = dir.join("p.exr");
+    let args = [
+        "render",
+        path.to_str().unwrap(),
+        "--photons",
+        "20000",
+        "--size",
+        "32x32",
+        "--aa",
+        "1",
+        "--light-samples",
+        "1",
+        "--out",
+        out_path.to_str().unwrap(),
+    ];
+    let Some(out) = render_or_skip("gltf_models_are_listed_and_rendered", &args) else {
+        return;
+    };
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let image = lustre_image::read_exr(&out_path).unwrap();
+    let mean = lustre_image::metrics::mean(&image);
+    assert!(mean.iter().all(|&m| m > 0.0 && m.is_finite()), "{mean:?}");
+    // A broken buffer reference is one clear line naming the file.
+    std::fs::remove_file(dir.join("pyramid.bin")).unwrap();
+    let out = lustre(&["info", path.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("pyramid.gltf") && stderr.contains("pyramid.bin"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -325,29 +325,19 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
         .map(Mesh::bounds)
         .fold(Aabb::EMPTY, Aabb::union);
     // No emitter at all: a default studio round the model.
-    let studio = (!meshes
+    let lit = meshes
         .iter()
-        .any(|m| materials[m.material as usize].is_emissive()))
-    .then(|| Studio::for_bounds(bounds));
-    if let Some(studio) = &studio {
-        let (extra_materials, extra_meshes) = studio.parts(bounds, materials.len() as MaterialId);
-        materials.extend(extra_materials);
-        for mesh in extra_meshes {
-            objects.push(Object {
-                name: mesh.name.clone(),
-                meshes: vec![meshes.len() as MeshId],
-                transform: glam::Affine3A::IDENTITY,
-            });
-            meshes.push(mesh);
-        }
-        warnings.push(format!(
-            "{}: no light: added a default studio (a ground plane at height {} and a {} m square area light of radiance {:.4} W/(m² sr) above the model)",
-            path.display(),
-            studio.ground_height,
-            studio.light_side,
-            studio.radiance
-        ));
-    }
+        .any(|m| materials[m.material as usize].is_emissive());
+    let studio = (!lit).then(|| {
+        Studio::add(
+            bounds,
+            &mut meshes,
+            &mut materials,
+            &mut objects,
+            path,
+            &mut warnings,
+        )
+    });
     let scene = Scene::new(
         stem,
         meshes,
@@ -438,6 +428,37 @@ impl Studio {
             radiance: std::f32::consts::PI * distance * distance / (light_side * light_side),
             model_size: extent,
         }
+    }
+
+    /// Adds the studio of `bounds` to a model's meshes, materials and
+    /// objects (one object per part), and says so in `warnings` for `file`.
+    pub(crate) fn add(
+        bounds: Aabb,
+        meshes: &mut Vec<Mesh>,
+        materials: &mut Vec<Material>,
+        objects: &mut Vec<Object>,
+        file: &Path,
+        warnings: &mut Vec<String>,
+    ) -> Self {
+        let studio = Self::for_bounds(bounds);
+        let (extra_materials, extra_meshes) = studio.parts(bounds, materials.len() as MaterialId);
+        materials.extend(extra_materials);
+        for mesh in extra_meshes {
+            objects.push(Object {
+                name: mesh.name.clone(),
+                meshes: vec![meshes.len() as MeshId],
+                transform: glam::Affine3A::IDENTITY,
+            });
+            meshes.push(mesh);
+        }
+        warnings.push(format!(
+            "{}: no light: added a default studio (a ground plane at height {} and a {} m square area light of radiance {:.4} W/(m² sr) above the model)",
+            file.display(),
+            studio.ground_height,
+            studio.light_side,
+            studio.radiance
+        ));
+        studio
     }
 
     /// Its two materials and two meshes (ground facing up, light facing
