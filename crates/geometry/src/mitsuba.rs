@@ -1031,8 +1031,8 @@ pub fn read_ply(bytes: &[u8], path: &Path) -> Result<PlyMesh> {
     })
 }
 
-/// Writes `bytes` to a temporary file beside `path`, then renames it to `path`.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+/// Writes `bytes` to a temporary file beside `path`, then renames it to `path` (the Mitsuba and glTF exports).
+pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let io = |source| GeometryError::Io {
         path: path.to_path_buf(),
         source,

@@ -371,3 +371,100 @@ fn malformed_files_are_refused_naming_the_file_and_the_part() {
     assert!(error.contains("cut.glb"), "{error}");
     assert!(load_gltf(&dir.0.join("absent.glb")).is_err());
 }
+
+/// Every built-in scene exported to glTF and loaded back is the same scene: meshes (world positions, normals, UVs, winding), lights, camera, and each material the loader can make; the others were approximated with a warning.
+#[test]
+fn built_in_scenes_survive_a_round_trip() {
+    use lustre_geometry::builtin::{BUILTIN_SCENES, builtin};
+    use lustre_geometry::gltf::export_gltf;
+    let dir = Dir::new("roundtrip");
+    for name in BUILTIN_SCENES {
+        let scene = builtin(name).unwrap();
+        for ext in ["glb", "gltf"] {
+            let path = dir.0.join(format!("{name}.{ext}"));
+            let warnings = export_gltf(&scene, &path).unwrap();
+            let loaded = load_gltf(&path).unwrap();
+            assert!(loaded.studio.is_none(), "{name}: the lights came back");
+            let back = &loaded.scene;
+            assert_eq!(back.meshes().len(), scene.meshes().len(), "{name}");
+            for (m, (a, b)) in scene.meshes().iter().zip(back.meshes()).enumerate() {
+                let positions = scene.world_positions(m as u32);
+                let normals = scene.world_normals(m as u32);
+                assert_eq!(a.indices, b.indices, "{name}: {}", a.name);
+                assert_eq!(positions, b.positions, "{name}: {}", a.name);
+                assert_eq!(a.uvs, b.uvs, "{name}: {}", a.name);
+                for (n, nb) in normals.iter().zip(&b.normals) {
+                    assert!(close(*n, *nb), "{name}: {}: {n} {nb}", a.name);
+                }
+                let (ma, mb) = (
+                    &scene.materials()[a.material as usize],
+                    &back.materials()[b.material as usize],
+                );
+                assert_eq!(ma.name, mb.name);
+                assert_eq!(ma.emission, mb.emission, "{name}: {}", ma.name);
+                // The exact models come back (α through √α and back, within rounding); the others were reported.
+                let exact = match (&ma.model, &mb.model) {
+                    (
+                        MaterialModel::RoughConductor { alpha: x, .. },
+                        MaterialModel::RoughConductor { alpha: y, .. },
+                    ) => (x - y).abs() <= 1e-6 * x,
+                    (
+                        MaterialModel::Phong {
+                            diffuse: d1,
+                            specular: s1,
+                            exponent: e1,
+                        },
+                        MaterialModel::Phong {
+                            diffuse: d2,
+                            specular: s2,
+                            exponent: e2,
+                        },
+                    ) => close(*d1, *d2) && close(*s1, *s2) && (e1 - e2).abs() <= 1e-3 * e1,
+                    (x, y) => x == y,
+                };
+                assert!(
+                    exact
+                        || warnings
+                            .iter()
+                            .any(|w| w.contains(&format!("`{}`", ma.name))),
+                    "{name}: {} came back as {:?} from {:?} without a warning",
+                    ma.name,
+                    mb.model,
+                    ma.model
+                );
+            }
+            assert_eq!(
+                back.lights().len(),
+                scene.lights().len()
+                    - warnings
+                        .iter()
+                        .filter(|w| w.contains("point light has no glTF"))
+                        .count(),
+                "{name}"
+            );
+            for (la, lb) in scene.lights().iter().zip(back.lights()) {
+                match (la, lb) {
+                    (Light::Point(a), Light::Point(b)) => {
+                        assert!(close(a.position, b.position) && close(a.intensity, b.intensity))
+                    }
+                    (Light::Spot(a), Light::Spot(b)) => {
+                        assert!(close(a.position, b.position) && close(a.direction, b.direction));
+                        assert!(close(a.intensity, b.intensity));
+                        assert_eq!(
+                            (a.beam_width, a.cutoff_angle),
+                            (b.beam_width, b.cutoff_angle)
+                        );
+                    }
+                    (Light::Area(a), Light::Area(b)) => assert_eq!(a.radiance, b.radiance),
+                    (a, b) => panic!("{name}: {a:?} came back as {b:?}"),
+                }
+            }
+            let (ca, cb) = (scene.camera(), back.camera());
+            assert!(close(ca.position, cb.position), "{name}");
+            let (va, vb) = (ca.view_matrix(), cb.view_matrix());
+            assert!(va.abs_diff_eq(vb, 1e-4), "{name}: {va} {vb}");
+            assert!((ca.fov_y_degrees - cb.fov_y_degrees).abs() < 1e-4);
+            assert_eq!((ca.aspect, ca.near), (cb.aspect, cb.near));
+        }
+    }
+}

@@ -56,6 +56,13 @@ enum Command {
         #[arg(long, value_name = "R", allow_negative_numbers = true)]
         point_light_radius: Option<f32>,
     },
+    /// Write a scene as glTF 2.0: binary (`.glb`) or JSON with an embedded buffer (`.gltf`)
+    ExportGltf {
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
+        scene: String,
+        /// The file to write, `.glb` or `.gltf`.
+        out: PathBuf,
+    },
     /// Render a scene to an EXR or PNG file (photon splatting, Stürzlinger & Bastos 1997).
     Render(render::RenderArgs),
     /// Trace photons into a photon file on disk in bounded memory (`lustre render --photons-file` reads it).
@@ -161,6 +168,24 @@ fn info(arg: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `lustre export-gltf`: the scene as glTF 2.0, each approximation a warning on stderr.
+fn export_gltf(arg: &str, out: &std::path::Path) -> anyhow::Result<()> {
+    let extension = out.extension().and_then(|e| e.to_str()).unwrap_or_default();
+    anyhow::ensure!(
+        extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf"),
+        "{}: the glTF file must end in .glb or .gltf",
+        out.display()
+    );
+    let loaded = scene_arg::load(arg)?;
+    let warnings = lustre_geometry::gltf::export_gltf(&loaded.scene, out)
+        .with_context(|| format!("cannot export `{arg}` to {}", out.display()))?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
 fn export(
     arg: &str,
     out: &std::path::Path,
@@ -208,6 +233,7 @@ fn main() -> ExitCode {
             approximate,
             point_light_radius,
         } => export(scene, out, *size, *spp, *approximate, *point_light_radius),
+        Command::ExportGltf { scene, out } => export_gltf(scene, out),
         Command::Render(args) => render::run(args),
         Command::Trace(args) => trace::run(args),
         Command::Merge { inputs, out } => trace::merge(inputs, out),

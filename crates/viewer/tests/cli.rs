@@ -689,3 +689,30 @@ fn gltf_models_are_listed_and_rendered() {
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// `export-gltf` writes a file `info` reads back as the same scene, names each approximation, and refuses another extension before writing anything.
+#[test]
+fn export_gltf_writes_what_info_reads_back() {
+    let dir = scratch("export-gltf");
+    let glb = dir.join("glosbox.glb");
+    let out = lustre(&["export-gltf", "glosbox", glb.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("material `gold`"), "{stderr}");
+    let info = lustre(&["info", glb.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    assert!(
+        text.contains("triangles   36") && text.contains("lights      1"),
+        "{text}"
+    );
+    let bad = dir.join("glosbox.obj");
+    let out = lustre(&["export-gltf", "glosbox", bad.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".glb or .gltf"));
+    assert!(!bad.exists());
+}

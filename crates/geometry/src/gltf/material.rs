@@ -16,19 +16,25 @@
 //!   Lambertian base of `(1 − F0) · baseColor`, the Phong exponent from `α` by
 //!   Walter et al. 2007's equivalence `n = 2/α² − 2` (the Fresnel rise at
 //!   grazing angles is again left out), or the base colour alone when `n < 1`;
-//! - transmission (`KHR_materials_transmission`): a smooth dielectric
-//!   interface of the material's `ior` when the transmission factor is at
-//!   least ½, its transmittance filter the base colour, times the volume's
-//!   attenuation over its thickness (`KHR_materials_volume`, Beer–Lambert:
-//!   `attenuationColor^(thickness / attenuationDistance)`); rough transmission
-//!   is drawn smooth and a factor below ½ is left out, each with a warning;
+//! - transmission (`KHR_materials_transmission`) with a transmission factor
+//!   of at least ½: with a volume (`KHR_materials_volume`, thickness above
+//!   zero) a smooth dielectric interface of the material's `ior`, its
+//!   transmittance filter the base colour times the volume's attenuation over
+//!   its thickness (Beer–Lambert: `attenuationColor^(thickness /
+//!   attenuationDistance)`), rough transmission drawn smooth with a warning;
+//!   without one the specification's thin-walled surface, Lustre's
+//!   [`THIN_DIELECTRIC`] pane of that `ior`, Beckmann `α = roughness²` and
+//!   transmittance the base colour. A factor below ½ is left out with a
+//!   warning;
 //! - `0 < metallic < 1`: Mitsuba-style blend of the two with weight `metallic`.
 //!
 //! glTF leaves the unit of `emissiveFactor` open; Lustre reads
 //! `emissiveFactor × emissiveStrength` as radiance in W/(m² sr).
 
 use crate::Rgb;
-use crate::material::{ConductorFresnel, Material, MaterialModel, MicrofacetDistribution};
+use crate::material::{
+    ConductorFresnel, Material, MaterialModel, MicrofacetDistribution, THIN_DIELECTRIC,
+};
 
 /// Largest Phong exponent a smooth dielectric gets (its `α` near zero).
 const MAX_PHONG_EXPONENT: f32 = 10_000.0;
@@ -95,7 +101,18 @@ impl GltfMaterial {
             1.5
         };
         let transmission = clamp01(self.transmission);
-        let dielectric = if transmission >= 0.5 {
+        let solid = self.volume.is_some_and(|(thickness, _, _)| thickness > 0.0);
+        let dielectric = if transmission >= 0.5 && !solid {
+            MaterialModel::Named {
+                model: THIN_DIELECTRIC.into(),
+                params: [
+                    ("ior".to_owned(), vec![ior]),
+                    ("roughness".to_owned(), vec![alpha]),
+                    ("transmittance".to_owned(), base.to_array().to_vec()),
+                ]
+                .into(),
+            }
+        } else if transmission >= 0.5 {
             if roughness > 0.1 {
                 warnings.push(format!(
                     "material `{}`: rough transmission (roughness {roughness}) is drawn as a smooth dielectric",
@@ -151,6 +168,135 @@ impl GltfMaterial {
                 colour.map(|c| c.clamp(0.0, 1.0)).powf(thickness / distance)
             }
             _ => Rgb::ONE,
+        }
+    }
+}
+
+impl GltfMaterial {
+    /// The glTF parameters that load back as `material` ([`GltfMaterial::to_material`]): exactly for the models the loader makes (diffuse, mirror, a conductor without Fresnel, a smooth dielectric, a Phong lobe of grey specular reflectance `F0 ≤ 1/4` over a Lambertian base, and their metallic blend), up to rounding of `α`; other models are approximated, with a warning each.
+    pub fn from_material(material: &Material, warnings: &mut Vec<String>) -> Self {
+        let mut out = Self {
+            name: material.name.clone(),
+            emission: material.emission,
+            ..Self::default_material()
+        };
+        out.set_model(&material.model, &material.name, warnings);
+        out
+    }
+
+    /// Sets base colour, metallic, roughness, ior and transmission from a model.
+    fn set_model(&mut self, model: &MaterialModel, name: &str, warnings: &mut Vec<String>) {
+        let mut approximated = |why: &str| {
+            warnings.push(format!(
+                "material `{name}`: {} has no glTF counterpart; exported as {why}",
+                model.name()
+            ));
+        };
+        match model {
+            MaterialModel::Diffuse { reflectance } => {
+                (self.base_color, self.metallic, self.roughness) = (*reflectance, 0.0, 1.0);
+            }
+            MaterialModel::Mirror { reflectance } => {
+                (self.base_color, self.metallic, self.roughness) = (*reflectance, 1.0, 0.0);
+            }
+            MaterialModel::RoughConductor {
+                distribution,
+                alpha,
+                fresnel,
+                specular,
+            } => {
+                let f0 = match fresnel {
+                    ConductorFresnel::None => Rgb::ONE,
+                    ConductorFresnel::Complex { eta, k } => {
+                        approximated("a metal of its normal-incidence reflectance");
+                        ((*eta - 1.0) * (*eta - 1.0) + *k * *k)
+                            / ((*eta + 1.0) * (*eta + 1.0) + *k * *k)
+                    }
+                };
+                if *distribution != MicrofacetDistribution::Beckmann
+                    && !matches!(fresnel, ConductorFresnel::Complex { .. })
+                {
+                    approximated("a metal of the same α");
+                }
+                self.base_color = *specular * f0;
+                self.metallic = 1.0;
+                self.roughness = alpha.max(0.0).sqrt();
+            }
+            MaterialModel::Dielectric { ior, transmittance } => {
+                self.base_color = *transmittance;
+                (self.metallic, self.roughness) = (0.0, 0.0);
+                (self.ior, self.transmission) = (*ior, 1.0);
+                // A solid: any thickness, no attenuation.
+                self.volume = Some((1.0, f32::INFINITY, Rgb::ONE));
+            }
+            MaterialModel::Named { model, params } if model == THIN_DIELECTRIC => {
+                let value = |key: &str, default: f32| {
+                    params
+                        .get(key)
+                        .and_then(|v| v.first().copied())
+                        .unwrap_or(default)
+                };
+                self.base_color = match params.get("transmittance").map(Vec::as_slice) {
+                    Some(&[r, g, b]) => Rgb::new(r, g, b),
+                    Some(&[t]) => Rgb::splat(t),
+                    _ => Rgb::ONE,
+                };
+                (self.metallic, self.roughness) = (0.0, value("roughness", 0.0).max(0.0).sqrt());
+                (self.ior, self.transmission, self.volume) = (value("ior", 1.5), 1.0, None);
+            }
+            MaterialModel::Phong {
+                diffuse,
+                specular,
+                exponent,
+            } => {
+                // F0 = ((ior − 1)/(ior + 1))², so ior = (1 + √F0)/(1 − √F0); n = 2/α² − 2.
+                let f0 = specular.element_sum() / 3.0;
+                let grey = (specular.max_element() - specular.min_element()) <= 1e-6 * f0.max(1e-6);
+                if !grey || !(0.0..=0.25).contains(&f0) {
+                    approximated("a dielectric of its mean specular reflectance");
+                }
+                let f0 = f0.clamp(0.0, 0.25);
+                let root = f0.sqrt();
+                self.ior = (1.0 + root) / (1.0 - root);
+                self.base_color = *diffuse / (1.0 - f0);
+                self.metallic = 0.0;
+                let alpha = (2.0 / (exponent.max(0.0) + 2.0)).sqrt();
+                self.roughness = alpha.sqrt();
+            }
+            MaterialModel::Blend {
+                weight,
+                first,
+                second,
+            } => {
+                let mut dielectric = self.clone();
+                dielectric.set_model(first, name, warnings);
+                let mut metal = self.clone();
+                metal.set_model(second, name, warnings);
+                if dielectric.metallic != 0.0 || metal.metallic != 1.0 {
+                    warnings.push(format!(
+                        "material `{name}`: a blend that is not of a dielectric and a metal is exported as its weighted parameters"
+                    ));
+                }
+                let w = weight.clamp(0.0, 1.0);
+                let mix = |a: f32, b: f32| (1.0 - w) * a + w * b;
+                self.base_color = (1.0 - w) * dielectric.base_color + w * metal.base_color;
+                self.metallic = w;
+                self.roughness = mix(dielectric.roughness, metal.roughness);
+                (self.ior, self.transmission) = (dielectric.ior, dielectric.transmission);
+                if self.roughness != dielectric.roughness || self.roughness != metal.roughness {
+                    warnings.push(format!(
+                        "material `{name}`: glTF has one roughness for both parts of a blend; the weighted mean {} is exported",
+                        self.roughness
+                    ));
+                }
+            }
+            MaterialModel::Ward { diffuse, .. } => {
+                approximated("its diffuse part");
+                (self.base_color, self.metallic, self.roughness) = (*diffuse, 0.0, 1.0);
+            }
+            MaterialModel::Named { .. } => {
+                approximated("the specification's default material");
+            }
         }
     }
 }
@@ -266,6 +412,7 @@ mod tests {
         // Rough or partial transmission: approximated, with a warning each.
         let rough = GltfMaterial {
             transmission: 1.0,
+            volume: Some((0.1, f32::INFINITY, Rgb::ONE)),
             ..material(0.0, 0.6)
         };
         assert!(matches!(
@@ -280,6 +427,21 @@ mod tests {
             partial.to_material(&mut warnings).model,
             MaterialModel::Phong { .. }
         ));
+        assert_eq!(warnings.len(), 2, "{warnings:?}");
+
+        // Without a volume: the specification's thin-walled surface, a pane.
+        let pane = GltfMaterial {
+            transmission: 1.0,
+            ior: 1.4,
+            ..material(0.0, 0.5)
+        };
+        let MaterialModel::Named { model, params } = pane.to_material(&mut warnings).model else {
+            panic!("a thin-walled transmissive surface is a named model");
+        };
+        assert_eq!(model, THIN_DIELECTRIC);
+        assert_eq!(params["ior"], vec![1.4]);
+        assert_eq!(params["roughness"], vec![0.25]);
+        assert_eq!(params["transmittance"], vec![0.8, 0.4, 0.2]);
         assert_eq!(warnings.len(), 2, "{warnings:?}");
 
         let lamp = GltfMaterial {

@@ -17,7 +17,10 @@
 //! counterpart (no light at infinity) and are left out with a warning; a
 //! model left without any light gets the OBJ loader's default studio.
 
+pub mod export;
 pub mod material;
+
+pub use export::export_gltf;
 
 use std::path::{Path, PathBuf};
 
