@@ -28,6 +28,7 @@ pub mod animation;
 pub mod builtin;
 mod bvh;
 mod camera;
+pub mod camera_path;
 mod error;
 pub mod gltf;
 pub mod light;
