@@ -41,9 +41,10 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::ValueEnum;
 use lustre_beams::{BeamInput, BeamSet, BuildOptions, GlossyVolume, SplitPoint};
+use lustre_geometry::camera_path::CameraPath;
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::obj::Studio;
-use lustre_geometry::{Bvh, Scene};
+use lustre_geometry::{Bvh, Camera, Scene};
 use lustre_image::{Image, Precision};
 use lustre_mpr::beam_paths::scatterer_surfaces;
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
@@ -74,6 +75,7 @@ use crate::render_density::{
     DEFAULT_PHOTONMAP_K, DensityLengths, DensitySettings, DetpAcceleration, Estimator,
     GlossyEstimate, PreTestArg, check_lengths, vertex_lit_scene, vertex_radiance,
 };
+use crate::render_frames::{frame_path, median};
 use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
 use crate::scene_arg;
 use crate::trace::{PhotonBar, emission_of};
@@ -534,6 +536,12 @@ pub struct RenderArgs {
     /// With `--frames`: only simulate and report the times, without the GPU or images.
     #[arg(long, requires = "frames")]
     pub timing_only: bool,
+    /// Play a camera path (a `lustre-camera-path` JSON file, see `lustre_geometry::camera_path`): the lighting is computed once and every frame of the walkthrough is rendered from it, written as `NAME-0000.png`, ... with each frame's time in the sidecar.
+    #[arg(long, value_name = "PATH.json")]
+    pub camera_path: Option<PathBuf>,
+    /// With `--camera-path`: frames at evenly spaced times from its first keyframe to its last, both included; default 25 a second of the path, at least 2.
+    #[arg(long, requires = "camera_path")]
+    pub path_frames: Option<usize>,
 }
 
 impl RenderArgs {
@@ -695,6 +703,37 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bail!("--photons-file: --frames animates the per-vertex techniques only");
         }
     }
+    // The camera path first, so that a bad file fails before any work.
+    let camera_path = match &args.camera_path {
+        Some(file) => {
+            if args.frames.is_some() {
+                bail!("--camera-path: leave out --frames (which moves objects, not the camera)");
+            }
+            if args.photons_file.is_some() {
+                bail!(
+                    "--camera-path: photons streamed from --photons-file are splatted once, into one view"
+                );
+            }
+            if matches!(
+                args.technique,
+                Technique::Detp | Technique::Impact | Technique::Photonmap
+            ) {
+                bail!(
+                    "--camera-path: the per-vertex techniques compute their glossy radiance towards one eye \
+                     (García et al. section 2.10), so they render single frames; use splat, splat-direct, mpr or beams"
+                );
+            }
+            let path = CameraPath::load(file)
+                .with_context(|| format!("cannot read the camera path {}", file.display()))?;
+            let frames = match args.path_frames {
+                Some(0) => bail!("--path-frames 0: at least one frame"),
+                Some(n) => n,
+                None => ((path.duration() * PATH_FRAMES_PER_SECOND).round() as usize + 1).max(2),
+            };
+            Some((path, frames))
+        }
+        None => None,
+    };
     let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
         // The beams draw the light that mirrors and glass send on.
         _ if args.technique == Technique::Beams => 0,
@@ -1072,7 +1111,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let output_view = output.create_view(&wgpu::TextureViewDescriptor::default());
     timings.insert("gpu_setup".into(), json!(ms(start)));
 
-    let camera = *scene.camera();
+    let cameras: Vec<Camera> = match &camera_path {
+        Some((path, frames)) => path
+            .frames(*frames)
+            .into_iter()
+            .map(|c| c.with_aspect(width as f32 / height as f32))
+            .collect(),
+        None => vec![*scene.camera()],
+    };
+    let camera = cameras[0];
     let restriction = match args.restriction {
         RestrictionArg::SurfaceId => Restriction::SurfaceId,
         RestrictionArg::Stencil => Restriction::Stencil,
@@ -1086,11 +1133,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         && args.light_samples > 1
         && args.paired_lights
         && scene.lights().iter().any(|l| !l.is_delta());
-    let start = Instant::now();
     let tonemap = Tonemap::default();
-    let frame = FrameInputs {
+    let frame_at = |camera| FrameInputs {
         scene: &scene_buffers,
-        camera: &camera,
+        camera,
         tonemap: &tonemap,
         targets: &targets,
         output: &output_view,
@@ -1102,39 +1148,60 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         direct: direct.as_ref(),
         diffuse: diffuse_textures.as_ref(),
     };
-    graph.render_accumulated(
-        &ctx,
-        &frame,
-        args.aa,
-        if args.aa_splats {
-            AccumulatedSplats::EverySample
-        } else {
-            AccumulatedSplats::Once
-        },
-        &mut |s| {
-            let (Some(lights), Some(pass)) = (&direct, &graph.direct) else {
-                return Ok(());
-            };
-            if !paired {
-                return Ok(());
-            }
-            let rotation = paired_rotation(s, args.aa, args.light_samples);
-            lights.set_lights(
-                pass,
-                &ctx.queue,
-                &jittered_point_lights(scene.lights(), args.light_samples, rotation),
-            )?;
-            if shadow_volumes {
-                // The volumes follow the new positions by the pivot approximation.
-                return Ok(());
-            }
-            graph.update_shadows(&ctx, &scene_buffers, lights)
-        },
-    )?;
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .context("waiting for the frame")?;
-    timings.insert("frame".into(), json!(ms(start)));
+    let frame = frame_at(&camera);
+    // A walkthrough: every frame of the camera path from the same lighting, each read back and written.
+    let mut path_frame_ms = Vec::new();
+    let mut path_write_ms = 0.0;
+    for (i, camera) in cameras.iter().enumerate() {
+        let start = Instant::now();
+        graph.render_accumulated(
+            &ctx,
+            &frame_at(camera),
+            args.aa,
+            if args.aa_splats {
+                AccumulatedSplats::EverySample
+            } else {
+                AccumulatedSplats::Once
+            },
+            &mut |s| {
+                let (Some(lights), Some(pass)) = (&direct, &graph.direct) else {
+                    return Ok(());
+                };
+                if !paired {
+                    return Ok(());
+                }
+                let rotation = paired_rotation(s, args.aa, args.light_samples);
+                lights.set_lights(
+                    pass,
+                    &ctx.queue,
+                    &jittered_point_lights(scene.lights(), args.light_samples, rotation),
+                )?;
+                if shadow_volumes {
+                    // The volumes follow the new positions by the pivot approximation.
+                    return Ok(());
+                }
+                graph.update_shadows(&ctx, &scene_buffers, lights)
+            },
+        )?;
+        ctx.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .context("waiting for the frame")?;
+        path_frame_ms.push(ms(start));
+        if camera_path.is_some() {
+            let start = Instant::now();
+            let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
+            let image = Image::from_rgba(width, height, &hdr)?;
+            write_image(&frame_path(&args.out, i), args.exposure, &image)?;
+            path_write_ms += ms(start);
+            eprintln!(
+                "frame {}/{}: {:.0} ms",
+                i + 1,
+                cameras.len(),
+                path_frame_ms[i]
+            );
+        }
+    }
+    timings.insert("frame".into(), json!(path_frame_ms.iter().sum::<f64>()));
     // A streamed photon file: each batch's splats uploaded, added, dropped.
     let mut streamed_splats = (0u64, 0u64);
     if let (Some(streamed), Some(splatting)) = (streamed, &splatting) {
@@ -1175,14 +1242,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         timings.insert("streamed_splats".into(), json!(ms(start)));
     }
 
-    let start = Instant::now();
-    let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
-    let image = Image::from_rgba(width, height, &hdr)?;
-    timings.insert("readback".into(), json!(ms(start)));
+    if camera_path.is_some() {
+        timings.insert("readback_and_write".into(), json!(path_write_ms));
+    } else {
+        let start = Instant::now();
+        let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
+        let image = Image::from_rgba(width, height, &hdr)?;
+        timings.insert("readback".into(), json!(ms(start)));
 
-    let start = Instant::now();
-    write_outputs(args, &image)?;
-    timings.insert("write".into(), json!(ms(start)));
+        let start = Instant::now();
+        write_outputs(args, &image)?;
+        timings.insert("write".into(), json!(ms(start)));
+    }
     let scene_passes = graph.view_tree(&ctx, &camera)?.scene_passes();
     // Multi-pass pipeline rendering's pass counts (tables 1-3, equations 7 and 8).
     let mpr_passes = json!({
@@ -1294,14 +1365,33 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "batches": streamed_splats.1,
         "batch_records": args.batch_records,
     })));
+    info["camera_path"] = json!(camera_path.as_ref().map(|(_, frames)| json!({
+        "path": args.camera_path.as_ref().map(|p| p.display().to_string()),
+        "frames": frames,
+        "frame_ms": path_frame_ms,
+        "median_frame_ms": median(path_frame_ms.clone()),
+        "first": frame_path(&args.out, 0).display().to_string(),
+    })));
     info["peak_memory_bytes"] = json!(peak_memory_bytes());
     // The size the per-vertex techniques' default lengths scale with.
     info["scene_size"] = json!(lengths.map(|l| l.scene_size));
     lustre_image::write_json_atomic(&sidecar, &info)
         .with_context(|| format!("cannot write {}", sidecar.display()))?;
-    eprintln!("wrote {} and {}", args.out.display(), sidecar.display());
+    if camera_path.is_some() {
+        eprintln!(
+            "wrote {} frames {} ... and {}",
+            cameras.len(),
+            frame_path(&args.out, 0).display(),
+            sidecar.display()
+        );
+    } else {
+        eprintln!("wrote {} and {}", args.out.display(), sidecar.display());
+    }
     Ok(())
 }
+
+/// Frames a second of a camera path that `--camera-path` renders without `--path-frames`.
+const PATH_FRAMES_PER_SECOND: f32 = 25.0;
 
 /// What splatting produced before the GPU frame (Stürzlinger & Bastos 1997, sections 2.1 and 2.2).
 struct Splatting {

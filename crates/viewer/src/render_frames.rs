@@ -30,7 +30,7 @@ fn ms(d: std::time::Duration) -> f64 {
 }
 
 /// The median of some values (the mean of the two middle ones for an even count).
-fn median(mut values: Vec<f64>) -> f64 {
+pub fn median(mut values: Vec<f64>) -> f64 {
     if values.is_empty() {
         return 0.0;
     }

@@ -716,3 +716,115 @@ fn export_gltf_writes_what_info_reads_back() {
     assert!(String::from_utf8_lossy(&out.stderr).contains(".glb or .gltf"));
     assert!(!bad.exists());
 }
+
+/// `--camera-path` renders every frame of a walkthrough through the same frame code as a single render: a path whose keyframes are the scene's own camera gives that render bit for bit in every frame; a bad path or a technique that cannot follow one is refused before any work.
+#[test]
+fn a_camera_path_renders_the_walkthrough_through_the_same_frame() {
+    let dir = scratch("camera-path");
+    // glosbox's own camera.
+    let key = |t: f32| serde_json::json!({"time": t, "position": [0.0, 0.0, 3.9], "target": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0], "fov_y_degrees": 39.3077});
+    let path = dir.join("still.json");
+    let doc = serde_json::json!({"format": "lustre-camera-path", "version": 1, "keyframes": [key(0.0), key(1.5)]});
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let common = [
+        "--photons",
+        "20000",
+        "--size",
+        "32x24",
+        "--aa",
+        "1",
+        "--light-samples",
+        "1",
+    ];
+    let single = dir.join("single.exr");
+    let mut args = vec!["render", "glosbox"];
+    args.extend(common);
+    args.extend(["--out", single.to_str().unwrap()]);
+    let Some(out) = render_or_skip("a_camera_path_renders_the_walkthrough", &args) else {
+        return;
+    };
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let walk = dir.join("walk.exr");
+    let mut args = vec!["render", "glosbox"];
+    args.extend(common);
+    args.extend([
+        "--camera-path",
+        path.to_str().unwrap(),
+        "--path-frames",
+        "2",
+        "--out",
+        walk.to_str().unwrap(),
+    ]);
+    let out = lustre(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let expected = lustre_image::read_exr(&single).unwrap();
+    for frame in ["walk-0000.exr", "walk-0001.exr"] {
+        assert_eq!(
+            lustre_image::read_exr(dir.join(frame)).unwrap(),
+            expected,
+            "{frame}"
+        );
+    }
+    assert!(!walk.exists(), "a walkthrough writes numbered frames only");
+    let sidecar = sidecar(&walk);
+    assert_eq!(sidecar["camera_path"]["frames"], 2);
+    assert_eq!(
+        sidecar["camera_path"]["frame_ms"].as_array().unwrap().len(),
+        2
+    );
+
+    // Refusals, each before any work: a bad file, a per-vertex technique, --frames.
+    std::fs::write(
+        dir.join("bad.json"),
+        "{\"format\": \"lustre-camera-path\", \"version\": 1, \"keyframes\": []}",
+    )
+    .unwrap();
+    let bad = dir.join("bad.json");
+    for (extra, expected) in [
+        (
+            vec!["--camera-path", bad.to_str().unwrap()],
+            "needs a keyframe",
+        ),
+        (
+            vec![
+                "--camera-path",
+                path.to_str().unwrap(),
+                "--technique",
+                "detp",
+            ],
+            "per-vertex techniques",
+        ),
+        (
+            vec![
+                "--camera-path",
+                path.to_str().unwrap(),
+                "--path-frames",
+                "0",
+            ],
+            "--path-frames 0",
+        ),
+    ] {
+        let out_path = dir.join("refused.png");
+        let mut args = vec!["render", "glosbox", "--out", out_path.to_str().unwrap()];
+        args.extend(extra);
+        let out = lustre(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(expected),
+            "{expected}: {stderr}"
+        );
+        assert!(
+            !stderr.contains("traced"),
+            "refused after tracing: {stderr}"
+        );
+        assert!(!out_path.exists() && !dir.join("refused-0000.png").exists());
+    }
+}
