@@ -156,6 +156,14 @@ fn info(arg: &str) -> anyhow::Result<()> {
         bounds.min.to_array(),
         bounds.max.to_array()
     );
+    let camera = scene.camera();
+    println!(
+        "camera      position {:.4?} target {:.4?} up {:.4?} fov_y {:.4}°",
+        camera.position.to_array(),
+        camera.target.to_array(),
+        camera.up.to_array(),
+        camera.fov_y_degrees
+    );
     if loaded.degenerate_triangles_dropped > 0 {
         println!(
             "dropped     {} degenerate triangles",

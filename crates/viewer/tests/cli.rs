@@ -20,6 +20,13 @@ fn info_describes_the_builtin_scenes() {
             "{text}"
         );
         assert!(text.contains("lights      1"), "{text}");
+        // The camera, as a camera path's keyframe would name it.
+        assert!(
+            text.contains(
+                "camera      position [0.0000, 0.0000, 3.9000] target [0.0000, 0.0000, 0.0000]"
+            ),
+            "{text}"
+        );
     }
     let text = String::from_utf8(lustre(&["info", "glosbox"]).stdout).unwrap();
     assert!(
