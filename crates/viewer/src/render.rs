@@ -54,6 +54,7 @@ use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel, imaged_surfaces};
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
+use lustre_mpr::passes::splat_lowres::SplatResolution;
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::projective_texture::{
     DEFAULT_TEXTURE_SIZE, MAX_TEXTURE_SIZE, PaneLight, texture_bytes,
@@ -244,6 +245,21 @@ pub enum FilterArg {
     Mip,
 }
 
+/// The resolution the camera view's splats are accumulated at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SplatResolutionArg {
+    /// The coarsest of eighth, quarter, half and full at which 95 % of the splats still span at least 4 low-resolution pixels in radius.
+    Auto,
+    /// Every splat at the frame's resolution (the paper's pass).
+    Full,
+    /// Half the width and height, upsampled along surface ids and depth.
+    Half,
+    /// A quarter of the width and height, upsampled along surface ids and depth.
+    Quarter,
+    /// An eighth of the width and height, upsampled along surface ids and depth.
+    Eighth,
+}
+
 /// Reconstruction kernel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum KernelArg {
@@ -369,6 +385,15 @@ pub struct RenderArgs {
     /// How the kernel texture is read.
     #[arg(long, value_enum, default_value_t = FilterArg::Centre)]
     pub filter: FilterArg,
+    /// The resolution the camera view's splats are drawn at: below full, the
+    /// splats (restricted by surface ids) fill a target half or a quarter as
+    /// wide and high, which is then added at full resolution by a joint
+    /// bilateral upsampling that never blends across surface ids (the splat
+    /// pass is fill-bound; a sixteenth of the fill at a quarter). `auto`
+    /// picks from the splats' projected kernel size. Views through mirrors
+    /// always splat at full resolution.
+    #[arg(long, value_enum, default_value_t = SplatResolutionArg::Auto)]
+    pub splat_resolution: SplatResolutionArg,
     /// Photon emission sampling.
     #[arg(long, value_enum, default_value_t = EmissionArg::Sobol)]
     pub emission: EmissionArg,
@@ -670,6 +695,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     if args.aa == 0 {
         bail!("--aa 0: at least one sample per pixel is needed");
+    }
+    if args.restriction == RestrictionArg::Stencil
+        && matches!(
+            args.splat_resolution,
+            SplatResolutionArg::Half | SplatResolutionArg::Quarter | SplatResolutionArg::Eighth
+        )
+    {
+        bail!(
+            "--splat-resolution below full restricts splats by surface ids: \
+             leave out --restriction stencil or use --splat-resolution full"
+        );
     }
     if args.photons_file.is_some() {
         if !matches!(
@@ -1081,6 +1117,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         FilterArg::Centre => KernelFiltering::PixelCentre,
         FilterArg::Mip => KernelFiltering::MipMapped,
     };
+    // `auto` from the uploaded splats (a streamed file's: its first batch's).
+    let resolve_resolution = |supports: &[[f32; 4]]| match args.splat_resolution {
+        SplatResolutionArg::Auto if restriction == Restriction::Stencil => SplatResolution::Full,
+        SplatResolutionArg::Auto => SplatResolution::auto(supports, &camera, height),
+        SplatResolutionArg::Full => SplatResolution::Full,
+        SplatResolutionArg::Half => SplatResolution::Half,
+        SplatResolutionArg::Quarter => SplatResolution::Quarter,
+        SplatResolutionArg::Eighth => SplatResolution::Eighth,
+    };
+    let mut splat_resolution = splats.as_ref().map(|b| resolve_resolution(&b.supports));
     // Paired light jitter: a different set of light positions per accumulation sample.
     let paired = args.aa > 1
         && args.light_samples > 1
@@ -1098,6 +1144,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             buffers,
             restriction,
             filtering,
+            resolution: splat_resolution.unwrap_or_default(),
         }),
         direct: direct.as_ref(),
         diffuse: diffuse_textures.as_ref(),
@@ -1148,6 +1195,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     &ctx, &scene, &estimator, glossy, &exclude, &imaged,
                 )
                 .with_context(|| format!("scene `{}`", scene.name))?;
+                let resolution =
+                    *splat_resolution.get_or_insert_with(|| resolve_resolution(&buffers.supports));
                 graph.add_splats(
                     &ctx,
                     &FrameInputs {
@@ -1155,6 +1204,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                             buffers: &buffers,
                             restriction,
                             filtering,
+                            resolution,
                         }),
                         direct: None,
                         diffuse: None,
@@ -1289,6 +1339,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "timings_ms": timings,
         "version": env!("CARGO_PKG_VERSION"),
     });
+    info["splat_resolution"] = json!(splat_resolution.map(|r| format!("{r:?}")));
     info["photons_file"] = json!(args.photons_file.as_ref().map(|p| json!({
         "path": p.display().to_string(),
         "batches": streamed_splats.1,
