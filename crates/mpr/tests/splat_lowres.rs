@@ -10,7 +10,9 @@ use lustre_geometry::{Bvh, Scene, builtin};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::depth::DepthPass;
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
-use lustre_mpr::passes::splat_lowres::{SplatResolution, guides_cpu, upsample_cpu};
+use lustre_mpr::passes::splat_lowres::{
+    AUTO_MIN_RADIUS, SplatResolution, guides_cpu, upsample_cpu,
+};
 use lustre_mpr::readback::{read_depth, read_rgba_f32, read_texture_bytes, read_u32};
 use lustre_mpr::{GpuContext, NO_SURFACE, RenderTargets, SceneBuffers};
 use lustre_photon::{
@@ -361,11 +363,14 @@ fn auto_follows_the_projected_kernel_size() {
     let at = camera.position + 2.0 * (camera.target - camera.position).normalize();
     let focal = 0.5 * 480.0 / (0.5 * camera.fov_y_degrees.to_radians()).tan();
     let with_radius = |pixels: f32| vec![[at.x, at.y, at.z, pixels * 2.0 / focal]; 10];
-    let auto = |pixels| SplatResolution::auto(&with_radius(pixels), camera, 480);
-    assert_eq!(auto(17.0), SplatResolution::Quarter);
-    assert_eq!(auto(15.0), SplatResolution::Half);
-    assert_eq!(auto(9.0), SplatResolution::Half);
-    assert_eq!(auto(7.0), SplatResolution::Full);
+    let auto = |pixels: f32| SplatResolution::auto(&with_radius(pixels), camera, 480);
+    let r = AUTO_MIN_RADIUS;
+    assert_eq!(auto(8.2 * r), SplatResolution::Eighth);
+    assert_eq!(auto(7.8 * r), SplatResolution::Quarter);
+    assert_eq!(auto(4.2 * r), SplatResolution::Quarter);
+    assert_eq!(auto(3.8 * r), SplatResolution::Half);
+    assert_eq!(auto(2.2 * r), SplatResolution::Half);
+    assert_eq!(auto(1.8 * r), SplatResolution::Full);
     assert_eq!(
         SplatResolution::auto(&[], camera, 480),
         SplatResolution::Full

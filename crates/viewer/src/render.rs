@@ -54,7 +54,7 @@ use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel, imaged_surfaces};
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
-use lustre_mpr::passes::splat_lowres::SplatResolution;
+use lustre_mpr::passes::splat_lowres::{AUTO_QUANTILE, SplatResolution, radius_quantile};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::projective_texture::{
     DEFAULT_TEXTURE_SIZE, MAX_TEXTURE_SIZE, PaneLight, texture_bytes,
@@ -248,7 +248,7 @@ pub enum FilterArg {
 /// The resolution the camera view's splats are accumulated at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SplatResolutionArg {
-    /// The coarsest of eighth, quarter, half and full at which 95 % of the splats still span at least 4 low-resolution pixels in radius.
+    /// The coarsest of eighth, quarter, half and full at which 95 % of the splats still span at least 2 low-resolution pixels in radius.
     Auto,
     /// Every splat at the frame's resolution (the paper's pass).
     Full,
@@ -1340,6 +1340,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "version": env!("CARGO_PKG_VERSION"),
     });
     info["splat_resolution"] = json!(splat_resolution.map(|r| format!("{r:?}")));
+    // The projected kernel radius `auto` reads (pixels, the 5 % quantile).
+    info["splat_radius_q05_px"] = json!(splats.as_ref().and_then(|b| radius_quantile(
+        &b.supports,
+        &camera,
+        height,
+        AUTO_QUANTILE
+    )));
     info["photons_file"] = json!(args.photons_file.as_ref().map(|p| json!({
         "path": p.display().to_string(),
         "batches": streamed_splats.1,

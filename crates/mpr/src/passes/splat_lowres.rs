@@ -34,8 +34,11 @@ pub const DEPTH_TAU: f32 = 0.1;
 pub const LOW_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
 /// The smallest projected kernel radius, in low-resolution pixels, that
-/// [`SplatResolution::auto`] accepts for most splats.
-pub const AUTO_MIN_RADIUS: f32 = 4.0;
+/// [`SplatResolution::auto`] accepts for most splats: two samples per
+/// radius, Nyquist's rate for a field whose narrowest features (single
+/// kernels) are a radius wide. On glosbox (1M photons, 256², BENCHMARKS.md
+/// "Splat frames at lower resolution") the error against the reference did not rise at this rate.
+pub const AUTO_MIN_RADIUS: f32 = 2.0;
 
 /// The share of splats whose projected radius [`SplatResolution::auto`] checks (the smallest this share may be below [`AUTO_MIN_RADIUS`]).
 pub const AUTO_QUANTILE: f32 = 0.05;
@@ -72,19 +75,9 @@ impl SplatResolution {
     /// radius `h · focal / distance` of at least [`AUTO_MIN_RADIUS`]
     /// low-resolution pixels; [`SplatResolution::Full`] when there are no splats.
     pub fn auto(supports: &[[f32; 4]], camera: &Camera, height: u32) -> Self {
-        let mut radii: Vec<f32> = supports
-            .iter()
-            .filter(|s| s[3] > 0.0)
-            .map(|s| {
-                let distance = Vec3::new(s[0], s[1], s[2]).distance(camera.position);
-                projected_radius(s[3], distance, camera, height)
-            })
-            .collect();
-        if radii.is_empty() {
+        let Some(small) = radius_quantile(supports, camera, height, AUTO_QUANTILE) else {
             return Self::Full;
-        }
-        let k = ((radii.len() as f32 * AUTO_QUANTILE) as usize).min(radii.len() - 1);
-        let (_, &mut small, _) = radii.select_nth_unstable_by(k, f32::total_cmp);
+        };
         [Self::Eighth, Self::Quarter, Self::Half]
             .into_iter()
             .find(|r| small >= AUTO_MIN_RADIUS * r.factor() as f32)
@@ -96,6 +89,29 @@ impl SplatResolution {
         let f = self.factor();
         (width.div_ceil(f), height.div_ceil(f))
     }
+}
+
+/// The `quantile` of the splats' projected kernel radii in pixels (`supports` and the view as in [`SplatResolution::auto`]); `None` without splats.
+pub fn radius_quantile(
+    supports: &[[f32; 4]],
+    camera: &Camera,
+    height: u32,
+    quantile: f32,
+) -> Option<f32> {
+    let mut radii: Vec<f32> = supports
+        .iter()
+        .filter(|s| s[3] > 0.0)
+        .map(|s| {
+            let distance = Vec3::new(s[0], s[1], s[2]).distance(camera.position);
+            projected_radius(s[3], distance, camera, height)
+        })
+        .collect();
+    if radii.is_empty() {
+        return None;
+    }
+    let k = ((radii.len() as f32 * quantile) as usize).min(radii.len() - 1);
+    let (_, &mut small, _) = radii.select_nth_unstable_by(k, f32::total_cmp);
+    Some(small)
 }
 
 /// The radius in pixels of a kernel of support `h` at `distance` from `camera` in a `height`-pixel-high image (seen face on).
