@@ -386,12 +386,14 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = FilterArg::Centre)]
     pub filter: FilterArg,
     /// The resolution the camera view's splats are drawn at: below full, the
-    /// splats (restricted by surface ids) fill a target half or a quarter as
-    /// wide and high, which is then added at full resolution by a joint
+    /// splats (restricted by surface ids) fill a target 2, 4 or 8 times
+    /// smaller per axis, which is then added at full resolution by a joint
     /// bilateral upsampling that never blends across surface ids (the splat
-    /// pass is fill-bound; a sixteenth of the fill at a quarter). `auto`
-    /// picks from the splats' projected kernel size. Views through mirrors
-    /// always splat at full resolution.
+    /// pass is fill-bound: glosbox's default 640x480 frame took 5.2 s at an
+    /// eighth against 62 s at full on the software driver, at the same
+    /// error). `auto` picks from the splats' projected kernel size; surfaces
+    /// thinner than the factor in pixels may get no splat light. Views
+    /// through mirrors always splat at full resolution.
     #[arg(long, value_enum, default_value_t = SplatResolutionArg::Auto)]
     pub splat_resolution: SplatResolutionArg,
     /// Photon emission sampling.
