@@ -5,7 +5,9 @@
 //! one of two ways ([`Restriction`]): a surface-id test in one draw, or the
 //! paper's per-surface stencil mask built from the depth buffer. The CPU
 //! counterpart is [`splat_pass_cpu`], built on
-//! [`SplatEstimator::radiance_splatted`].
+//! [`SplatEstimator::radiance_splatted`]. [`SplatPass::encode_at`] draws the
+//! camera view's splats at a lower resolution instead
+//! ([`crate::passes::splat_lowres`]).
 
 use std::ops::Range;
 
