@@ -7,6 +7,9 @@
 //! writes `<name>-actual.exr`, `<name>-actual.png` and
 //! `<name>-difference.png` (FLIP's magma error map) beside the goldens,
 //! git-ignored. A missing golden fails: only `cargo xtask bless` writes one.
+//! The splatting cases pin `--splat-resolution full`, the splat pass as the
+//! goldens were blessed with (the lower resolutions are tested against it
+//! in `crates/mpr/tests/splat_lowres.rs`).
 
 use std::path::{Path, PathBuf};
 
@@ -51,6 +54,8 @@ pub const CASES: &[Case] = &[
         name: "glosbox-splat",
         scene: "glosbox",
         args: &[
+            "--splat-resolution",
+            "full",
             "--technique",
             "splat",
             "--photons",
@@ -93,6 +98,8 @@ pub const CASES: &[Case] = &[
         name: "glosbox-splat-direct",
         scene: "glosbox",
         args: &[
+            "--splat-resolution",
+            "full",
             "--technique",
             "splat-direct",
             "--photons",
@@ -112,6 +119,8 @@ pub const CASES: &[Case] = &[
         name: "cornell-splat",
         scene: "cornell",
         args: &[
+            "--splat-resolution",
+            "full",
             "--technique",
             "splat",
             "--photons",
@@ -131,6 +140,8 @@ pub const CASES: &[Case] = &[
         name: "cornell-splat-paper",
         scene: "cornell",
         args: &[
+            "--splat-resolution",
+            "full",
             "--technique",
             "splat",
             "--photons",
@@ -260,6 +271,8 @@ pub const CASES: &[Case] = &[
         name: "glosbox-splat-direct-mip",
         scene: "glosbox",
         args: &[
+            "--splat-resolution",
+            "full",
             "--technique",
             "splat-direct",
             "--filter",
@@ -300,6 +313,8 @@ pub const CASES: &[Case] = &[
         name: "glosbox-splat-direct-fitted-phong",
         scene: "glosbox",
         args: &[
+            "--splat-resolution",
+            "full",
             "--technique",
             "splat-direct",
             "--glossy",

@@ -29,6 +29,7 @@ use crate::passes::gouraud::GouraudPass;
 use crate::passes::shadowed_direct::{ShadowVolumes, ShadowedDirect};
 use crate::passes::specular::{SpecularPass, SpecularSettings, ViewTree};
 use crate::passes::splat::{KernelFiltering, Restriction, SplatBuffers, SplatPass};
+use crate::passes::splat_lowres::SplatResolution;
 use crate::passes::tonemap::{Tonemap, TonemapPass};
 use crate::scene_buffers::SceneBuffers;
 use crate::target::RenderTargets;
@@ -62,16 +63,18 @@ impl LightPass for SplatPass {
         let Some(inputs) = frame.splats else {
             return Ok(());
         };
-        self.encode(
-            &ctx.device,
+        self.encode_at(
+            ctx,
             encoder,
             frame.scene,
             inputs.buffers,
             frame.targets,
             inputs.restriction,
+            inputs.resolution,
             views,
             slot,
         )
+        .map(|_| ())
     }
 }
 
@@ -178,6 +181,8 @@ pub struct SplatInputs<'a> {
     pub restriction: Restriction,
     /// How the kernel texture is filtered.
     pub filtering: KernelFiltering,
+    /// The resolution the camera view's splats are accumulated at ([`crate::passes::splat_lowres`]).
+    pub resolution: SplatResolution,
 }
 
 /// The passes of a frame, in the order they run.

@@ -95,6 +95,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             "passes/splat.wgsl",
             with_materials(&with_view(crate::passes::splat::SPLAT_WGSL)),
         ),
+        (
+            "passes/splat_lowres.wgsl",
+            crate::passes::splat_lowres::SPLAT_LOWRES_WGSL.to_owned(),
+        ),
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
         ("passes/beams.wgsl", crate::passes::beams::beams_wgsl()),
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),

@@ -585,6 +585,7 @@ fn limit_faces_show_their_limit_radiance_once_under_accumulation_with_splats() {
                     buffers: &splats,
                     restriction: lustre_mpr::passes::splat::Restriction::SurfaceId,
                     filtering: lustre_mpr::passes::splat::KernelFiltering::PixelCentre,
+                    resolution: lustre_mpr::passes::splat_lowres::SplatResolution::Full,
                 }),
                 direct: None,
                 diffuse: None,

@@ -16,4 +16,5 @@ pub mod shadow_volume;
 pub mod shadowed_direct;
 pub mod specular;
 pub mod splat;
+pub mod splat_lowres;
 pub mod tonemap;

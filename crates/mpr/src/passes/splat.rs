@@ -5,7 +5,9 @@
 //! one of two ways ([`Restriction`]): a surface-id test in one draw, or the
 //! paper's per-surface stencil mask built from the depth buffer. The CPU
 //! counterpart is [`splat_pass_cpu`], built on
-//! [`SplatEstimator::radiance_splatted`].
+//! [`SplatEstimator::radiance_splatted`]. [`SplatPass::encode_at`] draws the
+//! camera view's splats at a lower resolution instead
+//! ([`crate::passes::splat_lowres`]).
 
 use std::ops::Range;
 
@@ -17,6 +19,7 @@ use lustre_photon::{Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, Sur
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
 use crate::passes::redraw::{scene_module, view_stencil};
+use crate::passes::splat_lowres::{LowResTargets, SplatLowRes, SplatResolution};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
 use crate::shaders::{DEPTH_WGSL, with_materials, with_view};
 use crate::target::RenderTargets;
@@ -201,6 +204,8 @@ pub struct SplatBuffers {
     mass_values: wgpu::Buffer,
     /// Number of splats.
     pub count: u32,
+    /// Each uploaded splat's centre and support `h`, `[x, y, z, h]`, for choosing the splat resolution ([`SplatResolution::auto`]).
+    pub supports: Vec<[f32; 4]>,
 }
 
 impl SplatBuffers {
@@ -365,6 +370,10 @@ impl SplatBuffers {
             surface_ranges.push(start..instances.len() as u32);
         }
         let count = instances.len() as u32;
+        let supports = instances
+            .iter()
+            .map(|s| [s.position[0], s.position[1], s.position[2], s.h])
+            .collect();
         if instances.is_empty() {
             instances.push(GpuSplat::zeroed());
         }
@@ -442,6 +451,7 @@ impl SplatBuffers {
             )?,
             surface_ranges,
             count,
+            supports,
         })
     }
 }
@@ -452,6 +462,8 @@ impl SplatBuffers {
 pub struct SplatUniforms {
     /// `x`: 1 for [`KernelFiltering::MipMapped`], 0 for [`KernelFiltering::PixelCentre`]; `y`: 1 for [`Kernel::Gaussian`], 0 for Silverman's.
     pub options: [u32; 4],
+    /// `xy`: the NDC shift of the low-resolution splats (`vs_splat_low`), written by [`SplatPass::encode_at`]; `zw` unused.
+    pub low_res_offset: [f32; 4],
 }
 
 /// The GPU splat pass: pipelines of both restriction methods, the kernel texture and the uniforms.
@@ -459,6 +471,10 @@ pub struct SplatUniforms {
 pub struct SplatPass {
     layout: wgpu::BindGroupLayout,
     splat_id: wgpu::RenderPipeline,
+    /// The surface-id restriction into a low-resolution target, without depth or stencil ([`SplatPass::encode_at`]).
+    splat_low: wgpu::RenderPipeline,
+    /// The guide and upsampling of low-resolution splats.
+    lowres: SplatLowRes,
     splat_stencil: Option<wgpu::RenderPipeline>,
     mask: Option<wgpu::RenderPipeline>,
     uniforms: wgpu::Buffer,
@@ -503,6 +519,7 @@ impl SplatPass {
         let texture = kernel_texture(ctx, kernel, KERNEL_TEXTURE_SIZE)?;
         let depth_format = ctx.depth_format();
         let has_stencil = ctx.has_stencil();
+        let lowres = SplatLowRes::new(ctx, hdr_format)?;
         ctx.checked("splat pass creation", || {
             let device = &ctx.device;
             let source = with_materials(&with_view(SPLAT_WGSL));
@@ -580,36 +597,40 @@ impl SplatPass {
                     bind_group_layouts: &[Some(ctx.view_layout())],
                     immediate_size: 0,
                 });
+            let splat_pipeline_with =
+                |vertex: &str, entry: &str, depth_stencil: Option<wgpu::DepthStencilState>| {
+                    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(&pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &module,
+                            entry_point: Some(vertex),
+                            compilation_options: Default::default(),
+                            buffers: &[Some(GpuSplat::LAYOUT)],
+                        },
+                        primitive: wgpu::PrimitiveState {
+                            topology: wgpu::PrimitiveTopology::TriangleList,
+                            cull_mode: None,
+                            ..Default::default()
+                        },
+                        depth_stencil,
+                        multisample: wgpu::MultisampleState::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &module,
+                            entry_point: Some(entry),
+                            compilation_options: Default::default(),
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format: hdr_format,
+                                blend: Some(ADD),
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+                };
             let splat_pipeline = |entry: &str, depth_stencil: Option<wgpu::DepthStencilState>| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_splat"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(GpuSplat::LAYOUT)],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::TriangleList,
-                        cull_mode: None,
-                        ..Default::default()
-                    },
-                    depth_stencil,
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: hdr_format,
-                            blend: Some(ADD),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+                splat_pipeline_with("vs_splat", entry, depth_stencil)
             };
             // Surface-id restriction under the view's stencil test (only the view's pixels).
             let splat_id = splat_pipeline(
@@ -622,6 +643,8 @@ impl SplatPass {
                     bias: wgpu::DepthBiasState::default(),
                 }),
             );
+            // The same restriction at low resolution, against the low-resolution surface-id guide.
+            let splat_low = splat_pipeline_with("vs_splat_low", "fs_splat_id", None);
             let (splat_stencil, mask) = if has_stencil {
                 let splat_stencil = splat_pipeline(
                     "fs_splat_stencil",
@@ -693,6 +716,8 @@ impl SplatPass {
             Self {
                 layout,
                 splat_id,
+                splat_low,
+                lowres,
                 splat_stencil,
                 mask,
                 uniforms,
@@ -717,6 +742,7 @@ impl SplatPass {
                 0,
                 0,
             ],
+            low_res_offset: [0.0; 4],
         };
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
     }
@@ -737,44 +763,7 @@ impl SplatPass {
         views: &ViewBuffer,
         slot: ViewSlot,
     ) -> Result<()> {
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("splat"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.uniforms.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: splats.materials.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: splats.surface_materials.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&self.kernel_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&targets.surface_id.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: splats.mass_grids.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: splats.mass_values.as_entire_binding(),
-                },
-            ],
-        });
+        let bind_group = self.bind_group(device, splats, &targets.surface_id.view);
         match restriction {
             Restriction::SurfaceId => {
                 let mut pass = begin(encoder, targets, None);
@@ -835,6 +824,159 @@ impl SplatPass {
             }
         }
         Ok(())
+    }
+    /// The splat bind group over `splats`, restricting by the surface ids in `surface_ids`.
+    fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        splats: &SplatBuffers,
+        surface_ids: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: splats.materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: splats.surface_materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&self.kernel_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(surface_ids),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: splats.mass_grids.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: splats.mass_values.as_entire_binding(),
+                },
+            ],
+        })
+    }
+
+    /// [`SplatPass::encode`] at `resolution`: at [`SplatResolution::Full`],
+    /// or in a virtual view (stencil reference above 0, whose splats are
+    /// limited to its stencilled area), exactly [`SplatPass::encode`];
+    /// otherwise the surface-id restriction drawn into [`LowResTargets`]
+    /// against the low-resolution guide and upsampled into `targets.hdr`
+    /// ([`crate::passes::splat_lowres`]), which [`Restriction::Stencil`]
+    /// cannot do (an error). Returns the low-resolution targets when they were used.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_at(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        splats: &SplatBuffers,
+        targets: &RenderTargets,
+        restriction: Restriction,
+        resolution: SplatResolution,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+    ) -> Result<Option<LowResTargets>> {
+        if resolution == SplatResolution::Full || slot.stencil_reference != 0 {
+            self.encode(
+                &ctx.device,
+                encoder,
+                scene,
+                splats,
+                targets,
+                restriction,
+                views,
+                slot,
+            )?;
+            return Ok(None);
+        }
+        if restriction != Restriction::SurfaceId {
+            return Err(MprError::InvalidSetting {
+                what: "splat resolution",
+                message: "splats below full resolution are restricted by surface ids; \
+                          use the surface-id restriction or the full resolution"
+                    .into(),
+            });
+        }
+        let device = &ctx.device;
+        // The NDC shift of vs_splat_low (applied at submit, with prepare's options).
+        let offset = [
+            -1.0 / targets.width as f32,
+            1.0 / targets.height as f32,
+            0.0,
+            0.0,
+        ];
+        ctx.queue.write_buffer(
+            &self.uniforms,
+            std::mem::offset_of!(SplatUniforms, low_res_offset) as u64,
+            bytemuck::cast_slice(&offset),
+        );
+        let low = LowResTargets::new(ctx, targets, resolution);
+        self.lowres.encode_guides(device, encoder, targets, &low);
+        let low_ids = low.ids.create_view(&wgpu::TextureViewDescriptor::default());
+        let radiance = low
+            .radiance
+            .create_view(&wgpu::TextureViewDescriptor::default());
+        let bind_group = self.bind_group(device, splats, &low_ids);
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("splat-lowres"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &radiance,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if splats.count > 0 {
+                // The frame's NDC square onto width/f × height/f pixels and
+                // shifted by half a full-resolution pixel (vs_splat_low), so the
+                // low-resolution pixel centre i + 1/2 lies on the centre of full-resolution pixel f i + f/2.
+                let f = resolution.factor() as f32;
+                pass.set_viewport(
+                    0.0,
+                    0.0,
+                    targets.width as f32 / f,
+                    targets.height as f32 / f,
+                    0.0,
+                    1.0,
+                );
+                pass.set_pipeline(&self.splat_low);
+                views.bind(&mut pass, 0, slot);
+                pass.set_bind_group(1, &bind_group, &[]);
+                draw_instances(&mut pass, splats, 0..splats.count);
+            }
+        }
+        self.lowres.encode_upsample(
+            device,
+            encoder,
+            targets,
+            &low,
+            slot.scissor_in(targets.width, targets.height),
+        );
+        Ok(Some(low))
     }
 }
 

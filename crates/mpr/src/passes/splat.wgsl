@@ -34,6 +34,10 @@ struct SplatUniforms {
     // x: 1 to filter the kernel texture with mip-maps and anisotropy (section 3.2), 0 to evaluate K at the pixel centre.
     // y: the kernel at the pixel centre: 0 Silverman, 1 truncated Gaussian (lustre-photon's Kernel).
     options: vec4u,
+    // xy: vs_splat_low's NDC shift (-1/W, 1/H for a W x H frame), which puts each
+    // low-resolution pixel centre on the centre of the full-resolution pixel
+    // its guide reads (splat_lowres.wgsl); zw unused.
+    low_res_offset: vec4f,
 }
 
 @group(1) @binding(0) var<uniform> uniforms: SplatUniforms;
@@ -104,6 +108,19 @@ fn vs_splat(
     @location(4) power: vec3f,
     @location(5) normal: vec3f,
 ) -> VertexOutput {
+    return splat_vertex(corner, position, surface, incoming, h, power, normal);
+}
+
+// One corner of a splat's triangle (vs_splat and vs_splat_low).
+fn splat_vertex(
+    corner: u32,
+    position: vec3f,
+    surface: u32,
+    incoming: vec3f,
+    h: f32,
+    power: vec3f,
+    normal: vec3f,
+) -> VertexOutput {
     var out: VertexOutput;
     let to_eye = view.eye.xyz - position;
     let wo = normalize(to_eye);
@@ -118,6 +135,24 @@ fn vs_splat(
     let f = splat_brdf(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
     out.colour = power * f / (h * h);
     out.surface = surface;
+    return out;
+}
+
+// vs_splat for a low-resolution target (lustre_mpr::passes::splat_lowres): the
+// same splat moved by low_res_offset in NDC, so that the low-resolution pixel i
+// samples the point the full-resolution pixel f i + f/2 sees.
+@vertex
+fn vs_splat_low(
+    @builtin(vertex_index) corner: u32,
+    @location(0) position: vec3f,
+    @location(1) surface: u32,
+    @location(2) incoming: vec3f,
+    @location(3) h: f32,
+    @location(4) power: vec3f,
+    @location(5) normal: vec3f,
+) -> VertexOutput {
+    var out = splat_vertex(corner, position, surface, incoming, h, power, normal);
+    out.clip = vec4f(out.clip.xy + uniforms.low_res_offset.xy * out.clip.w, out.clip.zw);
     return out;
 }
 
