@@ -14,6 +14,7 @@ mod reference_check;
 mod render;
 mod surfaces;
 mod venv;
+mod walkthrough;
 
 pub use reference::workspace_root;
 
@@ -77,6 +78,8 @@ enum Command {
     Converge(converge::Args),
     /// Error (noise, bias, total) and per-frame times of the quasi-static estimators, into BENCHMARKS.md (García et al. tables 2.1, 2.6-2.8).
     DensityErrors(density_errors::Args),
+    /// The walkthrough benchmark: a camera path rendered once with `--camera-path`, every frame against a path-traced reference and beside the path tracer's time for the same error, into BENCHMARKS.md.
+    Walkthrough(walkthrough::Args),
     /// Check the Ray driver (tools/ray) on a local Ray instance against a single-process trace; creates .ray-venv.
     Ray(ray::Args),
     /// The README's test command: format check, clippy with warnings denied, all tests, golden images, reference checks, the Ray driver.
@@ -93,6 +96,7 @@ fn main() -> ExitCode {
         Command::Converge(args) => converge::run(args),
         Command::DensityErrors(args) => density_errors::run(args),
         Command::Ray(args) => ray::run(args),
+        Command::Walkthrough(args) => walkthrough::run(args),
         Command::Ci => ci::run(),
     };
     match result {

@@ -220,43 +220,12 @@ pub fn measure(reference: &Reference, spps: &[u32], work: &Path) -> Result<Curve
             );
         }
         let dir = work.join(format!("{}-{spp}", reference.scene));
-        let xml = dir.join("scene.xml");
-        mitsuba::export(&scene, &xml, &options)
-            .with_context(|| format!("exporting `{}` to Mitsuba", reference.scene))?;
-        let exr = dir.join("render.exr");
-        let spp_arg = spp.to_string();
-        let seed_arg = SEED.to_string();
-        let info = run_helper(
-            &python,
-            &root,
-            &[
-                "--variant",
-                &variant,
-                "--scene",
-                path_str(&xml)?,
-                "--out",
-                path_str(&exr)?,
-                "--spp",
-                &spp_arg,
-                "--spp-per-pass",
-                &spp_arg,
-                "--seed",
-                &seed_arg,
-            ],
-        )
-        .with_context(|| format!("path tracing `{}` at {spp} spp", reference.scene))?;
+        let (image, times) = render(&python, &scene, &options, &variant, &dir)
+            .with_context(|| format!("path tracing `{}` at {spp} spp", reference.scene))?;
+        let seconds = times.load + times.render;
         if !counted {
             continue;
         }
-        let seconds = ["load_seconds", "render_seconds"]
-            .iter()
-            .map(|k| {
-                info[k]
-                    .as_f64()
-                    .with_context(|| format!("the helper reported no {k}"))
-            })
-            .sum::<Result<f64>>()?;
-        let image = read_exr(&exr)?;
         let rel_mse = metrics::relative_mse(&image, &reference.image, RELATIVE_MSE_EPSILON)?;
         println!(
             "converge {:<10} path tracer {spp} spp: {seconds:.2} s, relMSE {rel_mse:.5}",
@@ -267,9 +236,64 @@ pub fn measure(reference: &Reference, spps: &[u32], work: &Path) -> Result<Curve
             seconds,
             rel_mse,
         });
-        let _ = std::fs::remove_dir_all(&dir);
     }
     Curve::new(points, reference_spp)
+}
+
+/// Seconds a Mitsuba render took, by its own timings (the Python start and `import mitsuba` not counted).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Times {
+    /// Loading the scene.
+    pub load: f64,
+    /// Rendering it.
+    pub render: f64,
+}
+
+/// One Mitsuba render of `scene` as `options` say (size, spp, seed, integrator), in `dir` (removed after): the image and its times.
+pub fn render(
+    python: &Path,
+    scene: &lustre_geometry::Scene,
+    options: &mitsuba::ExportOptions,
+    variant: &str,
+    dir: &Path,
+) -> Result<(lustre_image::Image, Times)> {
+    let root = crate::workspace_root();
+    let xml = dir.join("scene.xml");
+    mitsuba::export(scene, &xml, options)
+        .with_context(|| format!("exporting `{}` to Mitsuba", scene.name))?;
+    let exr = dir.join("render.exr");
+    let spp = options.spp.to_string();
+    let seed = options.seed.to_string();
+    let info = run_helper(
+        python,
+        &root,
+        &[
+            "--variant",
+            variant,
+            "--scene",
+            path_str(&xml)?,
+            "--out",
+            path_str(&exr)?,
+            "--spp",
+            &spp,
+            "--spp-per-pass",
+            &spp,
+            "--seed",
+            &seed,
+        ],
+    )?;
+    let time = |k: &str| {
+        info[k]
+            .as_f64()
+            .with_context(|| format!("the helper reported no {k}"))
+    };
+    let times = Times {
+        load: time("load_seconds")?,
+        render: time("render_seconds")?,
+    };
+    let image = read_exr(&exr)?;
+    let _ = std::fs::remove_dir_all(dir);
+    Ok((image, times))
 }
 
 #[cfg(test)]

@@ -174,6 +174,13 @@ impl Lustre {
     }
 }
 
+/// Frame `index` of a `lustre render --camera-path` run written to `out`: `walk.exr` gives `walk-0003.exr` (the binary's `render_frames::frame_path`).
+pub fn frame_path(out: &Path, index: usize) -> PathBuf {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
+    let ext = out.extension().and_then(|s| s.to_str()).unwrap_or("png");
+    out.with_file_name(format!("{stem}-{index:04}.{ext}"))
+}
+
 /// Cargo's target directory for this workspace, from `cargo metadata`.
 fn target_directory() -> Result<PathBuf> {
     let output = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
