@@ -577,20 +577,7 @@ fn a_model_without_light_or_mtl_renders_in_a_default_studio() {
         assert!(stdout.contains(needle), "{needle}: {stdout}");
     }
     let out_path = dir.join("t.exr");
-    let args = [
-        "render",
-        obj.to_str().unwrap(),
-        "--photons",
-        "20000",
-        "--size",
-        "32x32",
-        "--aa",
-        "1",
-        "--light-samples",
-        "1",
-        "--out",
-        out_path.to_str().unwrap(),
-    ];
+    let args = small_render(&obj, &out_path);
     let Some(out) = render_or_skip("a_model_without_light_or_mtl_renders", &args) else {
         return;
     };
@@ -660,20 +647,7 @@ fn gltf_models_are_listed_and_rendered() {
     // Six triangles of the pyramid, four of the studio's two quads.
     assert!(stdout.contains("triangles   10"), "{stdout}");
     let out_path = dir.join("p.exr");
-    let args = [
-        "render",
-        path.to_str().unwrap(),
-        "--photons",
-        "20000",
-        "--size",
-        "32x32",
-        "--aa",
-        "1",
-        "--light-samples",
-        "1",
-        "--out",
-        out_path.to_str().unwrap(),
-    ];
+    let args = small_render(&path, &out_path);
     let Some(out) = render_or_skip("gltf_models_are_listed_and_rendered", &args) else {
         return;
     };
@@ -834,4 +808,22 @@ fn a_camera_path_renders_the_walkthrough_through_the_same_frame() {
         );
         assert!(!out_path.exists() && !dir.join("refused-0000.png").exists());
     }
+}
+
+/// `lustre render MODEL` small and quick: 20,000 photons, 32 × 32, one sample per pixel, one light sample, into `out`.
+fn small_render<'a>(model: &'a std::path::Path, out: &'a std::path::Path) -> [&'a str; 12] {
+    [
+        "render",
+        model.to_str().unwrap(),
+        "--photons",
+        "20000",
+        "--size",
+        "32x32",
+        "--aa",
+        "1",
+        "--light-samples",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]
 }

@@ -31,13 +31,12 @@ use ::gltf::mesh::Mode;
 use base64::Engine as _;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
-use crate::aabb::Aabb;
 use crate::error::{GeometryError, Location, Result};
 use crate::light::{Light, PointLight, SpotLight};
 use crate::material::{Material, MaterialId};
 use crate::mesh::{Mesh, MeshId};
-use crate::obj::{LoadedScene, Studio, framing_camera};
-use crate::scene::{Object, Scene};
+use crate::obj::{LoadedScene, Parts, finish};
+use crate::scene::Object;
 use crate::{Camera, Rgb};
 
 use material::GltfMaterial;
@@ -89,45 +88,26 @@ pub fn load_gltf(path: &Path) -> Result<LoadedScene> {
         loader.node(&node, Mat4::IDENTITY, 0).map_err(&fail)?;
     }
     let Loader {
-        mut meshes,
-        mut objects,
+        meshes,
+        objects,
         lights,
         camera,
-        mut materials,
+        materials,
         ..
     } = loader;
-    if meshes.is_empty() {
-        return Err(GeometryError::EmptyMesh {
-            mesh: stem,
-            file: Some(path.to_owned()),
-        });
-    }
-    let bounds = meshes
-        .iter()
-        .map(Mesh::bounds)
-        .fold(Aabb::EMPTY, Aabb::union);
-    let lit = !lights.is_empty()
-        || meshes
-            .iter()
-            .any(|m| materials[m.material as usize].is_emissive());
-    let studio = (!lit).then(|| {
-        Studio::add(
-            bounds,
-            &mut meshes,
-            &mut materials,
-            &mut objects,
-            path,
-            &mut warnings,
-        )
-    });
-    let camera = camera.unwrap_or_else(|| framing_camera(bounds));
-    let scene = Scene::new(stem, meshes, materials, objects, lights, camera)?;
-    Ok(LoadedScene {
-        scene,
-        degenerate_triangles_dropped: 0,
-        warnings,
-        studio,
-    })
+    finish(
+        Parts {
+            name: stem,
+            meshes,
+            materials,
+            objects,
+            lights,
+            camera,
+            degenerate_triangles_dropped: 0,
+            warnings,
+        },
+        path,
+    )
 }
 
 /// Every buffer's bytes: the GLB chunk, a base64 `data:` URI or a file relative to `base`.

@@ -314,9 +314,58 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
             material: *material,
         });
     }
+    finish(
+        Parts {
+            name: stem,
+            meshes,
+            materials,
+            objects,
+            lights: Vec::new(),
+            camera: None,
+            degenerate_triangles_dropped: dropped,
+            warnings,
+        },
+        path,
+    )
+}
+
+/// What a loader made of a file, before the scene is put together.
+pub(crate) struct Parts {
+    /// The scene's name (the file stem).
+    pub name: String,
+    /// Its meshes.
+    pub meshes: Vec<Mesh>,
+    /// Its materials.
+    pub materials: Vec<Material>,
+    /// Its objects.
+    pub objects: Vec<Object>,
+    /// Its lights other than emissive meshes.
+    pub lights: Vec<crate::Light>,
+    /// The file's camera, if it has one.
+    pub camera: Option<Camera>,
+    /// Degenerate triangles dropped.
+    pub degenerate_triangles_dropped: usize,
+    /// Warnings so far.
+    pub warnings: Vec<String>,
+}
+
+/// The scene of a loaded file (OBJ or glTF): refused without a mesh, the
+/// default studio added when nothing emits, framed by [`framing_camera`]
+/// when the file has no camera.
+pub(crate) fn finish(parts: Parts, path: &Path) -> Result<LoadedScene> {
+    let Parts {
+        name,
+        mut meshes,
+        mut materials,
+        mut objects,
+        lights,
+        camera,
+        degenerate_triangles_dropped,
+        mut warnings,
+    } = parts;
     if meshes.is_empty() {
         return Err(GeometryError::EmptyMesh {
-            mesh: stem,
+            mesh: name,
             file: Some(path.to_owned()),
         });
     }
@@ -325,9 +374,10 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
         .map(Mesh::bounds)
         .fold(Aabb::EMPTY, Aabb::union);
     // No emitter at all: a default studio round the model.
-    let lit = meshes
-        .iter()
-        .any(|m| materials[m.material as usize].is_emissive());
+    let lit = !lights.is_empty()
+        || meshes
+            .iter()
+            .any(|m| materials[m.material as usize].is_emissive());
     let studio = (!lit).then(|| {
         Studio::add(
             bounds,
@@ -338,17 +388,11 @@ pub fn load_obj_with(path: &Path, options: &ObjOptions) -> Result<LoadedScene> {
             &mut warnings,
         )
     });
-    let scene = Scene::new(
-        stem,
-        meshes,
-        materials,
-        objects,
-        Vec::new(),
-        framing_camera(bounds),
-    )?;
+    let camera = camera.unwrap_or_else(|| framing_camera(bounds));
+    let scene = Scene::new(name, meshes, materials, objects, lights, camera)?;
     Ok(LoadedScene {
         scene,
-        degenerate_triangles_dropped: dropped,
+        degenerate_triangles_dropped,
         warnings,
         studio,
     })
