@@ -691,6 +691,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             args.out.display()
         );
     }
+    // The output's directory must exist before any work (nothing half-written, no render thrown away).
+    let out_dir = match args.out.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    if !out_dir.is_dir() {
+        bail!(
+            "--out {}: the directory {} does not exist",
+            args.out.display(),
+            out_dir.display()
+        );
+    }
     if !(args.kernel_c > 0.0 && args.kernel_c.is_finite()) {
         bail!("--kernel-c {}: must be positive", args.kernel_c);
     }

@@ -827,3 +827,22 @@ fn small_render<'a>(model: &'a std::path::Path, out: &'a std::path::Path) -> [&'
         out.to_str().unwrap(),
     ]
 }
+
+/// An output in a directory that does not exist is refused before any photon is traced.
+#[test]
+fn a_missing_output_directory_is_refused_before_any_work() {
+    let dir = scratch("missing-dir");
+    let out_path = dir.join("nowhere").join("r.png");
+    let out = lustre(&["render", "glosbox", "--out", out_path.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("does not exist") && stderr.contains("nowhere"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("traced"),
+        "refused after tracing: {stderr}"
+    );
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+}
