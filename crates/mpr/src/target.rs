@@ -25,7 +25,7 @@ pub struct Target {
 
 impl Target {
     /// A 2D render attachment that can also be sampled and copied out.
-    fn new(
+    pub(crate) fn new(
         ctx: &GpuContext,
         label: &str,
         width: u32,

@@ -110,9 +110,9 @@ fn render(
     let rgb = |v: Vec<[f32; 4]>| v.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
     let (low_radiance, low_ids, low_depth) = match &low {
         Some(low) => (
-            rgb(read_rgba_f32(ctx, &low.radiance).unwrap()),
-            read_u32(ctx, &low.ids).unwrap(),
-            read_texture_bytes(ctx, &low.depth, wgpu::TextureAspect::All)
+            rgb(read_rgba_f32(ctx, &low.radiance.texture).unwrap()),
+            read_u32(ctx, &low.ids.texture).unwrap(),
+            read_texture_bytes(ctx, &low.depth.texture, wgpu::TextureAspect::All)
                 .unwrap()
                 .chunks_exact(4)
                 .map(|t| f32::from_le_bytes([t[0], t[1], t[2], t[3]]))

@@ -928,16 +928,12 @@ impl SplatPass {
         );
         let low = LowResTargets::new(ctx, targets, resolution);
         self.lowres.encode_guides(device, encoder, targets, &low);
-        let low_ids = low.ids.create_view(&wgpu::TextureViewDescriptor::default());
-        let radiance = low
-            .radiance
-            .create_view(&wgpu::TextureViewDescriptor::default());
-        let bind_group = self.bind_group(device, splats, &low_ids);
+        let bind_group = self.bind_group(device, splats, &low.ids.view);
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("splat-lowres"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &radiance,
+                    view: &low.radiance.view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {

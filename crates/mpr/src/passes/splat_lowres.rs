@@ -19,7 +19,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use lustre_geometry::Camera;
 
-use crate::target::{NO_SURFACE, RenderTargets, SURFACE_ID_FORMAT};
+use crate::target::{NO_SURFACE, RenderTargets, SURFACE_ID_FORMAT, Target};
 use crate::{GpuContext, Result};
 
 /// The low-resolution WGSL (`src/passes/splat_lowres.wgsl`), self-contained.
@@ -141,35 +141,18 @@ pub struct LowResTargets {
     /// Low-resolution height.
     pub height: u32,
     /// The splats' radiance at low resolution, in the frame's HDR format.
-    pub radiance: wgpu::Texture,
+    pub radiance: Target,
     /// The surface id at each low-resolution pixel's centre ([`SURFACE_ID_FORMAT`]).
-    pub ids: wgpu::Texture,
+    pub ids: Target,
     /// The depth there ([`LOW_DEPTH_FORMAT`]).
-    pub depth: wgpu::Texture,
+    pub depth: Target,
 }
 
 impl LowResTargets {
     /// Targets for `targets` reduced by `resolution` (not [`SplatResolution::Full`]).
     pub fn new(ctx: &GpuContext, targets: &RenderTargets, resolution: SplatResolution) -> Self {
         let (width, height) = resolution.low_size(targets.width, targets.height);
-        let texture = |label, format| {
-            ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
+        let texture = |label, format| Target::new(ctx, label, width, height, format);
         Self {
             resolution,
             width,
@@ -337,8 +320,6 @@ impl SplatLowRes {
                 aspect: wgpu::TextureAspect::DepthOnly,
                 ..Default::default()
             });
-        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-        let (ids, depth, radiance) = (view(&low.ids), view(&low.depth), view(&low.radiance));
         let entries = [
             wgpu::BindGroupEntry {
                 binding: 0,
@@ -354,15 +335,15 @@ impl SplatLowRes {
             },
             wgpu::BindGroupEntry {
                 binding: 3,
-                resource: wgpu::BindingResource::TextureView(&ids),
+                resource: wgpu::BindingResource::TextureView(&low.ids.view),
             },
             wgpu::BindGroupEntry {
                 binding: 4,
-                resource: wgpu::BindingResource::TextureView(&depth),
+                resource: wgpu::BindingResource::TextureView(&low.depth.view),
             },
             wgpu::BindGroupEntry {
                 binding: 5,
-                resource: wgpu::BindingResource::TextureView(&radiance),
+                resource: wgpu::BindingResource::TextureView(&low.radiance.view),
             },
         ];
         let (layout, entries) = if upsample {
@@ -387,8 +368,6 @@ impl SplatLowRes {
         low: &LowResTargets,
     ) {
         let bind_group = self.bind_group(device, targets, low, false);
-        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-        let (ids, depth) = (view(&low.ids), view(&low.depth));
         let attachment = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -402,7 +381,7 @@ impl SplatLowRes {
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("splat-lowres-guide"),
-            color_attachments: &[attachment(&ids), attachment(&depth)],
+            color_attachments: &[attachment(&low.ids.view), attachment(&low.depth.view)],
             depth_stencil_attachment: None,
             timestamp_writes: None,
             occlusion_query_set: None,
