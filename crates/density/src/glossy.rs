@@ -749,7 +749,7 @@ impl GlossyVertices {
     /// The radiance of the non-diffuse part of every vertex's BRDF towards the eye, [`GlossyVertex::lobe_estimate`] with the mesh material's Lambertian reflectance (beyond the paper: the diffuse part `ρ/π E` is left to the diffuse estimate), `[mesh][vertex]`; empty for meshes not built. Fails when a mesh's material has no BRDF.
     pub fn lobe_radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
         self.per_vertex(brdfs, |v, brdf, diffuse| {
-            v.lobe_estimate(brdf, eye - v.disc().centre, diffuse).value
+            lobe_towards(v, brdf, eye, diffuse)
         })
     }
 
@@ -774,21 +774,8 @@ impl GlossyVertices {
                 let Some(vertex) = slot else {
                     return Ok(Rgb::ZERO);
                 };
-                let material = self.materials[m as usize];
-                let brdf =
-                    brdfs
-                        .get(material as usize)
-                        .ok_or_else(|| DensityError::InvalidOption {
-                            option: "brdfs",
-                            message: format!("no BRDF for material {material}"),
-                        })?;
-                Ok(vertex
-                    .lobe_estimate(
-                        brdf.as_ref(),
-                        eye - vertex.disc().centre,
-                        self.diffuse[m as usize],
-                    )
-                    .value)
+                let brdf = brdf_of(brdfs, self.materials[m as usize])?;
+                Ok(lobe_towards(vertex, brdf, eye, self.diffuse[m as usize]))
             })
             .collect()
     }
@@ -807,21 +794,30 @@ impl GlossyVertices {
                 if vertices.is_empty() {
                     return Ok(Vec::new());
                 }
-                let brdf =
-                    brdfs
-                        .get(material as usize)
-                        .ok_or_else(|| DensityError::InvalidOption {
-                            option: "brdfs",
-                            message: format!("no BRDF for material {material}"),
-                        })?;
+                let brdf = brdf_of(brdfs, material)?;
                 Ok(vertices
                     .par_iter()
-                    .map(|v| {
-                        v.as_ref()
-                            .map_or(Rgb::ZERO, |v| f(v, brdf.as_ref(), diffuse))
-                    })
+                    .map(|v| v.as_ref().map_or(Rgb::ZERO, |v| f(v, brdf, diffuse)))
                     .collect())
             })
             .collect()
     }
+}
+
+/// The BRDF of `material` among `brdfs` (one per material); an error when there is none.
+fn brdf_of(brdfs: &[BoxedBrdf], material: MaterialId) -> Result<&(dyn Brdf + Send + Sync)> {
+    brdfs
+        .get(material as usize)
+        .map(|b| b.as_ref())
+        .ok_or_else(|| DensityError::InvalidOption {
+            option: "brdfs",
+            message: format!("no BRDF for material {material}"),
+        })
+}
+
+/// [`GlossyVertex::lobe_estimate`] of `vertex` towards `eye`: the radiance of its BRDF's non-diffuse part.
+fn lobe_towards(vertex: &GlossyVertex, brdf: &dyn Brdf, eye: Vec3, diffuse: Rgb) -> Rgb {
+    vertex
+        .lobe_estimate(brdf, eye - vertex.disc().centre, diffuse)
+        .value
 }
