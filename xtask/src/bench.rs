@@ -240,6 +240,17 @@ fn collect(
     Ok(())
 }
 
+/// The median of some values (the mean of the two middle ones for an even count; NaN for none).
+pub fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => values[n / 2],
+        _ => 0.5 * (values[n / 2 - 1] + values[n / 2]),
+    }
+}
+
 /// The machine this runs on, from /proc/cpuinfo.
 pub fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")

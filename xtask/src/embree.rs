@@ -67,20 +67,14 @@ fn read_json(path: &Path) -> Result<Value> {
 
 /// The median of a JSON list of numbers (the mean of the middle two for an even count).
 fn median(list: &Value) -> Result<f64> {
-    let mut v: Vec<f64> = list
+    let v: Vec<f64> = list
         .as_array()
         .context("not a list of times")?
         .iter()
         .filter_map(Value::as_f64)
         .collect();
     ensure!(!v.is_empty(), "no times");
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Ok(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    })
+    Ok(crate::bench::median(v))
 }
 
 /// The first of several runs' JSON results with every list of times under

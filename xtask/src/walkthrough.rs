@@ -237,8 +237,8 @@ fn section(
     errors.sort_by(f64::total_cmp);
     let ours = total_ms / 1000.0;
     let path_tracer: f64 = frames.iter().map(|f| f.path_tracer_seconds).sum();
-    let median_ms = median(frames.iter().map(|f| f.ms).collect());
-    let median_spp = median(frames.iter().map(|f| f.path_tracer_spp).collect());
+    let median_ms = crate::bench::median(frames.iter().map(|f| f.ms).collect());
+    let median_spp = crate::bench::median(frames.iter().map(|f| f.path_tracer_spp).collect());
     let over = frames.iter().filter(|f| f.rel_mse > args.bound).count();
     let at_noise = frames.iter().filter(|f| f.at_noise).count();
     let mut s = String::new();
@@ -280,17 +280,6 @@ fn section(
         args.reference_spp
     );
     s
-}
-
-/// The median of some values (the mean of the two middle ones for an even count).
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    match n {
-        0 => f64::NAN,
-        _ if n % 2 == 1 => values[n / 2],
-        _ => 0.5 * (values[n / 2 - 1] + values[n / 2]),
-    }
 }
 
 #[cfg(test)]
