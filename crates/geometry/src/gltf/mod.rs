@@ -220,14 +220,15 @@ impl Loader<'_> {
         node: &str,
         world: Mat4,
     ) -> std::result::Result<(), String> {
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let linear = Mat3::from_mat4(world);
+        let normal_matrix = linear.inverse().transpose();
         // A mirroring transform turns counter-clockwise triangles clockwise.
-        let flip = Mat3::from_mat4(world).determinant() < 0.0;
+        let flip = linear.determinant() < 0.0;
         let mut ids = Vec::new();
         let count = mesh.primitives().len();
         for primitive in mesh.primitives() {
             let what = format!("mesh {} primitive {}", mesh.index(), primitive.index());
-            let Some(triangles) = self.triangles(&primitive, &what)? else {
+            let Some(triangles) = self.triangles(&primitive, &what) else {
                 continue;
             };
             let reader = primitive.reader(|b| self.buffers.get(b.index()).map(Vec::as_slice));
@@ -336,19 +337,15 @@ impl Loader<'_> {
     }
 
     /// The primitive's mode as triangles, or `None` (with a warning) for points and lines.
-    fn triangles(
-        &mut self,
-        primitive: &::gltf::Primitive,
-        what: &str,
-    ) -> std::result::Result<Option<Mode>, String> {
-        Ok(match primitive.mode() {
+    fn triangles(&mut self, primitive: &::gltf::Primitive, what: &str) -> Option<Mode> {
+        match primitive.mode() {
             mode @ (Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) => Some(mode),
             other => {
                 self.warnings
                     .push(format!("{what}: {other:?} are not surfaces, left out"));
                 None
             }
-        })
+        }
     }
 
     /// The Lustre material of a primitive's glTF material, made on first use.
