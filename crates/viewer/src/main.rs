@@ -3,6 +3,7 @@
 //! merged and read in bounded memory (`lustre trace`, `lustre merge`, see
 //! [`trace`]).
 
+mod gpu_frame;
 mod render;
 mod render_density;
 mod render_frames;

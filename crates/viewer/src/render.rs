@@ -42,29 +42,25 @@ use anyhow::{Context, bail};
 use clap::ValueEnum;
 use lustre_beams::{BeamInput, BeamSet, BuildOptions, GlossyVolume, SplitPoint};
 use lustre_geometry::camera_path::CameraPath;
-use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::obj::Studio;
 use lustre_geometry::{Bvh, Camera, Scene};
 use lustre_image::{Image, Precision};
 use lustre_mpr::beam_paths::scatterer_surfaces;
-use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
-use lustre_mpr::material::GlossyModel;
+use lustre_mpr::frame::SplatInputs;
 use lustre_mpr::passes::beams::Traversal;
-use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions, DiffuseTextures};
+use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::passes::direct::DirectLights;
-use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel, imaged_surfaces};
-use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
-use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
-use lustre_mpr::passes::splat_lowres::{AUTO_QUANTILE, SplatResolution, radius_quantile};
-use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::passes::glossy_image::{Fog, GlossySettings, ShearModel};
+use lustre_mpr::passes::splat::SplatBuffers;
+use lustre_mpr::passes::splat_lowres::{AUTO_QUANTILE, radius_quantile};
 use lustre_mpr::projective_texture::{
     DEFAULT_TEXTURE_SIZE, MAX_TEXTURE_SIZE, PaneLight, texture_bytes,
 };
 use lustre_mpr::virtual_light::{
-    MAX_SHADOW_DEPTH, PassedFaces, SpecularShadows, VirtualLightSettings, equation_7,
+    MAX_SHADOW_DEPTH, PassedFaces, SpecularShadows, equation_7,
 };
 use lustre_mpr::{
-    AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
+    AdapterPreference, FrameInputs, GpuContext,
 };
 use lustre_photon::{
     BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, SplatEstimator, Support,
@@ -76,6 +72,7 @@ use crate::render_density::{
     DEFAULT_PHOTONMAP_K, DensityLengths, DensitySettings, DetpAcceleration, Estimator,
     GlossyEstimate, PreTestArg, check_lengths, vertex_lit_scene, vertex_radiance,
 };
+use crate::gpu_frame::{GpuFrame, Lighting, resolve_resolution};
 use crate::render_frames::{frame_path, median};
 use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
 use crate::scene_arg;
@@ -106,17 +103,17 @@ pub enum Technique {
 
 impl Technique {
     /// Whether the technique draws direct light from point lights (section 2.2.1) and splats only the indirect photons.
-    fn direct_light(self) -> bool {
+    pub fn direct_light(self) -> bool {
         matches!(self, Self::SplatDirect | Self::Mpr | Self::Beams)
     }
 
     /// Whether the technique draws the multi-pass pipeline's frame (Diefenbach & Badler 1997): specular images, shadow volumes, virtual lights.
-    fn multipass(self) -> bool {
+    pub fn multipass(self) -> bool {
         matches!(self, Self::Mpr | Self::Beams)
     }
 
     /// Whether the technique lights mesh vertices by a density estimator (García et al.).
-    fn per_vertex(self) -> bool {
+    pub fn per_vertex(self) -> bool {
         matches!(self, Self::Detp | Self::Impact | Self::Photonmap)
     }
 
@@ -209,7 +206,7 @@ pub enum SpecShadowsArg {
 }
 
 impl SpecShadowsArg {
-    fn setting(self) -> SpecularShadows {
+    pub fn setting(self) -> SpecularShadows {
         match self {
             Self::All => SpecularShadows::All,
             Self::OneBounce => SpecularShadows::OneBounce,
@@ -862,48 +859,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     check_lengths(args.radius, args.glossy_radius, args.mesh_edge)?;
     let mut timings = serde_json::Map::new();
     let start = Instant::now();
-    let loaded = scene_arg::load(&args.scene)?;
-    for w in &loaded.warnings {
-        eprintln!("warning: {w}");
-    }
-    // A model without a light got a default studio (lustre_geometry::obj::Studio).
-    let studio = loaded.studio.map(|s| {
-        json!({
-            "ground_height": s.ground_height,
-            "ground_half_side": s.ground_half_side,
-            "light_centre": s.light_centre.to_array(),
-            "light_side": s.light_side,
-            "radiance": s.radiance,
-            "model_size": s.model_size,
-        })
-    });
-    let mut scene = loaded.scene;
-    // The per-vertex techniques' lengths, relative to the scene as loaded.
-    let lengths = args
-        .technique
-        .per_vertex()
-        .then(|| args.density_lengths(&scene, loaded.studio.as_ref()))
-        .transpose()?;
-    let density = lengths.and_then(|l| args.technique.estimator(l.radius, args.k));
-    // Section 3: one point light of equal power for both phases; with more
-    // light samples the photons leave the area light itself and only the
-    // direct light uses its jittered point lights.
-    if args.point_lights() {
-        scene = with_point_lights(&scene)?;
-    }
-    if let Some(lengths) = &lengths {
-        scene = vertex_lit_scene(&scene, lengths.mesh_edge).with_context(|| {
-            format!(
-                "cannot mesh `{}` to {} edges for per-vertex lighting",
-                scene.name, lengths.mesh_edge
-            )
-        })?;
-    }
+    let Prepared {
+        scene,
+        studio,
+        lengths,
+        density,
+    } = prepare_scene(args)?;
     let (width, height) = args.size;
-    scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));
-    if scene.lights().is_empty() {
-        bail!("scene `{}` has no light", scene.name);
-    }
     timings.insert("load".into(), json!(ms(start)));
 
     if let Some(frames) = args.frames {
@@ -912,122 +874,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         };
         return crate::render_frames::run(args, &lengths, scene, estimator, frames);
     }
-    // Beams start at point lights: each area light's cosine point light of
-    // equal power at its centre (Stürzlinger & Bastos 1997, section 3).
-    let (beams, beam_scatterers) = if args.technique == Technique::Beams {
-        let start = Instant::now();
-        let point_scene = if scene.lights().iter().any(|l| !l.is_delta()) {
-            scene.with_area_lights_as_points()?
-        } else {
-            scene.clone()
-        };
-        let options = BuildOptions {
-            // The direct pass's shadow maps or volumes already hold the
-            // scatterers' shadows (section 3.1's first-order shadows).
-            shadow_beams: false,
-            split_point: args.split_point.into(),
-            glossy_volume: args.glossy_volume.into(),
-            ..BuildOptions::default()
-        };
-        let mut input = BeamInput::from_scene(&point_scene)
-            .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
-        if let Some(alpha) = args.beam_roughness {
-            for s in &mut input.scatterers {
-                s.material = s.material.with_roughness(alpha);
-            }
-        }
-        let set = BeamSet::build(&input.lights, &input.scatterers, scene.bounds(), &options)
-            .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
-        timings.insert("beams".into(), json!(ms(start)));
-        if input.scatterers.is_empty() {
-            eprintln!(
-                "warning: scene `{}` has no mirror, conductor or glass triangle: no beams",
-                scene.name
-            );
-        }
-        eprintln!(
-            "beams: {} scattered from {} scatterer triangles and {} point lights in {:.0} ms",
-            set.stats().scattered,
-            input.scatterers.len(),
-            input.lights.len(),
-            ms(start)
-        );
-        (Some(set), input.scatterers.len())
-    } else {
-        (None, 0)
-    };
-    let bvh = Bvh::build(&scene);
-    let kernel = match args.kernel {
-        KernelArg::Silverman => Kernel::Silverman,
-        KernelArg::Gaussian => Kernel::Gaussian,
-    };
-    let (splatting, vertex) = match density {
-        None => (
-            Some(splat_setup(
-                args,
-                &scene,
-                &bvh,
-                kernel,
-                args.technique.multipass().then_some(shadow_depth),
-                beams.is_some(),
-                &mut timings,
-            )?),
-            None,
-        ),
-        Some(estimator) => {
-            let lengths = lengths.context("a per-vertex technique has its lengths")?;
-            let v = vertex_radiance(estimator, &scene, &args.density_settings(&lengths))?;
-            eprintln!(
-                "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
-                estimator.name(),
-                v.primary_rays,
-                v.segments,
-                v.ray_set_ms,
-                scene
-                    .meshes()
-                    .iter()
-                    .map(|m| m.positions.len())
-                    .sum::<usize>(),
-                v.estimate_ms
-            );
-            timings.insert("ray_set".into(), json!(v.ray_set_ms));
-            timings.insert("estimate".into(), json!(v.estimate_ms));
-            (None, Some(v))
-        }
-    };
-
-    // Diffuse surfaces precomputed into textures (section 2.2.1).
-    let start = Instant::now();
+    let lit = light(args, &scene, shadow_depth, density, lengths, &mut timings)?;
+    let Lit {
+        beams,
+        beam_scatterers,
+        kernel,
+        splatting,
+        vertex,
+        atlas,
+    } = &lit;
     let diffuse = args.diffuse;
-    let texture_options = DiffuseTextureOptions {
-        lambertian_lobes: diffuse == DiffuseArg::Texture,
-        ..DiffuseTextureOptions::default()
-    };
-    let atlas = match (diffuse, &splatting) {
-        (DiffuseArg::Texture | DiffuseArg::DiffuseSurfaces, Some(splatting)) => Some(
-            match &splatting.photons {
-                Photons::Memory {
-                    estimator,
-                    lambertian,
-                } => DiffuseAtlas::build(
-                    &scene,
-                    lambertian.as_ref().unwrap_or(estimator),
-                    texture_options,
-                )
-                .map_err(anyhow::Error::from),
-                Photons::File(streamed) => streamed.atlas(
-                    &scene,
-                    splatting.lambertian_options.unwrap_or(splatting.options),
-                    texture_options,
-                ),
-            }
-            .context("cannot precompute the diffuse textures")?,
-        ),
-        _ => None,
-    };
-    if atlas.is_some() {
-        timings.insert("diffuse_textures".into(), json!(ms(start)));
-    }
 
     // GPU frame.
     let start = Instant::now();
@@ -1038,129 +894,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let ctx = GpuContext::new(preference)?;
     eprintln!("rendering {width}x{height} on {}", ctx.adapter());
-    let glossy = match args.glossy {
-        GlossyArg::Exact => GlossyModel::Exact,
-        GlossyArg::FittedPhong => GlossyModel::FittedPhong,
-    };
-    let targets = RenderTargets::new(&ctx, width, height)?;
-    let scene_buffers = SceneBuffers::upload(&ctx, &scene)?;
-    let exclude = atlas
-        .as_ref()
-        .map(DiffuseAtlas::textured)
-        .unwrap_or_default();
-    let glossy_images = GlossySettings {
-        fog_radiance: mean_radiance(&scene),
-        ..glossy_images
-    };
-    let imaged = imaged_surfaces(&scene, &glossy_images);
-    // Streamed photons are splatted batch by batch after the frame.
-    let splats = match splatting.as_ref().map(|s| &s.photons) {
-        Some(Photons::Memory { estimator, .. }) => Some(
-            SplatBuffers::new_excluding_imaged(&ctx, &scene, estimator, glossy, &exclude, &imaged)
-                .with_context(|| format!("scene `{}`", scene.name))?,
-        ),
-        _ => None,
-    };
-    let streamed = match splatting.as_ref().map(|s| &s.photons) {
-        Some(Photons::File(streamed)) => Some(streamed),
-        _ => None,
-    };
-    let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
-    let mut graph =
-        FrameGraph::new(&ctx, output_format)?.with_emission(&ctx, targets.hdr_format(), &scene)?;
-    if splatting.is_some() {
-        graph = graph.with_splats(&ctx, targets.hdr_format(), kernel)?;
-    }
-    if let Some(v) = &vertex {
-        graph = graph.with_gouraud(&ctx, targets.hdr_format(), &scene_buffers)?;
-        graph.set_gouraud_radiance(&ctx, &v.corners)?;
-    }
-    let diffuse_textures = match &atlas {
-        Some(atlas) => {
-            graph = graph.with_diffuse_textures(&ctx, targets.hdr_format())?;
-            let pass = graph.diffuse.as_ref().context("diffuse texture pass")?;
-            Some(DiffuseTextures::new(&ctx, pass, atlas)?)
-        }
-        None => None,
-    };
-    let shadow_volumes = args.technique.multipass() && args.shadows == ShadowArg::Volumes;
-    let direct = if args.technique.direct_light() {
-        graph = graph.with_direct(&ctx, targets.hdr_format())?;
-        let pass = graph.direct.as_ref().context("direct pass")?;
-        let lights = DirectLights::jittered(&ctx, pass, &scene, glossy, args.light_samples)
-            .with_context(|| format!("scene `{}`", scene.name))?;
-        if shadow_volumes {
-            graph = graph.with_shadow_volumes(
-                &ctx,
-                targets.hdr_format(),
-                &scene,
-                &pivot_point_lights(scene.lights(), args.light_samples),
-            )?;
-            if shadow_depth > 0 {
-                graph = graph.with_virtual_lights(
-                    &ctx,
-                    &scene,
-                    VirtualLightSettings {
-                        depth: shadow_depth,
-                        shadows: args.spec_shadows.setting(),
-                        panes: args.pane_light(),
-                    },
-                )?;
-            }
-        } else {
-            graph.update_shadows(&ctx, &scene_buffers, &lights)?;
-        }
-        Some(lights)
-    } else {
-        None
-    };
-    let beam_set = match &beams {
-        Some(set) => {
-            graph = graph.with_beams(
-                &ctx,
-                targets.hdr_format(),
-                &scene,
-                glossy,
-                set,
-                args.beam_traversal.into(),
-            )?;
-            Some(set)
-        }
-        None => None,
-    };
-    if args.technique.multipass() {
-        graph = graph.with_glossy_images(
-            &ctx,
-            targets.hdr_format(),
-            &scene,
-            SpecularSettings {
-                max_depth: args.spec_depth,
-                limit_radiance: mean_radiance(&scene),
-                clip: None,
-            },
-            &glossy_images,
-        )?;
-    }
-    if args.aa > 1 || streamed.is_some() {
-        graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
-    }
-    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("lustre-render-output"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: output_format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let output_view = output.create_view(&wgpu::TextureViewDescriptor::default());
-    timings.insert("gpu_setup".into(), json!(ms(start)));
-
     let cameras: Vec<Camera> = match &camera_path {
         Some((path, frames)) => path
             .frames(*frames)
@@ -1170,88 +903,28 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => vec![*scene.camera()],
     };
     let camera = cameras[0];
-    let restriction = match args.restriction {
-        RestrictionArg::SurfaceId => Restriction::SurfaceId,
-        RestrictionArg::Stencil => Restriction::Stencil,
+    let streamed = match splatting.as_ref().map(|s| &s.photons) {
+        Some(Photons::File(streamed)) => Some(streamed),
+        _ => None,
     };
-    let filtering = match args.filter {
-        FilterArg::Centre => KernelFiltering::PixelCentre,
-        FilterArg::Mip => KernelFiltering::MipMapped,
-    };
-    // `auto` from the uploaded splats (a streamed file's: its first batch's).
-    let resolve_resolution = |supports: &[[f32; 4]]| match args.splat_resolution {
-        SplatResolutionArg::Auto if restriction == Restriction::Stencil => SplatResolution::Full,
-        SplatResolutionArg::Auto => SplatResolution::auto(supports, &camera, height),
-        SplatResolutionArg::Full => SplatResolution::Full,
-        SplatResolutionArg::Half => SplatResolution::Half,
-        SplatResolutionArg::Quarter => SplatResolution::Quarter,
-        SplatResolutionArg::Eighth => SplatResolution::Eighth,
-    };
-    let mut splat_resolution = splats.as_ref().map(|b| resolve_resolution(&b.supports));
-    // Paired light jitter: a different set of light positions per accumulation sample.
-    let paired = args.aa > 1
-        && args.light_samples > 1
-        && args.paired_lights
-        && scene.lights().iter().any(|l| !l.is_delta());
-    let tonemap = Tonemap::default();
-    let frame_at = |camera| FrameInputs {
-        scene: &scene_buffers,
-        camera,
-        tonemap: &tonemap,
-        targets: &targets,
-        output: &output_view,
-        splats: splats.as_ref().map(|buffers| SplatInputs {
-            buffers,
-            restriction,
-            filtering,
-            resolution: splat_resolution.unwrap_or_default(),
-        }),
-        direct: direct.as_ref(),
-        diffuse: diffuse_textures.as_ref(),
-    };
-    let frame = frame_at(&camera);
+    let gpu = GpuFrame::new(
+        args,
+        lit.lighting(&scene, shadow_depth, glossy_images),
+        ctx,
+        (width, height),
+        &camera,
+    )?;
+    timings.insert("gpu_setup".into(), json!(ms(start)));
     // A walkthrough: every frame of the camera path from the same lighting, each read back and written.
     let mut path_frame_ms = Vec::new();
     let mut path_write_ms = 0.0;
     for (i, camera) in cameras.iter().enumerate() {
         let start = Instant::now();
-        graph.render_accumulated(
-            &ctx,
-            &frame_at(camera),
-            args.aa,
-            if args.aa_splats {
-                AccumulatedSplats::EverySample
-            } else {
-                AccumulatedSplats::Once
-            },
-            &mut |s| {
-                let (Some(lights), Some(pass)) = (&direct, &graph.direct) else {
-                    return Ok(());
-                };
-                if !paired {
-                    return Ok(());
-                }
-                let rotation = paired_rotation(s, args.aa, args.light_samples);
-                lights.set_lights(
-                    pass,
-                    &ctx.queue,
-                    &jittered_point_lights(scene.lights(), args.light_samples, rotation),
-                )?;
-                if shadow_volumes {
-                    // The volumes follow the new positions by the pivot approximation.
-                    return Ok(());
-                }
-                graph.update_shadows(&ctx, &scene_buffers, lights)
-            },
-        )?;
-        ctx.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .context("waiting for the frame")?;
+        gpu.draw(camera, args.aa)?;
         path_frame_ms.push(ms(start));
         if camera_path.is_some() {
             let start = Instant::now();
-            let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
-            let image = Image::from_rgba(width, height, &hdr)?;
+            let image = gpu.read_hdr()?;
             write_image(&frame_path(&args.out, i), args.exposure, &image)?;
             path_write_ms += ms(start);
             eprintln!(
@@ -1265,26 +938,34 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     timings.insert("frame".into(), json!(path_frame_ms.iter().sum::<f64>()));
     // A streamed photon file: each batch's splats uploaded, added, dropped.
     let mut streamed_splats = (0u64, 0u64);
+    let mut splat_resolution = gpu.splat_resolution;
     if let (Some(streamed), Some(splatting)) = (streamed, &splatting) {
         let start = Instant::now();
         let bar = PhotonBar::new("splatting photons", splatting.hit_records)?;
         let template = streamed.template(&scene, splatting.options)?;
+        let frame = gpu.inputs(&camera);
         streamed.for_each_batch(
             &mut |batch| {
                 let estimator = template.with_photons(batch)?;
                 let buffers = SplatBuffers::new_excluding_imaged(
-                    &ctx, &scene, &estimator, glossy, &exclude, &imaged,
+                    &gpu.ctx,
+                    &scene,
+                    &estimator,
+                    gpu.glossy,
+                    &gpu.exclude,
+                    &gpu.imaged,
                 )
                 .with_context(|| format!("scene `{}`", scene.name))?;
-                let resolution =
-                    *splat_resolution.get_or_insert_with(|| resolve_resolution(&buffers.supports));
-                graph.add_splats(
-                    &ctx,
+                let resolution = *splat_resolution.get_or_insert_with(|| {
+                    resolve_resolution(args, gpu.restriction, &buffers.supports, &camera, height)
+                });
+                gpu.graph.add_splats(
+                    &gpu.ctx,
                     &FrameInputs {
                         splats: Some(SplatInputs {
                             buffers: &buffers,
-                            restriction,
-                            filtering,
+                            restriction: gpu.restriction,
+                            filtering: gpu.filtering,
                             resolution,
                         }),
                         direct: None,
@@ -1294,7 +975,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     streamed_splats.1 == 0,
                 )?;
                 // One batch on the GPU at a time.
-                ctx.device
+                gpu.ctx
+                    .device
                     .poll(wgpu::PollType::wait_indefinitely())
                     .context("waiting for a batch of splats")?;
                 streamed_splats.0 += u64::from(buffers.count);
@@ -1310,15 +992,19 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         timings.insert("readback_and_write".into(), json!(path_write_ms));
     } else {
         let start = Instant::now();
-        let hdr = lustre_mpr::readback::read_rgba_f32(&ctx, &targets.hdr.texture)?;
-        let image = Image::from_rgba(width, height, &hdr)?;
+        let image = gpu.read_hdr()?;
         timings.insert("readback".into(), json!(ms(start)));
 
         let start = Instant::now();
         write_outputs(args, &image)?;
         timings.insert("write".into(), json!(ms(start)));
     }
-    let scene_passes = graph.view_tree(&ctx, &camera)?.scene_passes();
+    let (graph, ctx, targets) = (&gpu.graph, &gpu.ctx, &gpu.targets);
+    let (splats, direct, imaged, glossy_images) =
+        (&gpu.splats, &gpu.direct, &gpu.imaged, &gpu.glossy_images);
+    let (restriction, filtering, glossy) = (gpu.restriction, gpu.filtering, gpu.glossy);
+    let (shadow_volumes, paired, beam_set) = (gpu.shadow_volumes, gpu.paired, beams.as_ref());
+    let scene_passes = graph.view_tree(ctx, &camera)?.scene_passes();
     // Multi-pass pipeline rendering's pass counts (tables 1-3, equations 7 and 8).
     let mpr_passes = json!({
         "shadow_volume_bytes": graph.shadow_volumes.as_ref().map(|v| v.set().byte_size()),
@@ -1462,11 +1148,251 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A scene loaded and prepared for a technique.
+pub struct Prepared {
+    /// The scene: point lights and per-vertex meshing applied, the camera at the image's aspect.
+    pub scene: Scene,
+    /// The default studio of a model without lights, for the sidecar.
+    pub studio: Option<serde_json::Value>,
+    /// The per-vertex techniques' lengths.
+    pub lengths: Option<DensityLengths>,
+    /// The per-vertex estimator.
+    pub density: Option<Estimator>,
+}
+
+/// Loads `args.scene` (printing its warnings) and prepares it for `args.technique`.
+pub fn prepare_scene(args: &RenderArgs) -> anyhow::Result<Prepared> {
+    let loaded = scene_arg::load(&args.scene)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
+    // A model without a light got a default studio (lustre_geometry::obj::Studio).
+    let studio = loaded.studio.map(|s| {
+        json!({
+            "ground_height": s.ground_height,
+            "ground_half_side": s.ground_half_side,
+            "light_centre": s.light_centre.to_array(),
+            "light_side": s.light_side,
+            "radiance": s.radiance,
+            "model_size": s.model_size,
+        })
+    });
+    let mut scene = loaded.scene;
+    // The per-vertex techniques' lengths, relative to the scene as loaded.
+    let lengths = args
+        .technique
+        .per_vertex()
+        .then(|| args.density_lengths(&scene, loaded.studio.as_ref()))
+        .transpose()?;
+    let density = lengths.and_then(|l| args.technique.estimator(l.radius, args.k));
+    // Section 3: one point light of equal power for both phases; with more
+    // light samples the photons leave the area light itself and only the
+    // direct light uses its jittered point lights.
+    if args.point_lights() {
+        scene = with_point_lights(&scene)?;
+    }
+    if let Some(lengths) = &lengths {
+        scene = vertex_lit_scene(&scene, lengths.mesh_edge).with_context(|| {
+            format!(
+                "cannot mesh `{}` to {} edges for per-vertex lighting",
+                scene.name, lengths.mesh_edge
+            )
+        })?;
+    }
+    let (width, height) = args.size;
+    scene.set_camera(scene.camera().with_aspect(width as f32 / height as f32));
+    if scene.lights().is_empty() {
+        bail!("scene `{}` has no light", scene.name);
+    }
+    Ok(Prepared {
+        scene,
+        studio,
+        lengths,
+        density,
+    })
+}
+
+/// What the lighting phase computed for the GPU frame.
+pub struct Lit {
+    /// Duvenhage et al.'s beams (`--technique beams`).
+    pub beams: Option<BeamSet>,
+    /// Mirror, conductor and glass triangles the beams scatter from.
+    pub beam_scatterers: usize,
+    /// The splats' reconstruction kernel.
+    pub kernel: Kernel,
+    /// Photons and splat settings of the splatting techniques.
+    pub splatting: Option<Splatting>,
+    /// Per-vertex radiance of the per-vertex techniques.
+    pub vertex: Option<crate::render_density::VertexRadiance>,
+    /// The diffuse textures' atlas.
+    pub atlas: Option<DiffuseAtlas>,
+}
+
+impl Lit {
+    /// The lighting as the GPU frame takes it.
+    pub fn lighting<'a>(
+        &'a self,
+        scene: &'a Scene,
+        shadow_depth: u32,
+        glossy_images: GlossySettings,
+    ) -> Lighting<'a> {
+        Lighting {
+            scene,
+            splats: match self.splatting.as_ref().map(|s| &s.photons) {
+                Some(Photons::Memory { estimator, .. }) => Some(estimator),
+                _ => None,
+            },
+            splatting: self.splatting.is_some(),
+            corners: self.vertex.as_ref().map(|v| v.corners.as_slice()),
+            atlas: self.atlas.as_ref(),
+            beams: self.beams.as_ref(),
+            shadow_depth,
+            glossy_images,
+            kernel: self.kernel,
+        }
+    }
+}
+
+/// The lighting phase of `scene` (loaded and prepared): beams, photons and splats or per-vertex radiance, and the diffuse textures, each phase's time added to `timings`.
+pub fn light(
+    args: &RenderArgs,
+    scene: &Scene,
+    shadow_depth: u32,
+    density: Option<Estimator>,
+    lengths: Option<DensityLengths>,
+    timings: &mut serde_json::Map<String, serde_json::Value>,
+) -> anyhow::Result<Lit> {
+    // Beams start at point lights: each area light's cosine point light of
+    // equal power at its centre (Stürzlinger & Bastos 1997, section 3).
+    let (beams, beam_scatterers) = if args.technique == Technique::Beams {
+        let start = Instant::now();
+        let point_scene = if scene.lights().iter().any(|l| !l.is_delta()) {
+            scene.with_area_lights_as_points()?
+        } else {
+            scene.clone()
+        };
+        let options = BuildOptions {
+            // The direct pass's shadow maps or volumes already hold the
+            // scatterers' shadows (section 3.1's first-order shadows).
+            shadow_beams: false,
+            split_point: args.split_point.into(),
+            glossy_volume: args.glossy_volume.into(),
+            ..BuildOptions::default()
+        };
+        let mut input = BeamInput::from_scene(&point_scene)
+            .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
+        if let Some(alpha) = args.beam_roughness {
+            for s in &mut input.scatterers {
+                s.material = s.material.with_roughness(alpha);
+            }
+        }
+        let set = BeamSet::build(&input.lights, &input.scatterers, scene.bounds(), &options)
+            .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
+        timings.insert("beams".into(), json!(ms(start)));
+        if input.scatterers.is_empty() {
+            eprintln!(
+                "warning: scene `{}` has no mirror, conductor or glass triangle: no beams",
+                scene.name
+            );
+        }
+        eprintln!(
+            "beams: {} scattered from {} scatterer triangles and {} point lights in {:.0} ms",
+            set.stats().scattered,
+            input.scatterers.len(),
+            input.lights.len(),
+            ms(start)
+        );
+        (Some(set), input.scatterers.len())
+    } else {
+        (None, 0)
+    };
+    let bvh = Bvh::build(scene);
+    let kernel = match args.kernel {
+        KernelArg::Silverman => Kernel::Silverman,
+        KernelArg::Gaussian => Kernel::Gaussian,
+    };
+    let (splatting, vertex) = match density {
+        None => (
+            Some(splat_setup(
+                args,
+                scene,
+                &bvh,
+                kernel,
+                args.technique.multipass().then_some(shadow_depth),
+                beams.is_some(),
+                timings,
+            )?),
+            None,
+        ),
+        Some(estimator) => {
+            let lengths = lengths.context("a per-vertex technique has its lengths")?;
+            let v = vertex_radiance(estimator, scene, &args.density_settings(&lengths))?;
+            eprintln!(
+                "{}: ray set of {} primary rays, {} segments in {:.0} ms; estimate at {} vertices in {:.0} ms",
+                estimator.name(),
+                v.primary_rays,
+                v.segments,
+                v.ray_set_ms,
+                scene
+                    .meshes()
+                    .iter()
+                    .map(|m| m.positions.len())
+                    .sum::<usize>(),
+                v.estimate_ms
+            );
+            timings.insert("ray_set".into(), json!(v.ray_set_ms));
+            timings.insert("estimate".into(), json!(v.estimate_ms));
+            (None, Some(v))
+        }
+    };
+
+    // Diffuse surfaces precomputed into textures (section 2.2.1).
+    let start = Instant::now();
+    let diffuse = args.diffuse;
+    let texture_options = DiffuseTextureOptions {
+        lambertian_lobes: diffuse == DiffuseArg::Texture,
+        ..DiffuseTextureOptions::default()
+    };
+    let atlas = match (diffuse, &splatting) {
+        (DiffuseArg::Texture | DiffuseArg::DiffuseSurfaces, Some(splatting)) => Some(
+            match &splatting.photons {
+                Photons::Memory {
+                    estimator,
+                    lambertian,
+                } => DiffuseAtlas::build(
+                    scene,
+                    lambertian.as_ref().unwrap_or(estimator),
+                    texture_options,
+                )
+                .map_err(anyhow::Error::from),
+                Photons::File(streamed) => streamed.atlas(
+                    scene,
+                    splatting.lambertian_options.unwrap_or(splatting.options),
+                    texture_options,
+                ),
+            }
+            .context("cannot precompute the diffuse textures")?,
+        ),
+        _ => None,
+    };
+    if atlas.is_some() {
+        timings.insert("diffuse_textures".into(), json!(ms(start)));
+    }
+    Ok(Lit {
+        beams,
+        beam_scatterers,
+        kernel,
+        splatting,
+        vertex,
+        atlas,
+    })
+}
+
 /// Frames a second of a camera path that `--camera-path` renders without `--path-frames`.
 const PATH_FRAMES_PER_SECOND: f32 = 25.0;
 
 /// What splatting produced before the GPU frame (Stürzlinger & Bastos 1997, sections 2.1 and 2.2).
-struct Splatting {
+pub struct Splatting {
     /// Hit records left out because the beams draw their light.
     beam_hits: Option<u64>,
     /// Photons emitted.
@@ -1484,7 +1410,7 @@ struct Splatting {
 }
 
 /// The photons of a render: traced into memory, or streamed from a file.
-enum Photons {
+pub enum Photons {
     /// Traced now: the splats' estimator, and the Lambertian lobes' one where its settings differ.
     Memory {
         estimator: SplatEstimator,

@@ -1,0 +1,393 @@
+//! The GPU state of one lit scene and the frame drawn from it: the one code path of `lustre render` and `lustre view` (DESIGN.md "Data flow", steps 3 and 4).
+//!
+//! [`GpuFrame::new`] uploads what the lighting phase computed (splats, diffuse
+//! textures, direct lights, beams, per-vertex radiance) and builds the frame
+//! graph once; [`GpuFrame::draw`] renders one camera into the HDR target and
+//! the sRGB output, so a walkthrough, a headless render and the window draw
+//! every frame through the same calls.
+
+use anyhow::Context;
+use lustre_beams::BeamSet;
+use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
+use lustre_geometry::{Camera, Light, Scene};
+use lustre_image::Image;
+use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
+use lustre_mpr::material::GlossyModel;
+use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextures};
+use lustre_mpr::passes::direct::DirectLights;
+use lustre_mpr::passes::glossy_image::{GlossySettings, imaged_surfaces};
+use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
+use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
+use lustre_mpr::passes::splat_lowres::SplatResolution;
+use lustre_mpr::passes::tonemap::Tonemap;
+use lustre_mpr::virtual_light::VirtualLightSettings;
+use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers};
+use lustre_photon::{Kernel, SplatEstimator};
+
+use crate::render::{
+    FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg, Technique,
+};
+
+/// The format of the tone-mapped output every frame is drawn into.
+pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// What the lighting phase hands to the GPU.
+pub struct Lighting<'a> {
+    /// The scene as lit (point lights, per-vertex meshing applied).
+    pub scene: &'a Scene,
+    /// The splats' estimator of photons traced into memory.
+    pub splats: Option<&'a SplatEstimator>,
+    /// Splatting of any kind (in memory or streamed): the splat pass is built.
+    pub splatting: bool,
+    /// Per-corner radiance of a per-vertex technique, drawn with Gouraud interpolation.
+    pub corners: Option<&'a [[f32; 3]]>,
+    /// The diffuse textures' atlas (Stürzlinger & Bastos section 2.2.1).
+    pub atlas: Option<&'a DiffuseAtlas>,
+    /// Duvenhage et al.'s beams.
+    pub beams: Option<&'a BeamSet>,
+    /// Virtual light generations (Diefenbach & Badler section 4.2).
+    pub shadow_depth: u32,
+    /// Glossy images of the planar glossy faces (Diefenbach & Badler section 3).
+    pub glossy_images: GlossySettings,
+    /// The splats' reconstruction kernel.
+    pub kernel: Kernel,
+}
+
+/// The uploaded scene, lighting and frame graph of one render, and its targets.
+pub struct GpuFrame {
+    /// The device.
+    pub ctx: GpuContext,
+    /// The frame graph.
+    pub graph: FrameGraph,
+    /// HDR, depth and id targets at the frame's size.
+    pub targets: RenderTargets,
+    /// The scene's vertex and index buffers.
+    pub scene_buffers: SceneBuffers,
+    /// The splats of photons traced into memory.
+    pub splats: Option<SplatBuffers>,
+    /// The direct pass's point lights.
+    pub direct: Option<DirectLights>,
+    /// The diffuse textures.
+    pub diffuse_textures: Option<DiffuseTextures>,
+    /// The tone-mapped sRGB output.
+    pub output: wgpu::Texture,
+    output_view: wgpu::TextureView,
+    tonemap: Tonemap,
+    /// How splats keep to their surface.
+    pub restriction: Restriction,
+    /// How the kernel texture is read.
+    pub filtering: KernelFiltering,
+    /// The resolution the view's splats are drawn at (`None` without splats in memory).
+    pub splat_resolution: Option<SplatResolution>,
+    /// Glossy BRDFs on the GPU.
+    pub glossy: GlossyModel,
+    /// Surfaces drawn by glossy images (their splats dropped).
+    pub imaged: Vec<bool>,
+    /// Surfaces whose Lambertian lobes come from the textures.
+    pub exclude: Vec<bool>,
+    /// The glossy images' settings with the scene's mean radiance as fog.
+    pub glossy_images: GlossySettings,
+    /// Shadows by volumes (else shadow maps).
+    pub shadow_volumes: bool,
+    /// A different set of jittered light positions per accumulation sample.
+    pub paired: bool,
+    lights: Vec<Light>,
+    light_samples: u32,
+    aa_splats: bool,
+}
+
+impl GpuFrame {
+    /// Uploads the lighting and builds the frame graph for `args`' technique at `width` × `height`; `camera` (the first frame's) chooses the splats' `auto` resolution.
+    pub fn new(
+        args: &RenderArgs,
+        lighting: Lighting<'_>,
+        ctx: GpuContext,
+        (width, height): (u32, u32),
+        camera: &Camera,
+    ) -> anyhow::Result<Self> {
+        let scene = lighting.scene;
+        let glossy = match args.glossy {
+            GlossyArg::Exact => GlossyModel::Exact,
+            GlossyArg::FittedPhong => GlossyModel::FittedPhong,
+        };
+        let targets = RenderTargets::new(&ctx, width, height)?;
+        let scene_buffers = SceneBuffers::upload(&ctx, scene)?;
+        let exclude = lighting
+            .atlas
+            .map(DiffuseAtlas::textured)
+            .unwrap_or_default();
+        let glossy_images = GlossySettings {
+            fog_radiance: mean_radiance(scene),
+            ..lighting.glossy_images
+        };
+        let imaged = imaged_surfaces(scene, &glossy_images);
+        // Streamed photons are splatted batch by batch after the frame.
+        let splats = match lighting.splats {
+            Some(estimator) => Some(
+                SplatBuffers::new_excluding_imaged(
+                    &ctx, scene, estimator, glossy, &exclude, &imaged,
+                )
+                .with_context(|| format!("scene `{}`", scene.name))?,
+            ),
+            None => None,
+        };
+        let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)?.with_emission(
+            &ctx,
+            targets.hdr_format(),
+            scene,
+        )?;
+        if lighting.splatting {
+            graph = graph.with_splats(&ctx, targets.hdr_format(), lighting.kernel)?;
+        }
+        if let Some(corners) = lighting.corners {
+            graph = graph.with_gouraud(&ctx, targets.hdr_format(), &scene_buffers)?;
+            graph.set_gouraud_radiance(&ctx, corners)?;
+        }
+        let diffuse_textures = match lighting.atlas {
+            Some(atlas) => {
+                graph = graph.with_diffuse_textures(&ctx, targets.hdr_format())?;
+                let pass = graph.diffuse.as_ref().context("diffuse texture pass")?;
+                Some(DiffuseTextures::new(&ctx, pass, atlas)?)
+            }
+            None => None,
+        };
+        let shadow_volumes = args.technique.multipass() && args.shadows == ShadowArg::Volumes;
+        let direct = if args.technique.direct_light() {
+            graph = graph.with_direct(&ctx, targets.hdr_format())?;
+            let pass = graph.direct.as_ref().context("direct pass")?;
+            let lights = DirectLights::jittered(&ctx, pass, scene, glossy, args.light_samples)
+                .with_context(|| format!("scene `{}`", scene.name))?;
+            if shadow_volumes {
+                graph = graph.with_shadow_volumes(
+                    &ctx,
+                    targets.hdr_format(),
+                    scene,
+                    &pivot_point_lights(scene.lights(), args.light_samples),
+                )?;
+                if lighting.shadow_depth > 0 {
+                    graph = graph.with_virtual_lights(
+                        &ctx,
+                        scene,
+                        VirtualLightSettings {
+                            depth: lighting.shadow_depth,
+                            shadows: args.spec_shadows.setting(),
+                            panes: args.pane_light(),
+                        },
+                    )?;
+                }
+            } else {
+                graph.update_shadows(&ctx, &scene_buffers, &lights)?;
+            }
+            Some(lights)
+        } else {
+            None
+        };
+        if let Some(set) = lighting.beams {
+            graph = graph.with_beams(
+                &ctx,
+                targets.hdr_format(),
+                scene,
+                glossy,
+                set,
+                args.beam_traversal.into(),
+            )?;
+        }
+        if args.technique.multipass() {
+            graph = graph.with_glossy_images(
+                &ctx,
+                targets.hdr_format(),
+                scene,
+                SpecularSettings {
+                    max_depth: args.spec_depth,
+                    limit_radiance: mean_radiance(scene),
+                    clip: None,
+                },
+                &glossy_images,
+            )?;
+        }
+        if args.aa > 1 || (lighting.splatting && lighting.splats.is_none()) {
+            graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
+        }
+        let (output, output_view) = output_texture(&ctx, width, height);
+        let restriction = match args.restriction {
+            RestrictionArg::SurfaceId => Restriction::SurfaceId,
+            RestrictionArg::Stencil => Restriction::Stencil,
+        };
+        let filtering = match args.filter {
+            FilterArg::Centre => KernelFiltering::PixelCentre,
+            FilterArg::Mip => KernelFiltering::MipMapped,
+        };
+        let splat_resolution = splats
+            .as_ref()
+            .map(|b| resolve_resolution(args, restriction, &b.supports, camera, height));
+        // Paired light jitter: a different set of light positions per accumulation sample.
+        let paired = args.aa > 1
+            && args.light_samples > 1
+            && args.paired_lights
+            && scene.lights().iter().any(|l| !l.is_delta());
+        Ok(Self {
+            ctx,
+            graph,
+            targets,
+            scene_buffers,
+            splats,
+            direct,
+            diffuse_textures,
+            output,
+            output_view,
+            tonemap: Tonemap::default(),
+            restriction,
+            filtering,
+            splat_resolution,
+            glossy,
+            imaged,
+            exclude,
+            glossy_images,
+            shadow_volumes,
+            paired,
+            lights: scene.lights().to_vec(),
+            light_samples: args.light_samples,
+            aa_splats: args.aa_splats,
+        })
+    }
+
+    /// The frame's inputs for `camera`, drawn into the sRGB output.
+    pub fn inputs<'a>(&'a self, camera: &'a Camera) -> FrameInputs<'a> {
+        FrameInputs {
+            scene: &self.scene_buffers,
+            camera,
+            tonemap: &self.tonemap,
+            targets: &self.targets,
+            output: &self.output_view,
+            splats: self.splats.as_ref().map(|buffers| SplatInputs {
+                buffers,
+                restriction: self.restriction,
+                filtering: self.filtering,
+                resolution: self.splat_resolution.unwrap_or_default(),
+            }),
+            direct: self.direct.as_ref(),
+            diffuse: self.diffuse_textures.as_ref(),
+        }
+    }
+
+    /// Draws `camera` with `aa` jittered samples into the HDR target and the output, and waits for the GPU (Diefenbach & Badler section 7's accumulation).
+    pub fn draw(&self, camera: &Camera, aa: u32) -> anyhow::Result<()> {
+        let ctx = &self.ctx;
+        self.graph.render_accumulated(
+            ctx,
+            &self.inputs(camera),
+            aa,
+            if self.aa_splats {
+                AccumulatedSplats::EverySample
+            } else {
+                AccumulatedSplats::Once
+            },
+            &mut |s| {
+                let (Some(lights), Some(pass)) = (&self.direct, &self.graph.direct) else {
+                    return Ok(());
+                };
+                if !self.paired || aa <= 1 {
+                    return Ok(());
+                }
+                let rotation = paired_rotation(s, aa, self.light_samples);
+                lights.set_lights(
+                    pass,
+                    &ctx.queue,
+                    &jittered_point_lights(&self.lights, self.light_samples, rotation),
+                )?;
+                if self.shadow_volumes {
+                    // The volumes follow the new positions by the pivot approximation.
+                    return Ok(());
+                }
+                self.graph.update_shadows(ctx, &self.scene_buffers, lights)
+            },
+        )?;
+        ctx.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .context("waiting for the frame")?;
+        Ok(())
+    }
+
+    /// The HDR image of the last frame drawn.
+    pub fn read_hdr(&self) -> anyhow::Result<Image> {
+        let hdr = lustre_mpr::readback::read_rgba_f32(&self.ctx, &self.targets.hdr.texture)?;
+        Ok(Image::from_rgba(
+            self.targets.width,
+            self.targets.height,
+            &hdr,
+        )?)
+    }
+
+    /// The frame's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.targets.width, self.targets.height)
+    }
+
+    /// New targets and output at `width` × `height` (a resized window); the lighting and the graph are kept.
+    pub fn resize(&mut self, width: u32, height: u32) -> anyhow::Result<()> {
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        self.targets = RenderTargets::new(&self.ctx, width, height)?;
+        (self.output, self.output_view) = output_texture(&self.ctx, width, height);
+        Ok(())
+    }
+
+    /// Sets the splats' resolution (`auto` resolved for `camera` at the current height).
+    pub fn set_splat_resolution(&mut self, args: &RenderArgs, camera: &Camera) {
+        let height = self.targets.height;
+        let restriction = self.restriction;
+        self.splat_resolution = self
+            .splats
+            .as_ref()
+            .map(|b| resolve_resolution(args, restriction, &b.supports, camera, height));
+    }
+}
+
+/// `--splat-resolution`, with `auto` chosen from the splats' projected size through `camera`.
+pub fn resolve_resolution(
+    args: &RenderArgs,
+    restriction: Restriction,
+    supports: &[[f32; 4]],
+    camera: &Camera,
+    height: u32,
+) -> SplatResolution {
+    match args.splat_resolution {
+        SplatResolutionArg::Auto if restriction == Restriction::Stencil => SplatResolution::Full,
+        SplatResolutionArg::Auto => SplatResolution::auto(supports, camera, height),
+        SplatResolutionArg::Full => SplatResolution::Full,
+        SplatResolutionArg::Half => SplatResolution::Half,
+        SplatResolutionArg::Quarter => SplatResolution::Quarter,
+        SplatResolutionArg::Eighth => SplatResolution::Eighth,
+    }
+}
+
+/// The sRGB output texture (a render attachment, copied from for read-back, sampled by the window).
+fn output_texture(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::TextureView) {
+    let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("lustre-output"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: OUTPUT_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let view = output.create_view(&wgpu::TextureViewDescriptor::default());
+    (output, view)
+}
+
+/// Whether a technique renders any camera from one lighting solution (the per-vertex ones light towards one eye, García et al. section 2.10).
+pub fn view_independent(technique: Technique) -> bool {
+    !matches!(
+        technique,
+        Technique::Detp | Technique::Impact | Technique::Photonmap
+    )
+}
