@@ -51,8 +51,8 @@ impl fmt::Display for AdapterSummary {
     }
 }
 
-/// A headless device and queue with what the passes need to know about them.
-#[derive(Debug)]
+/// A headless device and queue with what the passes need to know about them (cloned cheaply: the wgpu handles are shared).
+#[derive(Debug, Clone)]
 pub struct GpuContext {
     /// The wgpu device.
     pub device: wgpu::Device,
@@ -89,6 +89,7 @@ fn select_adapter(
     instance: &wgpu::Instance,
     backends: wgpu::Backends,
     preference: AdapterPreference,
+    surface: Option<&wgpu::Surface<'_>>,
 ) -> Result<wgpu::Adapter> {
     let attempts: &[(&str, wgpu::RequestAdapterOptions<'_, '_>)] = match preference {
         AdapterPreference::Hardware => &[
@@ -98,17 +99,21 @@ fn select_adapter(
         AdapterPreference::Software => &[("the fallback adapter", software_options())],
     };
     for (_, options) in attempts {
-        if let Ok(adapter) = pollster::block_on(instance.request_adapter(options)) {
+        let options = wgpu::RequestAdapterOptions {
+            compatible_surface: surface,
+            ..*options
+        };
+        if let Ok(adapter) = pollster::block_on(instance.request_adapter(&options)) {
             return Ok(adapter);
         }
     }
     // `force_fallback_adapter` keeps only CPU-type adapters; enumerate in case
     // a backend reports its software driver only through enumeration.
     let adapters = pollster::block_on(instance.enumerate_adapters(backends));
-    if let Some(adapter) = adapters
-        .into_iter()
-        .find(|a| a.get_info().device_type == wgpu::DeviceType::Cpu)
-    {
+    if let Some(adapter) = adapters.into_iter().find(|a| {
+        a.get_info().device_type == wgpu::DeviceType::Cpu
+            && surface.is_none_or(|s| a.is_surface_supported(s))
+    }) {
         return Ok(adapter);
     }
     let mut tried: Vec<&str> = attempts.iter().map(|(what, _)| *what).collect();
@@ -128,10 +133,38 @@ impl GpuContext {
         desc.backends = backends;
         let (_instance, adapter) = wayland_quiet::run(|| {
             let instance = wgpu::Instance::new(desc);
-            let adapter = select_adapter(&instance, backends, preference);
+            let adapter = select_adapter(&instance, backends, preference, None);
             (instance, adapter)
         });
-        let adapter = adapter?;
+        Self::open(adapter?)
+    }
+
+    /// Opens a device on the adapter `preference` selects among those that can present to `window`, and the window's surface (unconfigured).
+    pub fn with_surface(
+        preference: AdapterPreference,
+        window: impl Into<wgpu::SurfaceTarget<'static>>,
+    ) -> Result<(Self, wgpu::Surface<'static>)> {
+        let backends =
+            wgpu::Backends::from_env().unwrap_or_else(wgpu::Instance::enabled_backend_features);
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        let (_instance, found) = wayland_quiet::run(|| {
+            let instance = wgpu::Instance::new(desc);
+            let found = instance
+                .create_surface(window)
+                .map_err(|e| MprError::Surface(e.to_string()))
+                .and_then(|surface| {
+                    let adapter = select_adapter(&instance, backends, preference, Some(&surface))?;
+                    Ok((adapter, surface))
+                });
+            (instance, found)
+        });
+        let (adapter, surface) = found?;
+        Ok((Self::open(adapter)?, surface))
+    }
+
+    /// Opens the device with the features the passes use where the adapter has them.
+    fn open(adapter: wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
         let summary = AdapterSummary {
             name: info.name.clone(),

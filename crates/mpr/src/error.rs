@@ -13,6 +13,9 @@ pub enum MprError {
         /// What was asked for, in order.
         tried: String,
     },
+    /// The window's surface could not be created.
+    #[error("cannot create a surface for the window: {0}")]
+    Surface(String),
     /// The adapter exists but refused to open a device.
     #[error("adapter `{adapter}` refused a device: {source}")]
     RequestDevice {

@@ -53,6 +53,27 @@ pub struct Lighting<'a> {
     pub kernel: Kernel,
 }
 
+/// Which lighting terms a frame draws (the window's switches; a render draws all).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Components {
+    /// Direct light from the point lights with shadow maps or volumes.
+    pub direct: bool,
+    /// The Lambertian lobes from the diffuse textures (Stürzlinger & Bastos section 2.2.1).
+    pub diffuse: bool,
+    /// The splats of the photon hits (section 2.2).
+    pub splats: bool,
+}
+
+impl Default for Components {
+    fn default() -> Self {
+        Self {
+            direct: true,
+            diffuse: true,
+            splats: true,
+        }
+    }
+}
+
 /// The uploaded scene, lighting and frame graph of one render, and its targets.
 pub struct GpuFrame {
     /// The device.
@@ -69,8 +90,7 @@ pub struct GpuFrame {
     pub direct: Option<DirectLights>,
     /// The diffuse textures.
     pub diffuse_textures: Option<DiffuseTextures>,
-    /// The tone-mapped sRGB output.
-    pub output: wgpu::Texture,
+    output: wgpu::Texture,
     output_view: wgpu::TextureView,
     tonemap: Tonemap,
     /// How splats keep to their surface.
@@ -94,6 +114,8 @@ pub struct GpuFrame {
     lights: Vec<Light>,
     light_samples: u32,
     aa_splats: bool,
+    /// The lighting terms drawn.
+    pub components: Components,
 }
 
 impl GpuFrame {
@@ -248,6 +270,7 @@ impl GpuFrame {
             lights: scene.lights().to_vec(),
             light_samples: args.light_samples,
             aa_splats: args.aa_splats,
+            components: Components::default(),
         })
     }
 
@@ -259,14 +282,21 @@ impl GpuFrame {
             tonemap: &self.tonemap,
             targets: &self.targets,
             output: &self.output_view,
-            splats: self.splats.as_ref().map(|buffers| SplatInputs {
-                buffers,
-                restriction: self.restriction,
-                filtering: self.filtering,
-                resolution: self.splat_resolution.unwrap_or_default(),
-            }),
-            direct: self.direct.as_ref(),
-            diffuse: self.diffuse_textures.as_ref(),
+            splats: self
+                .splats
+                .as_ref()
+                .filter(|_| self.components.splats)
+                .map(|buffers| SplatInputs {
+                    buffers,
+                    restriction: self.restriction,
+                    filtering: self.filtering,
+                    resolution: self.splat_resolution.unwrap_or_default(),
+                }),
+            direct: self.direct.as_ref().filter(|_| self.components.direct),
+            diffuse: self
+                .diffuse_textures
+                .as_ref()
+                .filter(|_| self.components.diffuse),
         }
     }
 
@@ -316,6 +346,16 @@ impl GpuFrame {
             self.targets.height,
             &hdr,
         )?)
+    }
+
+    /// Sets the tone mapping of the sRGB output (the window shows it; the HDR target is unchanged).
+    pub fn set_tonemap(&mut self, tonemap: Tonemap) {
+        self.tonemap = tonemap;
+    }
+
+    /// The sRGB output's texture.
+    pub fn output(&self) -> &wgpu::Texture {
+        &self.output
     }
 
     /// The frame's size in pixels.
@@ -378,7 +418,8 @@ fn output_texture(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, 
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
+        // The window samples the encoded bytes as they are (egui works in gamma space).
+        view_formats: &[wgpu::TextureFormat::Rgba8Unorm],
     });
     let view = output.create_view(&wgpu::TextureViewDescriptor::default());
     (output, view)

@@ -10,6 +10,7 @@ mod render_frames;
 mod render_stream;
 mod scene_arg;
 mod trace;
+mod view;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -66,6 +67,8 @@ enum Command {
     },
     /// Render a scene to an EXR or PNG file (photon splatting, Stürzlinger & Bastos 1997).
     Render(render::RenderArgs),
+    /// Open a scene in an interactive window: the same frame as `render`, lit progressively in the background, with orbit and fly cameras, a panel, camera paths and screenshots.
+    View(view::ViewArgs),
     /// Trace photons into a photon file on disk in bounded memory (`lustre render --photons-file` reads it).
     Trace(trace::TraceArgs),
     /// Merge the photon files of one run's batches (`lustre trace --batch I/N`) into the file of the whole run.
@@ -244,6 +247,7 @@ fn main() -> ExitCode {
         } => export(scene, out, *size, *spp, *approximate, *point_light_radius),
         Command::ExportGltf { scene, out } => export_gltf(scene, out),
         Command::Render(args) => render::run(args),
+        Command::View(args) => view::run(args.clone()),
         Command::Trace(args) => trace::run(args),
         Command::Merge { inputs, out } => trace::merge(inputs, out),
     };

@@ -56,23 +56,19 @@ use lustre_mpr::passes::splat_lowres::{AUTO_QUANTILE, radius_quantile};
 use lustre_mpr::projective_texture::{
     DEFAULT_TEXTURE_SIZE, MAX_TEXTURE_SIZE, PaneLight, texture_bytes,
 };
-use lustre_mpr::virtual_light::{
-    MAX_SHADOW_DEPTH, PassedFaces, SpecularShadows, equation_7,
-};
-use lustre_mpr::{
-    AdapterPreference, FrameInputs, GpuContext,
-};
+use lustre_mpr::virtual_light::{MAX_SHADOW_DEPTH, PassedFaces, SpecularShadows, equation_7};
+use lustre_mpr::{AdapterPreference, FrameInputs, GpuContext};
 use lustre_photon::{
     BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, SplatEstimator, Support,
     TraceOptions, trace_photons,
 };
 use serde_json::json;
 
+use crate::gpu_frame::{GpuFrame, Lighting, resolve_resolution};
 use crate::render_density::{
     DEFAULT_PHOTONMAP_K, DensityLengths, DensitySettings, DetpAcceleration, Estimator,
     GlossyEstimate, PreTestArg, check_lengths, vertex_lit_scene, vertex_radiance,
 };
-use crate::gpu_frame::{GpuFrame, Lighting, resolve_resolution};
 use crate::render_frames::{frame_path, median};
 use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
 use crate::scene_arg;
@@ -338,7 +334,7 @@ pub enum GlossyArg {
 }
 
 /// Options of `lustre render`.
-#[derive(Debug, clap::Args)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct RenderArgs {
     /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
     pub scene: String,
@@ -677,29 +673,7 @@ fn with_point_lights(scene: &Scene) -> anyhow::Result<Scene> {
 
 /// Renders as `args` says and writes the image and its sidecar.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let ext = args
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("exr" | "png")) {
-        bail!(
-            "--out {}: the file must end in .exr or .png",
-            args.out.display()
-        );
-    }
-    // The output's directory must exist before any work (nothing half-written, no render thrown away).
-    let out_dir = match args.out.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    };
-    if !out_dir.is_dir() {
-        bail!(
-            "--out {}: the directory {} does not exist",
-            args.out.display(),
-            out_dir.display()
-        );
-    }
+    check_output(&args.out, "--out")?;
     if !(args.kernel_c > 0.0 && args.kernel_c.is_finite()) {
         bail!("--kernel-c {}: must be positive", args.kernel_c);
     }
@@ -781,77 +755,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
-        // The beams draw the light that mirrors and glass send on.
-        _ if args.technique == Technique::Beams => 0,
-        ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
-        ShadowArg::Maps => 0,
-    });
-    if args.window_texture == 0 || args.window_texture > MAX_TEXTURE_SIZE {
-        bail!(
-            "--window-texture {}: expected 1 to {MAX_TEXTURE_SIZE} texels",
-            args.window_texture
-        );
-    }
-    if let Some(alpha) = args.beam_roughness {
-        if args.technique != Technique::Beams {
-            bail!("--beam-roughness: only --technique beams draws beams");
-        }
-        if !(alpha >= 0.0 && alpha.is_finite()) {
-            bail!("--beam-roughness {alpha}: must be finite and not negative");
-        }
-    }
-    if args.technique == Technique::Beams && shadow_depth > 0 {
-        bail!(
-            "--shadow-depth {shadow_depth}: with --technique beams the beams draw the light that \
-             mirrors and glass send on; virtual lights would add it twice"
-        );
-    }
-    if args.shadow_depth.is_some() && !args.technique.multipass() {
-        bail!("--shadow-depth: virtual lights belong to --technique mpr and beams");
-    }
-    if shadow_depth > 0 && args.shadows == ShadowArg::Maps {
-        bail!("--shadow-depth {shadow_depth}: virtual lights need --shadows volumes");
-    }
-    if shadow_depth > MAX_SHADOW_DEPTH {
-        bail!("--shadow-depth {shadow_depth}: at most {MAX_SHADOW_DEPTH}");
-    }
-    let glossy_images = GlossySettings {
-        samples: match (args.technique, args.glossy_images) {
-            (Technique::Mpr | Technique::Beams, Some(n)) => n,
-            (Technique::Mpr | Technique::Beams, None)
-                if args.diffuse == DiffuseArg::Texture && args.spec_depth > 0 =>
-            {
-                DEFAULT_GLOSSY_IMAGES
-            }
-            _ => 0,
-        },
-        depth: args.glossy_depth,
-        fog: args.glossy_fog.map_or(Fog::Material, Fog::Distance),
-        fog_radiance: glam::Vec3::ZERO,
-        hide_emitters: true,
-        shear: match args.glossy_shear {
-            GlossyShearArg::Isotropic => ShearModel::Isotropic,
-            GlossyShearArg::Microfacet => ShearModel::Microfacet,
-        },
-        frosted_alpha: args.frosted_glass,
-    };
-    if args.glossy_images.is_some_and(|n| n > 0) && !args.technique.multipass() {
-        bail!("--glossy-images: only --technique mpr and beams draw glossy images");
-    }
-    if glossy_images.samples > 0 && args.diffuse != DiffuseArg::Texture {
-        bail!(
-            "--glossy-images needs --diffuse texture: the imaged faces' Lambertian lobes come \
-             from the diffuse textures, their splats are dropped"
-        );
-    }
-    if glossy_images.samples > 0 && args.spec_depth == 0 {
-        bail!(
-            "--glossy-images needs --spec-depth 1 or more: glossy images are specular images \
-             (at depth 0 the faces would show only their reflectance times the mean radiance)"
-        );
-    }
-    glossy_images.validate()?;
+    let (shadow_depth, glossy_images) = render_settings(args)?;
     if args.technique == Technique::Photonmap && args.k == 0 {
         bail!("--k 0: Photon Maps needs at least one nearest impact");
     }
@@ -1148,6 +1052,109 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Checks an output path: `.exr` or `.png`, in a directory that exists (nothing half-written, no render thrown away); `flag` names the option in the message.
+pub fn check_output(out: &Path, flag: &str) -> anyhow::Result<()> {
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("exr" | "png")) {
+        bail!(
+            "{flag} {}: the file must end in .exr or .png",
+            out.display()
+        );
+    }
+    // The output's directory must exist before any work (nothing half-written, no render thrown away).
+    let out_dir = match out.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    if !out_dir.is_dir() {
+        bail!(
+            "{flag} {}: the directory {} does not exist",
+            out.display(),
+            out_dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// The virtual light generations and glossy image settings of `args`, checked against the technique and each other.
+pub fn render_settings(args: &RenderArgs) -> anyhow::Result<(u32, GlossySettings)> {
+    let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
+        // The beams draw the light that mirrors and glass send on.
+        _ if args.technique == Technique::Beams => 0,
+        ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
+        ShadowArg::Maps => 0,
+    });
+    if args.window_texture == 0 || args.window_texture > MAX_TEXTURE_SIZE {
+        bail!(
+            "--window-texture {}: expected 1 to {MAX_TEXTURE_SIZE} texels",
+            args.window_texture
+        );
+    }
+    if let Some(alpha) = args.beam_roughness {
+        if args.technique != Technique::Beams {
+            bail!("--beam-roughness: only --technique beams draws beams");
+        }
+        if !(alpha >= 0.0 && alpha.is_finite()) {
+            bail!("--beam-roughness {alpha}: must be finite and not negative");
+        }
+    }
+    if args.technique == Technique::Beams && shadow_depth > 0 {
+        bail!(
+            "--shadow-depth {shadow_depth}: with --technique beams the beams draw the light that \
+             mirrors and glass send on; virtual lights would add it twice"
+        );
+    }
+    if args.shadow_depth.is_some() && !args.technique.multipass() {
+        bail!("--shadow-depth: virtual lights belong to --technique mpr and beams");
+    }
+    if shadow_depth > 0 && args.shadows == ShadowArg::Maps {
+        bail!("--shadow-depth {shadow_depth}: virtual lights need --shadows volumes");
+    }
+    if shadow_depth > MAX_SHADOW_DEPTH {
+        bail!("--shadow-depth {shadow_depth}: at most {MAX_SHADOW_DEPTH}");
+    }
+    let glossy_images = GlossySettings {
+        samples: match (args.technique, args.glossy_images) {
+            (Technique::Mpr | Technique::Beams, Some(n)) => n,
+            (Technique::Mpr | Technique::Beams, None)
+                if args.diffuse == DiffuseArg::Texture && args.spec_depth > 0 =>
+            {
+                DEFAULT_GLOSSY_IMAGES
+            }
+            _ => 0,
+        },
+        depth: args.glossy_depth,
+        fog: args.glossy_fog.map_or(Fog::Material, Fog::Distance),
+        fog_radiance: glam::Vec3::ZERO,
+        hide_emitters: true,
+        shear: match args.glossy_shear {
+            GlossyShearArg::Isotropic => ShearModel::Isotropic,
+            GlossyShearArg::Microfacet => ShearModel::Microfacet,
+        },
+        frosted_alpha: args.frosted_glass,
+    };
+    if args.glossy_images.is_some_and(|n| n > 0) && !args.technique.multipass() {
+        bail!("--glossy-images: only --technique mpr and beams draw glossy images");
+    }
+    if glossy_images.samples > 0 && args.diffuse != DiffuseArg::Texture {
+        bail!(
+            "--glossy-images needs --diffuse texture: the imaged faces' Lambertian lobes come \
+             from the diffuse textures, their splats are dropped"
+        );
+    }
+    if glossy_images.samples > 0 && args.spec_depth == 0 {
+        bail!(
+            "--glossy-images needs --spec-depth 1 or more: glossy images are specular images \
+             (at depth 0 the faces would show only their reflectance times the mean radiance)"
+        );
+    }
+    glossy_images.validate()?;
+    Ok((shadow_depth, glossy_images))
+}
+
 /// A scene loaded and prepared for a technique.
 pub struct Prepared {
     /// The scene: point lights and per-vertex meshing applied, the camera at the image's aspect.
@@ -1229,6 +1236,18 @@ pub struct Lit {
 }
 
 impl Lit {
+    /// No lighting yet: the window's first frame (direct light and emitters) while the photons are traced.
+    pub fn unlit(args: &RenderArgs) -> Self {
+        Self {
+            beams: None,
+            beam_scatterers: 0,
+            kernel: kernel_of(args),
+            splatting: None,
+            vertex: None,
+            atlas: None,
+        }
+    }
+
     /// The lighting as the GPU frame takes it.
     pub fn lighting<'a>(
         &'a self,
@@ -1307,10 +1326,7 @@ pub fn light(
         (None, 0)
     };
     let bvh = Bvh::build(scene);
-    let kernel = match args.kernel {
-        KernelArg::Silverman => Kernel::Silverman,
-        KernelArg::Gaussian => Kernel::Gaussian,
-    };
+    let kernel = kernel_of(args);
     let (splatting, vertex) = match density {
         None => (
             Some(splat_setup(
@@ -1386,6 +1402,14 @@ pub fn light(
         vertex,
         atlas,
     })
+}
+
+/// The splats' reconstruction kernel of `--kernel`.
+fn kernel_of(args: &RenderArgs) -> Kernel {
+    match args.kernel {
+        KernelArg::Silverman => Kernel::Silverman,
+        KernelArg::Gaussian => Kernel::Gaussian,
+    }
 }
 
 /// Frames a second of a camera path that `--camera-path` renders without `--path-frames`.
