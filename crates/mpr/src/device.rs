@@ -63,6 +63,7 @@ pub struct GpuContext {
     float32_blendable: bool,
     depth_stencil: bool,
     clip_distances: bool,
+    timestamps: bool,
     view_layout: wgpu::BindGroupLayout,
 }
 
@@ -190,6 +191,16 @@ impl GpuContext {
         if depth_stencil {
             required_features |= wgpu::Features::DEPTH32FLOAT_STENCIL8;
         }
+        // Per-pass GPU times (crate::pass_timing) where the adapter has them.
+        let timestamps =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let timestamps = adapter
+            .features()
+            .contains(timestamps)
+            .then_some(timestamps);
+        if let Some(t) = timestamps {
+            required_features |= t;
+        }
         let clip_distances = adapter.features().contains(wgpu::Features::CLIP_DISTANCES)
             && std::env::var_os("LUSTRE_NO_CLIP_DISTANCES").is_none();
         if clip_distances {
@@ -214,8 +225,14 @@ impl GpuContext {
             float32_blendable,
             depth_stencil,
             clip_distances,
+            timestamps: timestamps.is_some(),
             view_layout,
         })
+    }
+
+    /// Whether timestamps can be written between passes (`TIMESTAMP_QUERY_INSIDE_ENCODERS` enabled).
+    pub fn has_timestamps(&self) -> bool {
+        self.timestamps
     }
 
     /// The adapter's name, backend, type and driver.

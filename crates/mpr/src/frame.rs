@@ -21,6 +21,7 @@ use lustre_geometry::light::hammersley_centred;
 use crate::passes::accumulate::AccumulatePass;
 use crate::passes::beams::{BeamPass, Traversal};
 
+use crate::pass_timing::{PassTimer, PassTimes};
 use crate::passes::depth::DepthPass;
 use crate::passes::diffuse_texture::{DiffuseTexturePass, DiffuseTextures};
 use crate::passes::direct::{DirectLights, DirectPass};
@@ -40,6 +41,9 @@ use crate::{GpuContext, Result};
 /// the interface the frame records every such pass through, at every level
 /// of the specular recursion.
 pub trait LightPass {
+    /// The pass's name in the per-pass GPU times ([`crate::pass_timing`]).
+    fn name(&self) -> &'static str;
+
     /// Records the pass for the view in `slot` (its stencil reference bound with it).
     fn encode_view(
         &self,
@@ -52,6 +56,10 @@ pub trait LightPass {
 }
 
 impl LightPass for SplatPass {
+    fn name(&self) -> &'static str {
+        "splats"
+    }
+
     fn encode_view(
         &self,
         ctx: &GpuContext,
@@ -79,6 +87,10 @@ impl LightPass for SplatPass {
 }
 
 impl LightPass for EmissionPass {
+    fn name(&self) -> &'static str {
+        "emission"
+    }
+
     fn encode_view(
         &self,
         _ctx: &GpuContext,
@@ -93,6 +105,10 @@ impl LightPass for EmissionPass {
 }
 
 impl LightPass for GouraudPass {
+    fn name(&self) -> &'static str {
+        "per-vertex (Gouraud)"
+    }
+
     fn encode_view(
         &self,
         _ctx: &GpuContext,
@@ -106,6 +122,10 @@ impl LightPass for GouraudPass {
 }
 
 impl LightPass for DirectPass {
+    fn name(&self) -> &'static str {
+        "direct light"
+    }
+
     fn encode_view(
         &self,
         _ctx: &GpuContext,
@@ -122,6 +142,10 @@ impl LightPass for DirectPass {
 }
 
 impl LightPass for BeamPass {
+    fn name(&self) -> &'static str {
+        "beams"
+    }
+
     fn encode_view(
         &self,
         _ctx: &GpuContext,
@@ -136,6 +160,10 @@ impl LightPass for BeamPass {
 }
 
 impl LightPass for DiffuseTexturePass {
+    fn name(&self) -> &'static str {
+        "diffuse textures"
+    }
+
     fn encode_view(
         &self,
         _ctx: &GpuContext,
@@ -212,6 +240,8 @@ pub struct FrameGraph {
     pub tonemap: TonemapPass,
     /// The frame's views (camera, virtual cameras), rewritten every frame.
     views: Mutex<ViewBuffer>,
+    /// Timestamps between the passes ([`FrameGraph::with_pass_timing`]).
+    timer: Option<PassTimer>,
 }
 
 impl FrameGraph {
@@ -230,7 +260,39 @@ impl FrameGraph {
             beams: None,
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
+            timer: None,
         })
+    }
+
+    /// Times every pass of each frame on the GPU where the device writes timestamps inside encoders (else unchanged); [`FrameGraph::pass_times`] reads the last frame's.
+    pub fn with_pass_timing(mut self, ctx: &GpuContext) -> Self {
+        self.timer = PassTimer::new(ctx);
+        self
+    }
+
+    /// GPU milliseconds of each pass of the last frame, summed over its views and samples; `None` without timing.
+    pub fn pass_times(&self, ctx: &GpuContext) -> Result<Option<PassTimes>> {
+        self.timer.as_ref().map(|t| t.read(ctx)).transpose()
+    }
+
+    /// Records `f` as the pass `name` (timed when timing is on).
+    fn timed<R>(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        name: &'static str,
+        f: impl FnOnce(&mut wgpu::CommandEncoder) -> R,
+    ) -> R {
+        match &self.timer {
+            Some(timer) => timer.span(encoder, name, f),
+            None => f(encoder),
+        }
+    }
+
+    /// Starts a frame's timing.
+    fn reset_timing(&self) {
+        if let Some(timer) = &self.timer {
+            timer.reset();
+        }
     }
 
     /// Adds specular images (section 3, 7.1): every planar mirror face of
@@ -437,6 +499,7 @@ impl FrameGraph {
     /// vertex radiance, direct light, diffuse textures), splats, tone map to
     /// `output`. Returns the views drawn (scene passes, table 3).
     pub fn render(&self, ctx: &GpuContext, frame: &FrameInputs<'_>) -> Result<usize> {
+        self.reset_timing();
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
         let passes = self.resolve(frame)?;
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
@@ -464,12 +527,10 @@ impl FrameGraph {
                 &slots,
                 true,
             )?;
-            self.tonemap.encode(
-                &ctx.device,
-                &mut encoder,
-                &frame.targets.hdr.view,
-                frame.output,
-            );
+            self.timed(&mut encoder, "tone map", |encoder| {
+                self.tonemap
+                    .encode(&ctx.device, encoder, &frame.targets.hdr.view, frame.output);
+            });
             ctx.queue.submit([encoder.finish()]);
             Ok(())
         })?;
@@ -518,6 +579,7 @@ impl FrameGraph {
                     .into(),
             });
         };
+        self.reset_timing();
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
         let passes = self.resolve(frame)?;
         let (width, height) = (frame.targets.width, frame.targets.height);
@@ -558,7 +620,9 @@ impl FrameGraph {
                     &slots,
                     true,
                 )?;
-                accumulate.encode(&ctx.device, &mut encoder, frame.targets, weight, s == 0);
+                self.timed(&mut encoder, "accumulate", |encoder| {
+                    accumulate.encode(&ctx.device, encoder, frame.targets, weight, s == 0);
+                });
                 if s + 1 == samples {
                     if splat_once {
                         // The splats once through the pixel centres, at every
@@ -583,7 +647,9 @@ impl FrameGraph {
                             )?;
                         }
                     }
-                    self.encode_resolve(ctx, &mut encoder, frame);
+                    self.timed(&mut encoder, "tone map", |encoder| {
+                        self.encode_resolve(ctx, encoder, frame);
+                    });
                 }
                 ctx.queue.submit([encoder.finish()]);
                 Ok(())
@@ -829,37 +895,47 @@ impl FrameGraph {
         limit: bool,
     ) -> Result<()> {
         let slot = slots[index];
-        self.depth
-            .encode(encoder, frame.scene, frame.targets, views, slot, index == 0);
+        self.timed(encoder, "depth", |encoder| {
+            self.depth
+                .encode(encoder, frame.scene, frame.targets, views, slot, index == 0);
+        });
         if let Some(specular) = &self.specular {
             for &(face, child) in &tree.children[index] {
-                specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
+                self.timed(encoder, "specular masks", |encoder| {
+                    specular.encode_mask(encoder, frame.scene, frame.targets, views, slot, face);
+                });
                 self.draw_window(ctx, encoder, frame, light, views, tree, slots, child, limit)?;
-                specular.encode_restore_child(
-                    ctx,
-                    encoder,
-                    frame.scene,
-                    frame.targets,
-                    views,
-                    slot,
-                    slots[child],
-                    face,
-                    tree.samples[child],
-                );
+                self.timed(encoder, "specular masks", |encoder| {
+                    specular.encode_restore_child(
+                        ctx,
+                        encoder,
+                        frame.scene,
+                        frame.targets,
+                        views,
+                        slot,
+                        slots[child],
+                        face,
+                        tree.samples[child],
+                    );
+                });
             }
             if limit {
-                specular.encode_limit(
-                    encoder,
-                    frame.scene,
-                    frame.targets,
-                    views,
-                    slot,
-                    &tree.limit_faces[index],
-                );
+                self.timed(encoder, "specular masks", |encoder| {
+                    specular.encode_limit(
+                        encoder,
+                        frame.scene,
+                        frame.targets,
+                        views,
+                        slot,
+                        &tree.limit_faces[index],
+                    );
+                });
             }
         }
         for pass in light {
-            pass.encode_view(ctx, encoder, frame, views, slot)?;
+            self.timed(encoder, pass.name(), |encoder| {
+                pass.encode_view(ctx, encoder, frame, views, slot)
+            })?;
         }
         Ok(())
     }

@@ -45,6 +45,7 @@ mod error;
 pub mod frame;
 pub mod kernel_texture;
 pub mod material;
+pub mod pass_timing;
 pub mod passes;
 pub mod projective_texture;
 pub mod readback;

@@ -13,6 +13,7 @@ use lustre_geometry::{Camera, Light, Scene};
 use lustre_image::Image;
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::material::GlossyModel;
+use lustre_mpr::pass_timing::PassTimes;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{GlossySettings, imaged_surfaces};
@@ -153,11 +154,9 @@ impl GpuFrame {
             ),
             None => None,
         };
-        let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)?.with_emission(
-            &ctx,
-            targets.hdr_format(),
-            scene,
-        )?;
+        let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)?
+            .with_pass_timing(&ctx)
+            .with_emission(&ctx, targets.hdr_format(), scene)?;
         if lighting.splatting {
             graph = graph.with_splats(&ctx, targets.hdr_format(), lighting.kernel)?;
         }
@@ -336,6 +335,11 @@ impl GpuFrame {
             .poll(wgpu::PollType::wait_indefinitely())
             .context("waiting for the frame")?;
         Ok(())
+    }
+
+    /// GPU milliseconds of each pass of the last frame drawn (`None` where the adapter has no timestamps).
+    pub fn pass_times(&self) -> anyhow::Result<Option<PassTimes>> {
+        Ok(self.graph.pass_times(&self.ctx)?)
     }
 
     /// The HDR image of the last frame drawn.

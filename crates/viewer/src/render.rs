@@ -1034,6 +1034,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "median_frame_ms": median(path_frame_ms.clone()),
         "first": frame_path(&args.out, 0).display().to_string(),
     })));
+    // GPU time of each pass of the last frame (timestamp queries, where the adapter has them).
+    info["gpu_pass_ms"] = json!(gpu.pass_times()?.map(|t| {
+        t.into_iter()
+            .map(|(n, ms)| (n.to_owned(), json!(ms)))
+            .collect::<serde_json::Map<_, _>>()
+    }));
     info["peak_memory_bytes"] = json!(peak_memory_bytes());
     // The size the per-vertex techniques' default lengths scale with.
     info["scene_size"] = json!(lengths.map(|l| l.scene_size));

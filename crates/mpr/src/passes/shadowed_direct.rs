@@ -357,6 +357,10 @@ pub struct ShadowedDirect<'a> {
 }
 
 impl LightPass for ShadowedDirect<'_> {
+    fn name(&self) -> &'static str {
+        "direct light (shadow volumes)"
+    }
+
     fn encode_view(
         &self,
         _ctx: &GpuContext,

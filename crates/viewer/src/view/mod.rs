@@ -470,6 +470,9 @@ impl App {
         }
         if let Some((time, _)) = drew {
             self.panel.push_frame_time(time.as_secs_f32() * 1e3);
+            if let Some(gpu) = self.shown.as_ref().and_then(|s| s.gpu.as_ref()) {
+                self.panel.pass_times = gpu.pass_times()?;
+            }
         }
         let lit_completely = self.shown_photons.is_some_and(|(_, last)| last);
         let mut exit_after = false;
@@ -576,7 +579,7 @@ impl App {
         };
         let image = shown.image;
         let mut requests = Vec::new();
-        let output = shown.egui.run_ui(raw, |ui| {
+        let mut output = shown.egui.run_ui(raw, |ui| {
             requests = panel.show(ui, &info, image);
         });
         shown
@@ -589,11 +592,11 @@ impl App {
             size_in_pixels: [shown.config.width, shown.config.height],
             pixels_per_point: output.pixels_per_point,
         };
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
+        for (id, deltas) in output.textures_delta.set.drain() {
+            for delta in &deltas {
                 shown
                     .egui_renderer
-                    .update_texture(&shown.ctx.device, &shown.ctx.queue, *id, delta);
+                    .update_texture(&shown.ctx.device, &shown.ctx.queue, id, delta);
             }
         }
         let mut encoder =
@@ -637,14 +640,15 @@ impl App {
             .ctx
             .queue
             .submit(extra.into_iter().chain([encoder.finish()]));
+        // Freed after painting (the submitted commands keep what they use alive).
+        for id in output.textures_delta.free.drain() {
+            shown.egui_renderer.free_texture(&id);
+        }
         if let Some(path) = panel.window_capture.take() {
             capture_window(shown, &frame.texture, &path)?;
         }
         shown.window.pre_present_notify();
         shown.ctx.queue.present(frame);
-        for id in &output.textures_delta.free {
-            shown.egui_renderer.free_texture(id);
-        }
         for request in requests {
             self.on_request(request);
         }

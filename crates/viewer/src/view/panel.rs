@@ -108,6 +108,8 @@ pub struct Panel {
     pub components: Components,
     /// Recent frame times (ms), oldest first.
     pub frame_times: Vec<f32>,
+    /// GPU time of each pass of the last frame (ms), where the adapter has timestamps.
+    pub pass_times: Option<Vec<(&'static str, f64)>>,
     /// Where the window's pixels go after this frame (a screenshot's companion).
     pub window_capture: Option<PathBuf>,
 }
@@ -127,6 +129,7 @@ impl Panel {
             render_scale: 1.0,
             components: Components::default(),
             frame_times: Vec::new(),
+            pass_times: None,
             window_capture: None,
         }
     }
@@ -283,6 +286,7 @@ impl Panel {
                 }
             });
         frame_graph(ui, &self.frame_times);
+        pass_bars(ui, self.pass_times.as_deref());
         ui.separator();
         ui.strong("Camera");
         ui.horizontal(|ui| {
@@ -366,6 +370,27 @@ fn frame_graph(ui: &mut egui::Ui, times: &[f32]) {
         points,
         egui::Stroke::new(1.0, egui::Color32::LIGHT_GREEN),
     ));
+}
+
+/// The last frame's GPU time per pass as bars scaled to the slowest.
+fn pass_bars(ui: &mut egui::Ui, times: Option<&[(&'static str, f64)]>) {
+    let Some(times) = times else {
+        ui.small("no per-pass GPU times: the adapter has no timestamp queries");
+        return;
+    };
+    let max = times.iter().map(|(_, ms)| *ms).fold(1e-6, f64::max);
+    for (name, ms) in times {
+        ui.horizontal(|ui| {
+            let (rect, _) = ui.allocate_exact_size(egui::vec2(60.0, 10.0), egui::Sense::hover());
+            let width = rect.width() * (*ms / max) as f32;
+            ui.painter().rect_filled(
+                egui::Rect::from_min_size(rect.min, egui::vec2(width, rect.height())),
+                1.0,
+                egui::Color32::LIGHT_BLUE,
+            );
+            ui.small(format!("{name} {ms:.1} ms"));
+        });
+    }
 }
 
 #[cfg(test)]
