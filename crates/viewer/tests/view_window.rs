@@ -175,6 +175,14 @@ fn view_refuses_bad_input_before_opening_a_window() {
             vec!["view", "glosbox", "--play", "no-such-path.json"],
             "cannot read the camera path",
         ),
+        (
+            vec!["view", "glosbox", "--out", "elsewhere.png"],
+            "--out belongs to lustre render",
+        ),
+        (
+            vec!["view", "glosbox", "--camera-path", "no-such-path.json"],
+            "the window plays a path with --play",
+        ),
     ] {
         let out = support::lustre(&args);
         let stderr = String::from_utf8_lossy(&out.stderr);

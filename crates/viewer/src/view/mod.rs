@@ -80,6 +80,15 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
             "--frames and --camera-path belong to lustre render; the window plays a path with --play"
         );
     }
+    if render.timing_only {
+        bail!("--timing-only belongs to lustre render --frames; the window always draws");
+    }
+    if render.out != Path::new("render.png") {
+        bail!(
+            "--out {}: the window writes images with F12 or --screenshot FILE; --out belongs to lustre render",
+            render.out.display()
+        );
+    }
     if let Some(shot) = &args.screenshot {
         crate::render::check_output(shot, "--screenshot")?;
     }
