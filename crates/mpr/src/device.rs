@@ -85,6 +85,15 @@ fn software_options() -> wgpu::RequestAdapterOptions<'static, 'static> {
     }
 }
 
+/// A wgpu instance on the backends `WGPU_BACKEND` names, else every compiled one (Vulkan here), and those backends.
+fn instance() -> (wgpu::Instance, wgpu::Backends) {
+    let backends =
+        wgpu::Backends::from_env().unwrap_or_else(wgpu::Instance::enabled_backend_features);
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    (wgpu::Instance::new(desc), backends)
+}
+
 /// Picks an adapter per `preference`, ending with any CPU-type adapter the instance enumerates.
 fn select_adapter(
     instance: &wgpu::Instance,
@@ -128,12 +137,8 @@ impl GpuContext {
     /// Opens a headless device on the adapter `preference` selects; backends
     /// come from `WGPU_BACKEND` when set, else every compiled one (Vulkan here).
     pub fn new(preference: AdapterPreference) -> Result<Self> {
-        let backends =
-            wgpu::Backends::from_env().unwrap_or_else(wgpu::Instance::enabled_backend_features);
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = backends;
         let (_instance, adapter) = wayland_quiet::run(|| {
-            let instance = wgpu::Instance::new(desc);
+            let (instance, backends) = instance();
             let adapter = select_adapter(&instance, backends, preference, None);
             (instance, adapter)
         });
@@ -145,12 +150,8 @@ impl GpuContext {
         preference: AdapterPreference,
         window: impl Into<wgpu::SurfaceTarget<'static>>,
     ) -> Result<(Self, wgpu::Surface<'static>)> {
-        let backends =
-            wgpu::Backends::from_env().unwrap_or_else(wgpu::Instance::enabled_backend_features);
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = backends;
         let (_instance, found) = wayland_quiet::run(|| {
-            let instance = wgpu::Instance::new(desc);
+            let (instance, backends) = instance();
             let found = instance
                 .create_surface(window)
                 .map_err(|e| MprError::Surface(e.to_string()))

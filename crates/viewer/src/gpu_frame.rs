@@ -26,7 +26,7 @@ use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffer
 use lustre_photon::{Kernel, SplatEstimator};
 
 use crate::render::{
-    FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg, Technique,
+    FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg,
 };
 
 /// The format of the tone-mapped output every frame is drawn into.
@@ -407,7 +407,11 @@ pub fn resolve_resolution(
 }
 
 /// The sRGB output texture (a render attachment, copied from for read-back, sampled by the window).
-fn output_texture(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, wgpu::TextureView) {
+pub fn output_texture(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+) -> (wgpu::Texture, wgpu::TextureView) {
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("lustre-output"),
         size: wgpu::Extent3d {
@@ -427,12 +431,4 @@ fn output_texture(ctx: &GpuContext, width: u32, height: u32) -> (wgpu::Texture, 
     });
     let view = output.create_view(&wgpu::TextureViewDescriptor::default());
     (output, view)
-}
-
-/// Whether a technique renders any camera from one lighting solution (the per-vertex ones light towards one eye, García et al. section 2.10).
-pub fn view_independent(technique: Technique) -> bool {
-    !matches!(
-        technique,
-        Technique::Detp | Technique::Impact | Technique::Photonmap
-    )
 }

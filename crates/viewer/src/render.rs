@@ -735,10 +735,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     "--camera-path: photons streamed from --photons-file are splatted once, into one view"
                 );
             }
-            if matches!(
-                args.technique,
-                Technique::Detp | Technique::Impact | Technique::Photonmap
-            ) {
+            if args.technique.per_vertex() {
                 bail!(
                     "--camera-path: the per-vertex techniques compute their glossy radiance towards one eye \
                      (García et al. section 2.10), so they render single frames; use splat, splat-direct, mpr or beams"

@@ -14,6 +14,7 @@ use lustre_mpr::{
 };
 use serde_json::json;
 
+use crate::gpu_frame::{OUTPUT_FORMAT, output_texture};
 use crate::render::{RenderArgs, sidecar_path, write_image};
 use crate::render_density::{DensityLengths, corners};
 
@@ -48,7 +49,8 @@ struct Gpu {
     ctx: GpuContext,
     targets: RenderTargets,
     graph: FrameGraph,
-    output: wgpu::Texture,
+    /// A view of the tone-mapped output (the frame's images are read from the HDR target).
+    output: wgpu::TextureView,
     /// Jittered accumulation samples per frame (`--aa`, Diefenbach & Badler section 7).
     aa: u32,
 }
@@ -65,27 +67,13 @@ impl Gpu {
         eprintln!("rendering {width}x{height} on {}", ctx.adapter());
         let targets = RenderTargets::new(&ctx, width, height)?;
         let buffers = SceneBuffers::upload(&ctx, scene)?;
-        let output_format = wgpu::TextureFormat::Rgba8UnormSrgb;
-        let mut graph = FrameGraph::new(&ctx, output_format)?
+        let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)?
             .with_emission(&ctx, targets.hdr_format(), scene)?
             .with_gouraud(&ctx, targets.hdr_format(), &buffers)?;
         if args.aa > 1 {
             graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
         }
-        let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("lustre-frames-output"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: output_format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let (_, output) = output_texture(&ctx, width, height);
         Ok(Self {
             ctx,
             targets,
@@ -100,9 +88,6 @@ impl Gpu {
         // The mobile objects moved: upload the pose (the corner count is unchanged, so the Gouraud pass is kept).
         let buffers = SceneBuffers::upload(&self.ctx, scene)?;
         self.graph.set_gouraud_radiance(&self.ctx, corners)?;
-        let view = self
-            .output
-            .create_view(&wgpu::TextureViewDescriptor::default());
         self.graph.render_accumulated(
             &self.ctx,
             &FrameInputs {
@@ -110,7 +95,7 @@ impl Gpu {
                 camera: scene.camera(),
                 tonemap: &Tonemap::default(),
                 targets: &self.targets,
-                output: &view,
+                output: &self.output,
                 splats: None,
                 direct: None,
                 diffuse: None,

@@ -22,7 +22,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy}
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use crate::gpu_frame::{GpuFrame, view_independent};
+use crate::gpu_frame::GpuFrame;
 use crate::render::{Lit, Prepared, RenderArgs, prepare_scene, render_settings, write_image};
 use camera_control::{Controller, Orbit};
 use input::Action;
@@ -63,7 +63,7 @@ const PLAY_FPS: f32 = 25.0;
 /// Checks the options, loads the scene (a bad file fails here, before any window) and runs the window until it is closed.
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     let render = &args.render;
-    if !view_independent(render.technique) {
+    if render.technique.per_vertex() {
         bail!(
             "--technique {:?}: the per-vertex techniques compute their glossy radiance towards one eye \
              (García et al. section 2.10); the window needs splat, splat-direct, mpr or beams",
@@ -102,13 +102,14 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     if args.play_frames == Some(0) {
         bail!("--play-frames 0: at least one frame");
     }
-    let (shadow_depth, _) = render_settings(render)?;
+    // Checked before any window opens; the window derives them again from the panel's options.
+    render_settings(render)?;
     let prepared = Arc::new(prepare_scene(render)?);
     let event_loop = EventLoop::<LightingEvent>::with_user_event()
         .build()
         .context("cannot open a window: no display (set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run)")?;
     let proxy = event_loop.create_proxy();
-    let mut app = App::new(args.clone(), prepared, shadow_depth, play, proxy);
+    let mut app = App::new(args.clone(), prepared, play, proxy);
     event_loop
         .run_app(&mut app)
         .context("the window's event loop failed")?;
@@ -142,7 +143,6 @@ struct Shown {
 struct App {
     args: ViewArgs,
     prepared: Arc<Prepared>,
-    shadow_depth: u32,
     proxy: EventLoopProxy<LightingEvent>,
     shown: Option<Shown>,
     /// The scene's camera (the lens of every controller).
@@ -175,7 +175,6 @@ impl App {
     fn new(
         args: ViewArgs,
         prepared: Arc<Prepared>,
-        shadow_depth: u32,
         play: Option<CameraPath>,
         proxy: EventLoopProxy<LightingEvent>,
     ) -> Self {
@@ -186,7 +185,6 @@ impl App {
         Self {
             args,
             prepared,
-            shadow_depth,
             proxy,
             shown: None,
             template,
@@ -218,15 +216,25 @@ impl App {
         self.panel.apply(&self.args.render)
     }
 
-    /// Starts lighting the scene with the panel's settings (dropping any run in progress).
+    /// Starts lighting the scene with the panel's settings (dropping any run in progress); settings `render` would refuse stop here, with the reason in the panel.
     fn start_lighting(&mut self) {
+        let args = self.render_args();
+        let shadow_depth = match render_settings(&args) {
+            Ok((depth, _)) => depth,
+            Err(e) => {
+                eprintln!("lustre: {e:#}");
+                self.status = format!("{e:#}");
+                self.lighting = None;
+                return;
+            }
+        };
         self.next_run += 1;
         let proxy = self.proxy.clone();
         self.lighting = Some(lighting::spawn(
             self.next_run,
-            self.render_args(),
+            args,
             Arc::clone(&self.prepared),
-            self.shadow_depth,
+            shadow_depth,
             move |event| {
                 // The window may be closing; nothing is lost then.
                 let _ = proxy.send_event(event);
@@ -250,7 +258,8 @@ impl App {
         camera.with_aspect(size.0 as f32 / size.1.max(1) as f32)
     }
 
-    fn act(&mut self, action: Action, event_loop: &ActiveEventLoop) {
+    /// Does `action` (a key's or the panel's); returns whether the window should close.
+    fn perform(&mut self, action: Action) -> bool {
         match action {
             Action::ToggleController => {
                 self.controller = self.controller.toggled(&self.template, self.scene_size());
@@ -292,9 +301,10 @@ impl App {
                 self.status = format!("bookmark {} stored", i + 1);
             }
             Action::TogglePanel => self.panel.visible = !self.panel.visible,
-            Action::Quit => event_loop.exit(),
+            Action::Quit => return true,
         }
         self.request_redraw();
+        false
     }
 
     fn toggle_recording(&mut self) {
@@ -383,25 +393,21 @@ impl App {
     /// A GPU frame from `lit` at the image area's size.
     fn build_frame(&mut self, lit: &Lit) -> anyhow::Result<()> {
         let args = self.render_args();
+        // Derived from the options the lighting was started with (the technique decides them).
+        let (shadow_depth, glossy_images) = render_settings(&args)?;
         let size = self.render_size();
         let camera = self.camera(size);
         let Some(shown) = &mut self.shown else {
             return Ok(());
         };
-        let mut gpu = GpuFrame::new(
+        // Its tone map and lighting terms are set from the panel before every draw (`redraw`).
+        shown.gpu = Some(GpuFrame::new(
             &args,
-            lit.lighting(
-                &self.prepared.scene,
-                self.shadow_depth,
-                glossy_images(&args)?,
-            ),
+            lit.lighting(&self.prepared.scene, shadow_depth, glossy_images),
             shown.ctx.clone(),
             size,
             &camera,
-        )?;
-        gpu.set_tonemap(display_tonemap(self.panel.exposure));
-        gpu.components = self.panel.components;
-        shown.gpu = Some(gpu);
+        )?);
         Ok(())
     }
 
@@ -458,26 +464,27 @@ impl App {
                 .camera_drawn
                 .as_ref()
                 .is_some_and(|(c, s, d)| *c == camera && *s == size && *d == settings);
-            if !same {
-                // Moving: one sample for speed; the resting camera is refined next.
+            // Moving: one sample for speed; a resting camera is refined to `aa` next.
+            let samples = if !same {
+                Some(
+                    if self.playback.is_some() || self.args.screenshot.is_some() {
+                        aa
+                    } else {
+                        1
+                    },
+                )
+            } else {
+                (!self.refined).then_some(aa)
+            };
+            if let Some(samples) = samples {
                 let start = Instant::now();
-                let samples = if self.playback.is_some() || self.args.screenshot.is_some() {
-                    aa
-                } else {
-                    1
-                };
                 gpu.draw(&camera, samples)?;
-                drew = Some((start.elapsed(), samples));
+                drew = Some(start.elapsed());
                 self.camera_drawn = Some((camera, size, settings));
                 self.refined = samples >= aa;
-            } else if !self.refined {
-                let start = Instant::now();
-                gpu.draw(&camera, aa)?;
-                drew = Some((start.elapsed(), aa));
-                self.refined = true;
             }
         }
-        if let Some((time, _)) = drew {
+        if let Some(time) = drew {
             self.panel.push_frame_time(time.as_secs_f32() * 1e3);
             if let Some(gpu) = self.shown.as_ref().and_then(|s| s.gpu.as_ref()) {
                 self.panel.pass_times = gpu.pass_times()?;
@@ -679,20 +686,16 @@ impl App {
                 self.refined = false;
             }
             PanelRequest::Screenshot => {
-                self.screenshots += 1;
-                self.pending_screenshot =
-                    Some(PathBuf::from(format!("lustre-{:04}.png", self.screenshots)));
+                self.perform(Action::Screenshot);
             }
             PanelRequest::ToggleController => {
-                self.controller = self.controller.toggled(&self.template, self.scene_size());
+                self.perform(Action::ToggleController);
             }
-            PanelRequest::ToggleRecording => self.toggle_recording(),
+            PanelRequest::ToggleRecording => {
+                self.perform(Action::ToggleRecording);
+            }
             PanelRequest::TogglePlayback => {
-                if self.playback.is_some() {
-                    self.playback = None;
-                } else if let Some(path) = &self.play {
-                    self.playback = Some(playback_of(path, self.args.play_frames));
-                }
+                self.perform(Action::TogglePlayback);
             }
         }
         self.request_redraw();
@@ -922,8 +925,9 @@ impl ApplicationHandler<LightingEvent> for App {
                         self.held.insert(code);
                         if !key.repeat
                             && let Some(action) = input::action(code, ctrl)
+                            && self.perform(action)
                         {
-                            self.act(action, event_loop);
+                            event_loop.exit();
                         }
                     }
                     ElementState::Released => {
@@ -989,13 +993,6 @@ fn display_tonemap(exposure_stops: f32) -> Tonemap {
         exposure: exposure_stops.exp2(),
         operator: ToneOperator::Clamp,
     }
-}
-
-/// The glossy images' settings of `args` (as `lustre render` checks them).
-fn glossy_images(
-    args: &RenderArgs,
-) -> anyhow::Result<lustre_mpr::passes::glossy_image::GlossySettings> {
-    Ok(render_settings(args)?.1)
 }
 
 /// The image area of the window in physical pixels: all of it but the panel.
