@@ -536,7 +536,7 @@ fn select(name: Option<&str>) -> Result<Vec<&'static Case>> {
 /// then a summary line `golden: N passed, N failed, N skipped`; fails if any case failed.
 pub fn run(case: Option<&str>) -> Result<()> {
     let cases = select(case)?;
-    let lustre = Lustre::build()?;
+    let lustre = Lustre::build_for_checks()?;
     let scratch = Scratch::new("golden")?;
     let dir = goldens_dir();
     let require_gpu = gpu_required();
@@ -561,7 +561,7 @@ pub fn run(case: Option<&str>) -> Result<()> {
 /// writes its golden, saying what changed.
 pub fn bless(case: Option<&str>) -> Result<()> {
     let cases = select(case)?;
-    let lustre = Lustre::build()?;
+    let lustre = Lustre::build_for_checks()?;
     let scratch = Scratch::new("bless")?;
     let dir = goldens_dir();
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -532,7 +532,7 @@ fn case_source(case: &Case, m: &Measured, seconds: f64) -> String {
 /// `--measure`, the cases as Rust with bounds from the measured values.
 pub fn run(args: Args) -> Result<()> {
     let cases = select(args.case.as_deref())?;
-    let lustre = Lustre::build()?;
+    let lustre = Lustre::build_for_checks()?;
     let scratch = Scratch::new("reference-check")?;
     let require_gpu = gpu_required();
     let (mut passed, mut failed, mut skipped) = (0, 0, 0);
