@@ -116,3 +116,50 @@ impl RadialReflectance {
         t
     }
 }
+
+/// The 1D reflectance table indexed by the flipped sphere-map scheme of section 9: entry k holds R at `cos θ = (k + ½)/M`, so grazing directions (`cos θ → 0`) index the start of the table, the region of finest angular resolution, instead of the sphere map's outer ring (Bastos et al. 1999, section 9: "flip the sphere-mapping indexing scheme").
+///
+/// With the sphere map's index `ρ = sin θ`, the outermost of `M` entries
+/// spans `cos θ` from 0 to `√(2/M)`; indexed by `cos θ` it spans `1/M`, a
+/// `√(2M)` times finer step where R = F/(π cos² θ) changes fastest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlippedRadialReflectance {
+    /// R at the entry centres `cos θk = (k + ½)/M`.
+    pub values: Vec<Rgb>,
+}
+
+impl FlippedRadialReflectance {
+    /// The table with `len` entries for `fresnel`.
+    pub fn new(fresnel: &Fresnel, len: u32) -> Result<Self> {
+        check_size("len", len)?;
+        let m = len as f32;
+        let values = (0..len)
+            .map(|k| reflectance_modulation(fresnel, (k as f32 + 0.5) / m))
+            .collect();
+        Ok(Self { values })
+    }
+
+    /// Linear interpolation at `cos θ` in [0, 1] with clamp-to-edge (a GPU's linear filter); zero for `cos θ ≤ 0`.
+    pub fn eval(&self, cos_theta: f32) -> Rgb {
+        if !(cos_theta > 0.0) || self.values.is_empty() {
+            return Rgb::ZERO;
+        }
+        let m = self.values.len();
+        if m == 1 {
+            return self.values[0];
+        }
+        let x = (cos_theta.min(1.0) * m as f32 - 0.5).clamp(0.0, (m - 1) as f32);
+        let i = (x.floor() as usize).min(m - 2);
+        let t = x - i as f32;
+        self.values[i] * (1.0 - t) + self.values[i + 1] * t
+    }
+
+    /// The table as a `M × 1` RGBA texture (A = 1).
+    pub fn to_texture(&self) -> TextureRgba32F {
+        let mut t = TextureRgba32F::zeros(self.values.len() as u32, 1);
+        for (k, v) in self.values.iter().enumerate() {
+            t.set_texel(k as u32, 0, [v.x, v.y, v.z, 1.0]);
+        }
+        t
+    }
+}

@@ -6,7 +6,9 @@ use glam::Vec3;
 use lustre_brdf::Fresnel;
 use lustre_brdf::kernel_texture::KernelTexture;
 use lustre_brdf::microfacet::{Distribution, Shadowing};
-use lustre_brdf::reflectance_modulation::{RadialReflectance, reflectance_sphere_map};
+use lustre_brdf::reflectance_modulation::{
+    FlippedRadialReflectance, RadialReflectance, reflectance_modulation, reflectance_sphere_map,
+};
 use lustre_geometry::Rgb;
 use lustre_geometry::material::MicrofacetDistribution;
 use support::{AU_ETA, AU_K, complex_fresnel};
@@ -175,4 +177,44 @@ fn radial_table_equals_the_sphere_map_along_any_radius() {
         }
     }
     assert_eq!(radial.eval(1.5), Rgb::ZERO);
+}
+
+#[test]
+fn flipped_table_holds_r_and_resolves_grazing_angles_better() {
+    // Section 9: indexed by cos θ, the table resolves the grazing angles, where
+    // R = F/(π cos² θ) grows fastest, finer than the sphere map's radius sin θ.
+    let fresnel = Fresnel::Conductor {
+        eta: Vec3::from_array(AU_ETA),
+        k: Vec3::from_array(AU_K),
+    };
+    let m = 64u32;
+    let flipped = FlippedRadialReflectance::new(&fresnel, m).unwrap();
+    let radial = RadialReflectance::new(&fresnel, m).unwrap();
+    assert_eq!(flipped.to_texture().width, m);
+    // At its entry centres it is R itself (equation 4's second factor).
+    for (k, v) in flipped.values.iter().enumerate() {
+        let c = (k as f32 + 0.5) / m as f32;
+        // Against the tests' own f64 Fresnel of gold.
+        for ch in 0..3 {
+            let f = complex_fresnel(f64::from(c), f64::from(AU_ETA[ch]), f64::from(AU_K[ch]));
+            let exact = f / (std::f64::consts::PI * f64::from(c * c));
+            assert!((f64::from(v[ch]) - exact).abs() <= 1e-4 * exact, "{k} {ch}");
+        }
+        assert!((flipped.eval(c) - *v).abs().max_element() <= 1e-5 * v.max_element());
+    }
+    // Relative interpolation error between 60° and 85° from the normal.
+    let (mut worst_flipped, mut worst_sphere) = (0.0f32, 0.0f32);
+    for step in 0..=250 {
+        let theta = (60.0 + 25.0 * step as f32 / 250.0).to_radians();
+        let exact = reflectance_modulation(&fresnel, theta.cos());
+        let rel = |v: Rgb| ((v - exact).abs() / exact).max_element();
+        worst_flipped = worst_flipped.max(rel(flipped.eval(theta.cos())));
+        worst_sphere = worst_sphere.max(rel(radial.eval(theta.sin())));
+    }
+    assert!(
+        worst_flipped < 0.25 * worst_sphere,
+        "flipped {worst_flipped}, sphere-map radius {worst_sphere}"
+    );
+    assert!(worst_flipped < 0.05, "flipped {worst_flipped}");
+    assert_eq!(flipped.eval(0.0), Rgb::ZERO);
 }
