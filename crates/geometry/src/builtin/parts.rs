@@ -295,7 +295,7 @@ pub(crate) fn cylinder(
 }
 
 /// Appends the flat quad `corners` (a loop) to `mesh`, wound so that it faces `outward`.
-fn push_facing(mesh: &mut Mesh, corners: [Vec3; 4], outward: Vec3) {
+pub(crate) fn push_facing(mesh: &mut Mesh, corners: [Vec3; 4], outward: Vec3) {
     let [a, b, c, d] = corners;
     let corners = if (b - a).cross(c - a).dot(outward) >= 0.0 {
         [a, b, c, d]
@@ -379,4 +379,185 @@ pub(crate) fn frame_solid(
         );
     }
     mesh
+}
+
+/// `n + 1` coordinates from `a` to `b` in equal steps, exactly `a` and `b`
+/// at the ends, so that parts built on the same edges meet bit for bit.
+pub(crate) fn edges(a: f32, b: f32, n: u32) -> Vec<f32> {
+    (0..=n)
+        .map(|k| match k {
+            0 => a,
+            k if k == n => b,
+            k => a + (b - a) * (k as f32 / n as f32),
+        })
+        .collect()
+}
+
+/// Axis-aligned rectangular cells in the plane where coordinate `axis` is
+/// `at`: cell `(i, j)` spans `u_edges[i]..u_edges[i + 1]` and
+/// `v_edges[j]..v_edges[j + 1]` along the two axes after `axis`
+/// (cyclically), and is kept when `keep(i, j)`; two triangles each, facing
+/// +`axis` when `positive`, else -`axis`, flat normals. Corners are taken
+/// from the edges exactly, so cells of different meshes on the same edges
+/// share their corners bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cells(
+    name: &str,
+    axis: usize,
+    at: f32,
+    u_edges: &[f32],
+    v_edges: &[f32],
+    positive: bool,
+    keep: impl Fn(usize, usize) -> bool,
+    material: u32,
+) -> Mesh {
+    let (u_axis, v_axis) = ((axis + 1) % 3, (axis + 2) % 3);
+    let point = |u: f32, v: f32| {
+        let mut p = Vec3::ZERO;
+        p[axis] = at;
+        p[u_axis] = u;
+        p[v_axis] = v;
+        p
+    };
+    let normal = if positive {
+        Vec3::AXES[axis]
+    } else {
+        -Vec3::AXES[axis]
+    };
+    let mut mesh = empty(name, material);
+    for i in 0..u_edges.len() - 1 {
+        for j in 0..v_edges.len() - 1 {
+            if !keep(i, j) {
+                continue;
+            }
+            let (u0, u1, v0, v1) = (u_edges[i], u_edges[i + 1], v_edges[j], v_edges[j + 1]);
+            // u × v is +axis: (u0 v0, u1 v0, u1 v1, u0 v1) winds counter-clockwise seen from +axis.
+            let corners = [
+                (point(u0, v0), Vec2::ZERO),
+                (point(u1, v0), Vec2::X),
+                (point(u1, v1), Vec2::ONE),
+                (point(u0, v1), Vec2::Y),
+            ];
+            let base = mesh.positions.len() as u32;
+            for (p, uv) in corners {
+                mesh.positions.push(p);
+                mesh.normals.push(normal);
+                mesh.uvs.push(uv);
+            }
+            if positive {
+                mesh.indices.push([base, base + 1, base + 2]);
+                mesh.indices.push([base + 2, base + 3, base]);
+            } else {
+                mesh.indices.push([base, base + 2, base + 1]);
+                mesh.indices.push([base + 2, base, base + 3]);
+            }
+        }
+    }
+    mesh
+}
+
+/// `mesh` without the triangles all of whose corners lie at its greatest
+/// y: a box open at the top, for a lid that is a mesh of its own.
+pub(crate) fn open_top(mut mesh: Mesh) -> Mesh {
+    let top = mesh
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::NEG_INFINITY, f32::max);
+    let positions = &mesh.positions;
+    mesh.indices
+        .retain(|t| !t.iter().all(|&i| positions[i as usize].y == top));
+    mesh
+}
+
+/// A closed tube along the polyline `centres` (at least two points) with
+/// radius `radii[k]` at `centres[k]`, `segments` round: rings square to the
+/// curve, their zero angle along `side × tangent` (`side` must not be
+/// along the curve; for a curve in a plane, the plane's normal), smooth
+/// normals on the sides and flat caps at both ends, faces outward.
+pub(crate) fn tube(
+    name: &str,
+    centres: &[Vec3],
+    radii: &[f32],
+    side: Vec3,
+    segments: u32,
+    material: u32,
+) -> Mesh {
+    let mut mesh = empty(name, material);
+    let last = centres.len() - 1;
+    let n = segments;
+    let mut rings = Vec::with_capacity(centres.len());
+    for (k, &c) in centres.iter().enumerate() {
+        let (a, b) = (centres[k.saturating_sub(1)], centres[(k + 1).min(last)]);
+        let t = (b - a).normalize();
+        // t × (n × t) = n: the angle runs so that the quads below face out.
+        let nx = side.cross(t).normalize();
+        let ny = nx.cross(t);
+        let ring: Vec<(Vec3, Vec3)> = (0..n)
+            .map(|j| {
+                let phi = TAU * j as f32 / n as f32;
+                let d = phi.cos() * nx + phi.sin() * ny;
+                (c + radii[k] * d, d)
+            })
+            .collect();
+        rings.push((t, ring));
+    }
+    for (k, (_, ring)) in rings.iter().enumerate() {
+        for (j, &(p, d)) in ring.iter().enumerate() {
+            mesh.positions.push(p);
+            mesh.normals.push(d);
+            mesh.uvs.push(Vec2::new(
+                j as f32 / n as f32,
+                k as f32 / last.max(1) as f32,
+            ));
+        }
+    }
+    let at = |k: u32, j: u32| k * n + j % n;
+    for k in 0..last as u32 {
+        for j in 0..n {
+            let (a, b, c, d) = (at(k, j), at(k, j + 1), at(k + 1, j + 1), at(k + 1, j));
+            mesh.indices.push([a, d, c]);
+            mesh.indices.push([a, c, b]);
+        }
+    }
+    for (k, back) in [(0, true), (last, false)] {
+        let (t, ring) = &rings[k];
+        let normal = if back { -*t } else { *t };
+        let base = mesh.positions.len() as u32;
+        mesh.positions.push(centres[k]);
+        mesh.normals.push(normal);
+        mesh.uvs.push(Vec2::splat(0.5));
+        for &(p, d) in ring {
+            mesh.positions.push(p);
+            mesh.normals.push(normal);
+            mesh.uvs.push(Vec2::new(0.5 + 0.5 * d.x, 0.5 + 0.5 * d.z));
+        }
+        for j in 0..n {
+            let (p, q) = (base + 1 + j, base + 1 + (j + 1) % n);
+            mesh.indices
+                .push(if back { [base, p, q] } else { [base, q, p] });
+        }
+    }
+    mesh
+}
+
+/// Points of the cubic Bézier curve with control points `c`, at `steps + 1` equal parameter steps.
+pub(crate) fn bezier(c: [Vec3; 4], steps: u32) -> Vec<Vec3> {
+    (0..=steps)
+        .map(|k| {
+            let t = k as f32 / steps as f32;
+            let s = 1.0 - t;
+            s * s * s * c[0] + 3.0 * s * s * t * c[1] + 3.0 * s * t * t * c[2] + t * t * t * c[3]
+        })
+        .collect()
+}
+
+/// Appends triangle `t` (vertex indices of `mesh`), wound to face `outward`.
+pub(crate) fn push_triangle(mesh: &mut Mesh, t: [u32; 3], outward: Vec3) {
+    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+    if (b - a).cross(c - a).dot(outward) >= 0.0 {
+        mesh.indices.push(t);
+    } else {
+        mesh.indices.push([t[0], t[2], t[1]]);
+    }
 }
