@@ -1,24 +1,31 @@
 //! Radiance maps with depth for glossy planar reflections: R. Bastos, K. Hoff, W. Wynn and A. Lastra, "Increased photorealism for interactive architectural walkthroughs", I3D 1999.
 //!
 //! The view-dependent term of the paper's shading equation 2,
-//! `L = kd D + ks (M * K) R`, split into "what is reflected" (M, this
+//! `L = kd D + ks (M * K) R`, splits into "what is reflected" (M, this
 //! crate's radiance maps) and "how it is reflected" (K and R, from
-//! `lustre-brdf`: [`lustre_brdf::kernel_texture`] and
-//! [`lustre_brdf::reflectance_modulation`], re-exported here):
+//! `lustre-brdf`, re-exported here as [`kernel_texture`] and
+//! [`reflectance_modulation`]).
 //!
-//! - [`reflector`]: planar reflectors and their reflector elements;
-//! - [`sampling`]: cameras on each element's hemisphere, off-axis frusta;
-//! - [`radiance_map`]: radiance and depth per texel, captured from a
-//!   [`radiance_map::RadianceSource`];
-//! - [`quadtree`]: nodes of bounded depth range with representative points;
-//! - [`selection`]: the minimal-angle and distance-based selections;
-//! - [`reprojection`]: points into the reflected view, sized by equation 3,
-//!   and their zero-order reconstruction;
-//! - [`reflector_maps`]: one reflector's maps and their memory (table 1);
-//! - [`cache`]: the versioned, checksummed cache file.
+//! | paper | item |
+//! |---|---|
+//! | 8.1.3 sampling, first stage: reflector elements at a planar resolution | [`reflector::Reflector::elements`] |
+//! | 8.1.3 sampling: hemispheres, cameras at evenly spaced arc lengths, off-axis frusta through the element | [`sampling`] ([`sampling::hemisphere_directions`], [`SampleCamera`]) |
+//! | 8.1.3 radiance maps with depth | [`radiance_map::RadianceMap::capture`] from a [`RadianceSource`] |
+//! | 8.1.3 quadtree: depth range or minimum count, representative point, frustum culling | [`quadtree`] |
+//! | 8.1.3 selection: minimal angle, distance-based, k best | [`selection`] |
+//! | 8.1.3 reprojection of 3D points | [`reprojection::reproject`], [`view::PinholeView`] |
+//! | 8.1.3 equation 3, point size and step size | [`reprojection::point_size_terms`], [`reprojection::LeafDraw`] |
+//! | 8.1.3 reconstruction: zero-order boxes | [`reprojection::reconstruct`] |
+//! | 8.2.1 kernel texture K from D G | [`kernel_texture::KernelTexture`] (lustre-brdf) |
+//! | 8.2.2 reflectance sphere map R = F / (π (N·L)(N·V)) | [`reflectance_modulation::reflectance_sphere_map`] (lustre-brdf) |
+//! | 9 the 1D table, flipped indexing | [`reflectance_modulation::FlippedRadialReflectance`] (lustre-brdf) |
+//! | 9 table 1, memory per reflector | [`reflector_maps::ReflectorMaps::memory`] |
+//! | 6 preprocessing kept between runs | [`cache`] |
 //!
 //! Everything here runs on the CPU and is the reference of the GPU passes
-//! of `lustre-mpr`.
+//! of `lustre-mpr` (`passes::radiance_map`). Not here yet: the capture of
+//! D on the GPU, the convolution with K and modulation by R in the frame,
+//! and convolution in depth layers (section 9).
 
 pub mod cache;
 mod error;
@@ -37,7 +44,9 @@ pub use quadtree::{MapQuadtree, QuadtreeSettings};
 pub use radiance_map::{RadianceMap, RadianceSource};
 pub use reflector::{Reflector, ReflectorElement};
 pub use reflector_maps::{MemoryReport, ReflectorMaps};
-pub use reprojection::{PointSizing, ProjectedPoint, ReflectedImage, reconstruct, reproject};
+pub use reprojection::{
+    LeafDraw, PointSizing, ProjectedPoint, ReflectedImage, leaf_draws, reconstruct, reproject,
+};
 pub use sampling::{SampleCamera, SamplingSettings};
 pub use selection::{SelectionRule, select};
 pub use view::PinholeView;

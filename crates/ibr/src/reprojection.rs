@@ -151,13 +151,37 @@ fn culled(node: &QuadNode, view: &PinholeView) -> bool {
         || px.iter().all(|p| p.y > h)
 }
 
-/// The points of `map` reprojected into `desired`, sized by equation 3 under `sizing`, minified leaves thinned by their step, culled by `tree` (module documentation).
-pub fn reproject(
-    map: &RadianceMap,
-    tree: &MapQuadtree,
-    desired: &PinholeView,
-    sizing: PointSizing,
-) -> Vec<ProjectedPoint> {
+/// One quadtree leaf to draw: its texel rectangle, the step its texels are taken at and the point size at its representative (equation 3; `None` where the representative is not in front of both views).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeafDraw {
+    /// First texel column.
+    pub x: u32,
+    /// First texel row.
+    pub y: u32,
+    /// Columns covered.
+    pub width: u32,
+    /// Rows covered.
+    pub height: u32,
+    /// Every `step`-th texel is drawn along each axis (minification).
+    pub step: glam::UVec2,
+    /// Equation 3's point size at the leaf's representative point, in pixels.
+    pub size: Option<Vec2>,
+}
+
+impl LeafDraw {
+    /// The box size a point of this leaf is drawn at: `size · step`, at least one pixel.
+    pub fn drawn_size(&self, size: Vec2) -> Vec2 {
+        (size * self.step.as_vec2()).max(Vec2::ONE)
+    }
+
+    /// How many texels it draws: `⌈width/step.x⌉ · ⌈height/step.y⌉`.
+    pub fn texels(&self) -> u32 {
+        self.width.div_ceil(self.step.x) * self.height.div_ceil(self.step.y)
+    }
+}
+
+/// The leaves of `tree` that survive view-frustum culling against `desired`, in drawing order, each with its step and representative point size (module documentation).
+pub fn leaf_draws(map: &RadianceMap, tree: &MapQuadtree, desired: &PinholeView) -> Vec<LeafDraw> {
     let mut out = Vec::new();
     if tree.nodes.is_empty() {
         return out;
@@ -172,7 +196,7 @@ pub fn reproject(
             stack.extend((first..first + node.children).map(|c| c as usize));
             continue;
         }
-        let node_size = point_size_terms(
+        let size = point_size_terms(
             &map.camera,
             map.width,
             map.height,
@@ -180,9 +204,32 @@ pub fn reproject(
             node.representative,
         )
         .map(|t| t.point_size());
-        let step = node_size.map_or(glam::UVec2::ONE, step_of);
-        for j in (node.y..node.y + node.height).step_by(step.y as usize) {
-            for i in (node.x..node.x + node.width).step_by(step.x as usize) {
+        out.push(LeafDraw {
+            x: node.x,
+            y: node.y,
+            width: node.width,
+            height: node.height,
+            step: size.map_or(glam::UVec2::ONE, step_of),
+            size,
+        });
+    }
+    out
+}
+
+/// The points of `map` reprojected into `desired`, sized by equation 3 under `sizing`, minified leaves thinned by their step, culled by `tree` (module documentation).
+pub fn reproject(
+    map: &RadianceMap,
+    tree: &MapQuadtree,
+    desired: &PinholeView,
+    sizing: PointSizing,
+) -> Vec<ProjectedPoint> {
+    let mut out = Vec::new();
+    for leaf in leaf_draws(map, tree, desired) {
+        if sizing == PointSizing::PerNode && leaf.size.is_none() {
+            continue;
+        }
+        for j in (leaf.y..leaf.y + leaf.height).step_by(leaf.step.y as usize) {
+            for i in (leaf.x..leaf.x + leaf.width).step_by(leaf.step.x as usize) {
                 let Some(x) = map.world_point(i, j) else {
                     continue;
                 };
@@ -190,21 +237,17 @@ pub fn reproject(
                     continue;
                 };
                 let size = match sizing {
-                    PointSizing::PerNode => node_size,
+                    PointSizing::PerNode => leaf.size,
                     PointSizing::PerPoint => {
                         point_size_terms(&map.camera, map.width, map.height, desired, x)
                             .map(|t| t.point_size())
                     }
                 };
                 let Some(size) = size else { continue };
-                let step = match sizing {
-                    PointSizing::PerNode => step,
-                    PointSizing::PerPoint => step_of(size),
-                };
                 out.push(ProjectedPoint {
                     pixel,
                     depth,
-                    size: (size * step.as_vec2()).max(Vec2::ONE),
+                    size: leaf.drawn_size(size),
                     radiance: map.radiance_at(i, j),
                 });
             }

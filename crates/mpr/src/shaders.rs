@@ -127,6 +127,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             "passes/glossy_image.wgsl",
             with_view(crate::passes::glossy_image::GLOSSY_IMAGE_WGSL),
         ),
+        (
+            "passes/radiance_map.wgsl",
+            crate::passes::radiance_map::RADIANCE_MAP_WGSL.to_owned(),
+        ),
     ]
 }
 

@@ -10,6 +10,7 @@ pub mod glossy_image;
 pub mod glossy_lobe;
 pub mod gouraud;
 pub mod light_volume;
+pub mod radiance_map;
 pub mod redraw;
 pub mod shadow;
 pub mod shadow_volume;

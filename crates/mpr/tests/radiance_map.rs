@@ -1,0 +1,136 @@
+//! Bastos et al. 1999, section 8.1.3: radiance maps reprojected into a reflected view on the GPU agree with the CPU twin (lustre_ibr::reprojection) on the software driver.
+
+mod support;
+
+use lustre_geometry::{Bvh, Ray, Rgb, SurfaceKind, builtin};
+use lustre_ibr::{
+    PinholeView, PointSizing, QuadtreeSettings, Reflector, ReflectorMaps, SamplingSettings,
+    SelectionRule, select,
+};
+use lustre_mpr::passes::radiance_map::{RadianceMapBuffers, RadianceMapPass, ReflectedTargets};
+use lustre_mpr::readback::{read_depth, read_rgba_f32};
+
+#[test]
+fn gpu_reprojection_matches_the_cpu_twin() {
+    let Some(ctx) = support::gpu_or_skip("gpu_reprojection_matches_the_cpu_twin") else {
+        return;
+    };
+    let scene = builtin("cornell").unwrap();
+    let bvh = Bvh::build(&scene);
+    let (floor, _) = scene
+        .surfaces()
+        .iter()
+        .enumerate()
+        .find(
+            |(_, s)| matches!(s.kind, SurfaceKind::Planar(p) if p.normal.y > 0.99 && s.area > 3.0),
+        )
+        .expect("the floor");
+    let reflector = Reflector::from_surface(&scene, floor as u32).unwrap();
+    // A distinct radiance per surface, so that any misplaced point shows.
+    let trace = |o, d| {
+        let hit = bvh.closest_hit(&Ray::segment(o, d, 1e-4, f32::INFINITY))?;
+        let h = hit.surface.wrapping_mul(2_654_435_761);
+        let c = |s: u32| 0.1 + ((h >> s) & 0xff) as f32 / 255.0;
+        Some((Rgb::new(c(0), c(8), c(16)), hit.t))
+    };
+    let sampling = SamplingSettings {
+        planar_resolution: (2, 2),
+        arc_step_degrees: 45.0,
+        map_resolution: (64, 64),
+        ..Default::default()
+    };
+    let maps = ReflectorMaps::capture(
+        &reflector,
+        &sampling,
+        &QuadtreeSettings::default(),
+        &trace,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let (w, h) = (160u32, 120u32);
+    let eye = scene.camera().with_aspect(w as f32 / h as f32);
+    let view = PinholeView::mirrored(&eye, &reflector.plane, w, h);
+    let selected = select(&maps.cameras(), view.eye, 2, SelectionRule::MinimalAngle);
+    let cpu = maps.reflected_image(&view, 2, SelectionRule::MinimalAngle, PointSizing::PerNode);
+
+    let pass = RadianceMapPass::new(&ctx).unwrap();
+    let buffers = RadianceMapBuffers::upload(&ctx, &maps).unwrap();
+    let targets = ReflectedTargets::new(&ctx, w, h).unwrap();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    let drawn = pass
+        .encode(
+            &ctx,
+            &mut encoder,
+            &maps,
+            &buffers,
+            &selected,
+            &view,
+            &targets,
+        )
+        .unwrap();
+    ctx.queue.submit([encoder.finish()]);
+    let color = read_rgba_f32(&ctx, &targets.color).unwrap();
+    let depth = read_depth(&ctx, &targets.depth).unwrap();
+    assert!(drawn > 1000, "{drawn} boxes");
+    // IBR_DUMP=DIR writes both images as raw f32 RGB for inspection.
+    if let Ok(dir) = std::env::var("IBR_DUMP") {
+        let gpu: Vec<u8> = color
+            .iter()
+            .flat_map(|c| c[..3].to_vec())
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        let cpu_bytes: Vec<u8> = cpu
+            .radiance
+            .iter()
+            .flat_map(|c| c.to_array())
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        std::fs::write(format!("{dir}/gpu.bin"), gpu).unwrap();
+        std::fs::write(format!("{dir}/cpu.bin"), cpu_bytes).unwrap();
+    }
+
+    let (mut covered, mut coverage_differs, mut radiance_differs, mut depth_differs) = (0, 0, 0, 0);
+    for (k, (c, z)) in color.iter().zip(&depth).enumerate() {
+        let gpu_covered = *z > 0.0;
+        let cpu_covered = cpu.depth[k].is_finite();
+        covered += usize::from(cpu_covered);
+        if gpu_covered != cpu_covered {
+            coverage_differs += 1;
+        } else if cpu_covered {
+            let g = Rgb::new(c[0], c[1], c[2]);
+            if (g - cpu.radiance[k]).abs().max_element() > 1e-3 {
+                radiance_differs += 1;
+            } else {
+                // The same point: its reverse-Z depth is near / z.
+                let want = lustre_mpr::passes::radiance_map::REFLECTED_NEAR / cpu.depth[k];
+                // Boxes overlap their neighbours; where a box edge falls on a
+                // pixel centre within rounding, a neighbouring texel of the
+                // same surface may win instead, a little nearer or farther.
+                if (z - want).abs() > 1e-5 * want {
+                    depth_differs += 1;
+                    assert!(
+                        (z - want).abs() < 0.02 * want,
+                        "pixel {k}: depth {z} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{covered} pixels covered on the CPU; coverage differs at {coverage_differs}, radiance at {radiance_differs}, only depth at {depth_differs}"
+    );
+    assert!(covered > 2000, "{covered} pixels covered");
+    // Box edges that fall on pixel centres within rounding may go either way.
+    assert!(
+        coverage_differs * 500 < covered,
+        "coverage differs at {coverage_differs}"
+    );
+    assert!(
+        radiance_differs * 500 < covered,
+        "radiance differs at {radiance_differs}"
+    );
+    assert!(
+        depth_differs * 50 < covered,
+        "another point of the same radiance at {depth_differs}"
+    );
+}
