@@ -86,7 +86,7 @@ impl RadianceMapBuffers {
         if texels.is_empty() {
             texels.push(GpuTexel::zeroed());
         }
-        let limit = u64::from(ctx.device.limits().max_storage_buffer_binding_size);
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
         let bytes = (texels.len() * size_of::<GpuTexel>()) as u64;
         if bytes > limit {
             return Err(MprError::InvalidSetting {
