@@ -19,16 +19,19 @@
 //! | 8.2.1 kernel texture K from D G | [`kernel_texture::KernelTexture`] (lustre-brdf) |
 //! | 8.2.2 reflectance sphere map R = F / (π (N·L)(N·V)) | [`reflectance_modulation::reflectance_sphere_map`] (lustre-brdf) |
 //! | 9 the 1D table, flipped indexing | [`reflectance_modulation::FlippedRadialReflectance`] (lustre-brdf) |
+//! | 8.2.1 convolution `M * K` over the stencilled region, kernel size from the reflected distance | [`glossy::kernel_radius`], [`glossy::pixel_kernel`], [`glossy::convolve`] |
+//! | 8.2.2 modulation by R per pixel | [`glossy::modulate`] |
 //! | 9 table 1, memory per reflector | [`reflector_maps::ReflectorMaps::memory`] |
 //! | 6 preprocessing kept between runs | [`cache`] |
 //!
 //! Everything here runs on the CPU and is the reference of the GPU passes
 //! of `lustre-mpr` (`passes::radiance_map`). Not here yet: the capture of
-//! D on the GPU, the convolution with K and modulation by R in the frame,
+//! D on the GPU, the convolution and modulation as GPU passes in the frame,
 //! and convolution in depth layers (section 9).
 
 pub mod cache;
 mod error;
+pub mod glossy;
 pub mod quadtree;
 pub mod radiance_map;
 pub mod reflector;
