@@ -74,6 +74,18 @@ pub fn reflectance_sphere_map(fresnel: &Fresnel, size: u32) -> Result<TextureRgb
     Ok(t)
 }
 
+/// Linear interpolation of a non-empty table whose entry k sits at `(k + ½)/M` in [0, 1], clamped to its end entries: a GPU's linear filter on a 1D texture.
+fn linear_clamped(values: &[Rgb], u: f32) -> Rgb {
+    let m = values.len();
+    if m == 1 {
+        return values[0];
+    }
+    let x = (u.max(0.0) * m as f32 - 0.5).clamp(0.0, (m - 1) as f32);
+    let i = (x.floor() as usize).min(m - 2);
+    let t = x - i as f32;
+    values[i] * (1.0 - t) + values[i + 1] * t
+}
+
 /// The 1D radial reflectance table for isotropic BRDFs: R at `ρk = (k + ½)/M` (Bastos et al. 1999, section 9: "a one-dimensional texture-map indexed by the radius of the sphere-mapping indexing scheme").
 #[derive(Debug, Clone, PartialEq)]
 pub struct RadialReflectance {
@@ -97,14 +109,7 @@ impl RadialReflectance {
         if !(rho <= 1.0) || self.values.is_empty() {
             return Rgb::ZERO;
         }
-        let m = self.values.len();
-        let x = (rho.max(0.0) * m as f32 - 0.5).clamp(0.0, (m - 1) as f32);
-        let i = (x.floor() as usize).min(m.saturating_sub(2));
-        if m == 1 {
-            return self.values[0];
-        }
-        let t = x - i as f32;
-        self.values[i] * (1.0 - t) + self.values[i + 1] * t
+        linear_clamped(&self.values, rho)
     }
 
     /// The table as a `M × 1` RGBA texture (A = 1).
@@ -144,14 +149,7 @@ impl FlippedRadialReflectance {
         if !(cos_theta > 0.0) || self.values.is_empty() {
             return Rgb::ZERO;
         }
-        let m = self.values.len();
-        if m == 1 {
-            return self.values[0];
-        }
-        let x = (cos_theta.min(1.0) * m as f32 - 0.5).clamp(0.0, (m - 1) as f32);
-        let i = (x.floor() as usize).min(m - 2);
-        let t = x - i as f32;
-        self.values[i] * (1.0 - t) + self.values[i + 1] * t
+        linear_clamped(&self.values, cos_theta.min(1.0))
     }
 
     /// The table as a `M × 1` RGBA texture (A = 1).

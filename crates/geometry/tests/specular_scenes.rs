@@ -4,56 +4,15 @@
 //! counts of triangles and lights, the specular materials, the nested mirror
 //! images traced by brute force, and the Mitsuba export.
 
-use std::collections::HashMap;
+mod support;
+
+use support::{check_closed, mesh};
 
 use glam::Vec3;
 use lustre_geometry::builtin::{bathroom, mirrors};
 use lustre_geometry::light::Light;
 use lustre_geometry::mitsuba::{ExportOptions, export, read_ply};
-use lustre_geometry::{Bvh, MaterialModel, Mesh, Ray, Scene, SurfaceKind, builtin, triangle_area};
-
-fn mesh<'a>(scene: &'a Scene, name: &str) -> (u32, &'a Mesh) {
-    let m = scene
-        .meshes()
-        .iter()
-        .position(|m| m.name == name)
-        .unwrap_or_else(|| panic!("{}: no mesh {name}", scene.name));
-    (m as u32, &scene.meshes()[m])
-}
-
-/// Every directed edge (by exact positions) of `mesh` occurs once and its
-/// reverse once: a closed 2-manifold with consistent winding. Returns the
-/// signed volume (positive when the faces point out).
-fn check_closed(mesh: &Mesh) -> f32 {
-    let key = |p: Vec3| p.to_array().map(f32::to_bits);
-    let mut directed: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
-    for tri in &mesh.indices {
-        for e in 0..3 {
-            let a = key(mesh.positions[tri[e] as usize]);
-            let b = key(mesh.positions[tri[(e + 1) % 3] as usize]);
-            assert_ne!(a, b, "{}: a triangle repeats a position", mesh.name);
-            *directed.entry((a, b)).or_default() += 1;
-        }
-    }
-    for (&(a, b), &count) in &directed {
-        assert_eq!(count, 1, "{}: edge used {count} times one way", mesh.name);
-        assert_eq!(
-            directed.get(&(b, a)),
-            Some(&1),
-            "{}: edge {:?} -> {:?} has no opposite twin",
-            mesh.name,
-            a.map(f32::from_bits),
-            b.map(f32::from_bits)
-        );
-    }
-    mesh.indices
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum()
-}
+use lustre_geometry::{Bvh, MaterialModel, Ray, Scene, SurfaceKind, builtin, triangle_area};
 
 #[test]
 fn the_edge_check_tells_closed_from_open_and_flipped() {
