@@ -25,9 +25,9 @@
 //! | 6 preprocessing kept between runs | [`cache`] |
 //!
 //! Everything here runs on the CPU and is the reference of the GPU passes
-//! of `lustre-mpr` (`passes::radiance_map`). Not here yet: the capture of
-//! D on the GPU, the convolution and modulation as GPU passes in the frame,
-//! and convolution in depth layers (section 9).
+//! of `lustre-mpr` (`passes::radiance_map`, `passes::glossy_reflection`).
+//! Not here yet: the capture of D on the GPU, the passes in the frame, and
+//! convolution in depth layers (section 9).
 
 pub mod cache;
 mod error;

@@ -128,6 +128,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             with_view(crate::passes::glossy_image::GLOSSY_IMAGE_WGSL),
         ),
         (
+            "passes/glossy_reflection.wgsl",
+            crate::passes::glossy_reflection::GLOSSY_REFLECTION_WGSL.to_owned(),
+        ),
+        (
             "passes/radiance_map.wgsl",
             crate::passes::radiance_map::RADIANCE_MAP_WGSL.to_owned(),
         ),

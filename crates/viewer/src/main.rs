@@ -33,12 +33,12 @@ struct Cli {
 enum Command {
     /// Print a scene's triangles, surfaces, materials, lights and bounds, or a photon file's header.
     Info {
-        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), an OBJ or glTF 2.0 file (`.gltf`, `.glb`), or a photon file (`.lph`).
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass, pyramid, house), an OBJ or glTF 2.0 file (`.gltf`, `.glb`), or a photon file (`.lph`).
         scene: String,
     },
     /// Write a scene as Mitsuba 3 XML, with its meshes as PLY files beside it.
     ExportMitsuba {
-        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass, pyramid, house), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
         scene: String,
         /// The XML file to write.
         out: PathBuf,
@@ -60,7 +60,7 @@ enum Command {
     },
     /// Write a scene as glTF 2.0: binary (`.glb`) or JSON with an embedded buffer (`.gltf`)
     ExportGltf {
-        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
+        /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass, pyramid, house), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
         scene: String,
         /// The file to write, `.glb` or `.gltf`.
         out: PathBuf,

@@ -336,7 +336,7 @@ pub enum GlossyArg {
 /// Options of `lustre render`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RenderArgs {
-    /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
+    /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass, pyramid, house), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
     pub scene: String,
     /// Rendering technique.
     #[arg(long, value_enum, default_value_t = Technique::SplatDirect)]

@@ -26,7 +26,7 @@ pub enum AreaLightsArg {
 /// Options of `lustre trace`.
 #[derive(Debug, clap::Args)]
 pub struct TraceArgs {
-    /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
+    /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass, pyramid, house), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
     pub scene: String,
     /// The photon file to write (or, with --append, to extend).
     #[arg(long)]

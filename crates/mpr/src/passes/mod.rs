@@ -8,6 +8,7 @@ pub mod direct;
 pub mod emission;
 pub mod glossy_image;
 pub mod glossy_lobe;
+pub mod glossy_reflection;
 pub mod gouraud;
 pub mod light_volume;
 pub mod radiance_map;

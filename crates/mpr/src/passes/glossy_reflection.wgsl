@@ -1,0 +1,85 @@
+// "How it is reflected" (Bastos et al. 1999, section 8.2): the reflected
+// image M convolved with the resampled kernel K over the pixels M covers,
+// then modulated by R(cos θ) from the flipped 1D table. CPU twin:
+// lustre_ibr::glossy (convolve, modulate).
+//
+// Notation: a pixel's ray has direction normalize(forward + right x + up y)
+// with x = (px - cx)/fx, y = (cy - py)/fy (lustre_ibr::view); cos θ is
+// |ray · n| for the reflector's normal n; the table holds R at
+// cos θ = (k + 1/2)/m, linearly interpolated with clamp to edge.
+
+struct Params {
+    right: vec4f,
+    up: vec4f,
+    forward: vec4f,
+    // Reflector normal (xyz).
+    normal: vec4f,
+    // focal (fx, fy), principal point (cx, cy).
+    focal_principal: vec4f,
+    // width, height, tap count, table length.
+    counts: vec4u,
+};
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var m_color: texture_2d<f32>;
+@group(0) @binding(2) var m_depth: texture_depth_2d;
+// (dx, dy, weight, 0) per tap.
+@group(0) @binding(3) var<storage, read> taps: array<vec4f>;
+// R per table entry (rgb).
+@group(0) @binding(4) var<storage, read> table: array<vec4f>;
+@group(0) @binding(5) var out_term: texture_storage_2d<rgba32float, write>;
+
+fn covered(p: vec2i) -> bool {
+    return textureLoad(m_depth, p, 0) > 0.0;
+}
+
+fn reflectance(c: f32) -> vec3f {
+    let m = params.counts.w;
+    if (!(c > 0.0) || m == 0u) {
+        return vec3f(0.0);
+    }
+    if (m == 1u) {
+        return table[0].xyz;
+    }
+    let x = clamp(min(c, 1.0) * f32(m) - 0.5, 0.0, f32(m - 1u));
+    let i = min(u32(floor(x)), m - 2u);
+    let t = x - f32(i);
+    return table[i].xyz * (1.0 - t) + table[i + 1u].xyz * t;
+}
+
+@compute @workgroup_size(8, 8)
+fn cs_main(@builtin(global_invocation_id) id: vec3u) {
+    let size = params.counts.xy;
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let p = vec2i(id.xy);
+    if (!covered(p)) {
+        textureStore(out_term, p, vec4f(0.0));
+        return;
+    }
+    var sum = vec3f(0.0);
+    var weight = 0.0;
+    for (var k = 0u; k < params.counts.z; k++) {
+        let tap = taps[k];
+        let s = p + vec2i(i32(tap.x), i32(tap.y));
+        if (s.x < 0 || s.y < 0 || s.x >= i32(size.x) || s.y >= i32(size.y)) {
+            continue;
+        }
+        if (covered(s)) {
+            sum += textureLoad(m_color, s, 0).xyz * tap.z;
+            weight += tap.z;
+        }
+    }
+    var blurred = vec3f(0.0);
+    if (weight > 0.0) {
+        blurred = sum / weight;
+    }
+    let pixel = vec2f(id.xy) + 0.5;
+    let f = params.focal_principal;
+    let x = (pixel.x - f.z) / f.x;
+    let y = (f.w - pixel.y) / f.y;
+    let ray = normalize(params.forward.xyz + params.right.xyz * x + params.up.xyz * y);
+    let c = abs(dot(ray, params.normal.xyz));
+    textureStore(out_term, p, vec4f(blurred * reflectance(c), 1.0));
+}
