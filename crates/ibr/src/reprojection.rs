@@ -1,14 +1,14 @@
 //! Reprojection of radiance maps into a reflected view as sized points, and their reconstruction (Bastos et al. 1999, section 8.1.3, "Reprojection" and "Reconstruction", equation 3).
 //!
 //! **Reprojection.** A texel's world point is its camera's
-//! [`SampleCamera::unproject`] at its depth, projected into the desired
+//! [`crate::sampling::SampleCamera::unproject`] at its depth, projected into the desired
 //! (reflected) view ([`PinholeView::project`]).
 //!
 //! **Point size, equation 3.** `PointSize = 1/Step = DistanceScale ·
 //! Angular / Window` per axis. Derivation, for a point `X` at reference
 //! depth `zr` and desired depth `zd`: the texel is a patch parallel to the
 //! reference image plane of world size `zr/frx` along `u` and `zr/fry`
-//! along `v` (`fr` the reference focal lengths in pixels, [`SampleCamera`]'s
+//! along `v` (`fr` the reference focal lengths in pixels, [`crate::sampling::SampleCamera`]'s
 //! pinhole). The desired view maps a small world offset `Δ` at `X` to the
 //! pixel offset `(fdx/zd) Δ·ax` along x, with `ax = xd − (xc/zd) fd` its
 //! local x axis (`xd`, `fd` the desired right and forward axes, `xc` the
@@ -43,7 +43,6 @@ use lustre_geometry::Rgb;
 
 use crate::quadtree::{MapQuadtree, QuadNode};
 use crate::radiance_map::RadianceMap;
-use crate::sampling::SampleCamera;
 use crate::view::PinholeView;
 
 /// Where equation 3's point size is estimated (section 8.1.3).
@@ -87,15 +86,12 @@ impl PointSizeTerms {
     }
 }
 
-/// Equation 3's factors for world point `x` of a `w × h` map of `camera` seen by `desired`; `None` if `x` is not in front of both.
+/// Equation 3's factors for world point `x` of a map seen by `reference` (its sample camera's [`crate::sampling::SampleCamera::pinhole`]) and by `desired`; `None` if `x` is not in front of both.
 pub fn point_size_terms(
-    camera: &SampleCamera,
-    w: u32,
-    h: u32,
+    reference: &PinholeView,
     desired: &PinholeView,
     x: Vec3,
 ) -> Option<PointSizeTerms> {
-    let reference = camera.pinhole(w, h);
     let zr = reference.camera_coordinates(x).z;
     let c = desired.camera_coordinates(x);
     let zd = c.z;
@@ -135,15 +131,7 @@ fn culled(node: &QuadNode, view: &PinholeView) -> bool {
     if cs.iter().any(|c| c.z <= 0.0) {
         return false;
     }
-    let px: Vec<Vec2> = cs
-        .iter()
-        .map(|c| {
-            Vec2::new(
-                view.principal.x + view.focal.x * c.x / c.z,
-                view.principal.y - view.focal.y * c.y / c.z,
-            )
-        })
-        .collect();
+    let px: Vec<Vec2> = cs.iter().map(|&c| view.pixel(c)).collect();
     let (w, h) = (view.width as f32, view.height as f32);
     px.iter().all(|p| p.x < 0.0)
         || px.iter().all(|p| p.x > w)
@@ -186,6 +174,7 @@ pub fn leaf_draws(map: &RadianceMap, tree: &MapQuadtree, desired: &PinholeView) 
     if tree.nodes.is_empty() {
         return out;
     }
+    let reference = map.camera.pinhole(map.width, map.height);
     let mut stack = vec![0usize];
     while let Some(k) = stack.pop() {
         let node = &tree.nodes[k];
@@ -196,14 +185,8 @@ pub fn leaf_draws(map: &RadianceMap, tree: &MapQuadtree, desired: &PinholeView) 
             stack.extend((first..first + node.children).map(|c| c as usize));
             continue;
         }
-        let size = point_size_terms(
-            &map.camera,
-            map.width,
-            map.height,
-            desired,
-            node.representative,
-        )
-        .map(|t| t.point_size());
+        let size =
+            point_size_terms(&reference, desired, node.representative).map(|t| t.point_size());
         out.push(LeafDraw {
             x: node.x,
             y: node.y,
@@ -224,6 +207,7 @@ pub fn reproject(
     sizing: PointSizing,
 ) -> Vec<ProjectedPoint> {
     let mut out = Vec::new();
+    let reference = map.camera.pinhole(map.width, map.height);
     for leaf in leaf_draws(map, tree, desired) {
         if sizing == PointSizing::PerNode && leaf.size.is_none() {
             continue;
@@ -239,8 +223,7 @@ pub fn reproject(
                 let size = match sizing {
                     PointSizing::PerNode => leaf.size,
                     PointSizing::PerPoint => {
-                        point_size_terms(&map.camera, map.width, map.height, desired, x)
-                            .map(|t| t.point_size())
+                        point_size_terms(&reference, desired, x).map(|t| t.point_size())
                     }
                 };
                 let Some(size) = size else { continue };

@@ -80,13 +80,15 @@ impl PinholeView {
         if !(c.z > 0.0) {
             return None;
         }
-        Some((
-            Vec2::new(
-                self.principal.x + self.focal.x * c.x / c.z,
-                self.principal.y - self.focal.y * c.y / c.z,
-            ),
-            c.z,
-        ))
+        Some((self.pixel(c), c.z))
+    }
+
+    /// The pixel position of camera coordinates `c` (with `c.z > 0`).
+    pub fn pixel(&self, c: Vec3) -> Vec2 {
+        Vec2::new(
+            self.principal.x + self.focal.x * c.x / c.z,
+            self.principal.y - self.focal.y * c.y / c.z,
+        )
     }
 
     /// The unit direction from the eye through pixel position `pixel`.

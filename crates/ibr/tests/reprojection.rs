@@ -140,7 +140,7 @@ fn equation_3_matches_the_projected_texel_footprint() {
             continue;
         }
         checked += 1;
-        let terms = point_size_terms(&camera, w, h, &desired, x).unwrap();
+        let terms = point_size_terms(&camera.pinhole(w, h), &desired, x).unwrap();
         let eq3 = terms.point_size();
         assert!(
             ((eq3 - brute).abs() / brute).max_element() < 0.01,

@@ -13,7 +13,7 @@ use lustre_geometry::Plane;
 use lustre_ibr::PinholeView;
 use wgpu::util::DeviceExt;
 
-use crate::passes::radiance_map::ReflectedTargets;
+use crate::passes::radiance_map::{GpuPinhole, ReflectedTargets, texture_2d};
 use crate::{GpuContext, Result};
 
 /// The pass's WGSL (`src/passes/glossy_reflection.wgsl`).
@@ -26,11 +26,8 @@ pub const GLOSSY_TERM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32F
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct GpuParams {
-    right: [f32; 4],
-    up: [f32; 4],
-    forward: [f32; 4],
+    pinhole: GpuPinhole,
     normal: [f32; 4],
-    focal_principal: [f32; 4],
     counts: [u32; 4],
 }
 
@@ -67,22 +64,16 @@ impl GlossyReflectionPass {
     /// A `width × height` texture for the term.
     pub fn output(ctx: &GpuContext, width: u32, height: u32) -> Result<wgpu::Texture> {
         ctx.checked("glossy-term texture", || {
-            ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("glossy-term"),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: GLOSSY_TERM_FORMAT,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
+            texture_2d(
+                ctx,
+                "glossy-term",
+                width,
+                height,
+                GLOSSY_TERM_FORMAT,
+                wgpu::TextureUsages::STORAGE_BINDING
                     | wgpu::TextureUsages::COPY_SRC
                     | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
+            )
         })
     }
 
@@ -99,16 +90,8 @@ impl GlossyReflectionPass {
         output: &wgpu::Texture,
     ) -> Result<()> {
         let params = GpuParams {
-            right: view.right.extend(0.0).to_array(),
-            up: view.up.extend(0.0).to_array(),
-            forward: view.forward.extend(0.0).to_array(),
+            pinhole: GpuPinhole::new(view),
             normal: plane.normal.extend(0.0).to_array(),
-            focal_principal: [
-                view.focal.x,
-                view.focal.y,
-                view.principal.x,
-                view.principal.y,
-            ],
             counts: [
                 view.width,
                 view.height,

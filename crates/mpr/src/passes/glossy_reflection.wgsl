@@ -9,13 +9,15 @@
 // cos θ = (k + 1/2)/m, linearly interpolated with clamp to edge.
 
 struct Params {
+    // The reflected view (its eye unused here).
+    eye: vec4f,
     right: vec4f,
     up: vec4f,
     forward: vec4f,
-    // Reflector normal (xyz).
-    normal: vec4f,
     // focal (fx, fy), principal point (cx, cy).
     focal_principal: vec4f,
+    // Reflector normal (xyz).
+    normal: vec4f,
     // width, height, tap count, table length.
     counts: vec4u,
 };

@@ -44,16 +44,66 @@ struct GpuLeaf {
     size_width_first: [f32; 4],
 }
 
-/// The view on the GPU (`View` in the WGSL).
+/// A [`PinholeView`] on the GPU: eye and axes (w unused), then focal lengths and principal point; the leading fields of `View` here and `Params` in the glossy-reflection pass.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
-struct GpuView {
+pub(crate) struct GpuPinhole {
     eye: [f32; 4],
     right: [f32; 4],
     up: [f32; 4],
     forward: [f32; 4],
     focal_principal: [f32; 4],
+}
+
+impl GpuPinhole {
+    /// The GPU layout of `view`.
+    pub(crate) fn new(view: &PinholeView) -> Self {
+        Self {
+            eye: view.eye.extend(1.0).to_array(),
+            right: view.right.extend(0.0).to_array(),
+            up: view.up.extend(0.0).to_array(),
+            forward: view.forward.extend(0.0).to_array(),
+            focal_principal: [
+                view.focal.x,
+                view.focal.y,
+                view.principal.x,
+                view.principal.y,
+            ],
+        }
+    }
+}
+
+/// The view on the GPU (`View` in the WGSL).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct GpuView {
+    pinhole: GpuPinhole,
     size_near_leaves: [f32; 4],
+}
+
+/// A `width × height` 2D texture of one mip level and sample.
+pub(crate) fn texture_2d(
+    ctx: &GpuContext,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
 }
 
 /// One reflector's radiance maps on the GPU: every texel's world point and radiance, map after map.
@@ -121,28 +171,26 @@ impl ReflectedTargets {
     /// Targets of `width × height` pixels.
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Result<Self> {
         ctx.checked("reflected-image targets", || {
-            let texture = |label, format, usage| {
-                ctx.device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width,
-                        height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
-            };
             let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::COPY_SRC
                 | wgpu::TextureUsages::TEXTURE_BINDING;
             Self {
-                color: texture("reflected-radiance", REFLECTED_FORMAT, usage),
-                depth: texture("reflected-depth", REFLECTED_DEPTH_FORMAT, usage),
+                color: texture_2d(
+                    ctx,
+                    "reflected-radiance",
+                    width,
+                    height,
+                    REFLECTED_FORMAT,
+                    usage,
+                ),
+                depth: texture_2d(
+                    ctx,
+                    "reflected-depth",
+                    width,
+                    height,
+                    REFLECTED_DEPTH_FORMAT,
+                    usage,
+                ),
             }
         })
     }
@@ -275,16 +323,7 @@ impl RadianceMapPass {
             }
         }
         let gpu_view = GpuView {
-            eye: view.eye.extend(1.0).to_array(),
-            right: view.right.extend(0.0).to_array(),
-            up: view.up.extend(0.0).to_array(),
-            forward: view.forward.extend(0.0).to_array(),
-            focal_principal: [
-                view.focal.x,
-                view.focal.y,
-                view.principal.x,
-                view.principal.y,
-            ],
+            pinhole: GpuPinhole::new(view),
             size_near_leaves: [
                 view.width as f32,
                 view.height as f32,
