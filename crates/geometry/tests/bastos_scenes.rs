@@ -11,7 +11,7 @@ use std::path::Path;
 
 mod support;
 
-use support::{check_closed, mesh};
+use support::{check_closed, check_closed_meshes, check_no_degenerate_triangles, mesh};
 
 use glam::{Vec2, Vec3};
 use lustre_geometry::builtin::house::{self, HOUSE_REFLECTORS, ROOMS, house_path};
@@ -20,7 +20,7 @@ use lustre_geometry::camera_path::CameraPath;
 use lustre_geometry::light::Light;
 use lustre_geometry::material::ConductorFresnel;
 use lustre_geometry::mitsuba::{ExportOptions, export, read_ply, scene_xml};
-use lustre_geometry::{Bvh, MaterialModel, Mesh, Ray, Scene, SurfaceKind, builtin, triangle_area};
+use lustre_geometry::{Bvh, MaterialModel, Mesh, Ray, Scene, SurfaceKind, builtin};
 
 /// Checks that `name` is a planar reflector: one mesh whose vertices all lie
 /// within 1e-5 of one plane, flat shaded along that plane, a non-diffuse
@@ -67,23 +67,6 @@ fn glossy_meshes(scene: &Scene) -> HashSet<&str> {
         .filter(|m| !scene.materials()[m.material as usize].model.is_diffuse())
         .map(|m| m.name.as_str())
         .collect()
-}
-
-/// Every triangle has an area and no vanishing altitude.
-fn check_no_degenerate_triangles(scene: &Scene) {
-    for m in scene.meshes() {
-        for t in 0..m.indices.len() {
-            let [a, b, c] = m.triangle(t);
-            let area = triangle_area([a, b, c]);
-            let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
-            assert!(
-                area > 1e-7 && area / longest > 1e-5,
-                "{}: {} triangle {t} has area {area} and longest edge {longest}",
-                scene.name,
-                m.name
-            );
-        }
-    }
 }
 
 /// The mesh hit first by the ray from `eye` towards `target`.
@@ -229,15 +212,7 @@ fn pyramid_room_is_textured_with_geometry() {
 #[test]
 fn pyramid_closed_meshes_and_the_closed_pyramid() {
     let scene = builtin("pyramid").unwrap();
-    for name in pyramid::CLOSED_MESHES {
-        let (_, m) = mesh(&scene, name);
-        let volume = check_closed(m);
-        let extent = m.bounds().extent();
-        assert!(
-            volume > 0.0 && volume <= extent.x * extent.y * extent.z,
-            "{name}: {volume}"
-        );
-    }
+    check_closed_meshes(&scene, pyramid::CLOSED_MESHES);
     // The four faces and the base close the pyramid: volume b² · 4 · h / 3.
     let mut solid = mesh(&scene, "pyramid-base").1.clone();
     for name in pyramid::PYRAMID_FACES {
@@ -381,15 +356,7 @@ fn house_has_the_papers_triangle_count_and_five_reflectors() {
 #[test]
 fn house_closed_meshes_lights_and_camera() {
     let scene = builtin("house").unwrap();
-    for name in house::CLOSED_MESHES {
-        let (_, m) = mesh(&scene, name);
-        let volume = check_closed(m);
-        let extent = m.bounds().extent();
-        assert!(
-            volume > 0.0 && volume <= extent.x * extent.y * extent.z,
-            "{name}: {volume}"
-        );
-    }
+    check_closed_meshes(&scene, house::CLOSED_MESHES);
     // The piano's case is closed by its lid; the bench's seat is a box open at the top.
     let mut piano = mesh(&scene, "piano").1.clone();
     let (_, lid) = mesh(&scene, "piano-top");

@@ -6,13 +6,13 @@
 
 mod support;
 
-use support::{check_closed, mesh};
+use support::{check_closed, check_no_degenerate_triangles, mesh};
 
 use glam::Vec3;
 use lustre_geometry::builtin::{bathroom, mirrors};
 use lustre_geometry::light::Light;
 use lustre_geometry::mitsuba::{ExportOptions, export, read_ply};
-use lustre_geometry::{Bvh, MaterialModel, Ray, Scene, SurfaceKind, builtin, triangle_area};
+use lustre_geometry::{Bvh, MaterialModel, Ray, Scene, SurfaceKind, builtin};
 
 #[test]
 fn the_edge_check_tells_closed_from_open_and_flipped() {
@@ -65,20 +65,7 @@ fn closed_meshes_are_outward_oriented_manifolds() {
 #[test]
 fn no_triangle_is_degenerate() {
     for name in ["mirrors", "bathroom"] {
-        let scene = builtin(name).unwrap();
-        for m in scene.meshes() {
-            for t in 0..m.indices.len() {
-                let [a, b, c] = m.triangle(t);
-                let area = triangle_area([a, b, c]);
-                let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
-                // Area over the longest edge: the smallest altitude / 2.
-                assert!(
-                    area > 1e-7 && area / longest > 1e-5,
-                    "{name}: {} triangle {t} has area {area} and longest edge {longest}",
-                    m.name
-                );
-            }
-        }
+        check_no_degenerate_triangles(&builtin(name).unwrap());
     }
 }
 

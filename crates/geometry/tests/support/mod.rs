@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use glam::Vec3;
-use lustre_geometry::{Mesh, Scene};
+use lustre_geometry::{Mesh, Scene, triangle_area};
 
 /// The mesh named `name` of `scene` and its id.
 pub fn mesh<'a>(scene: &'a Scene, name: &str) -> (u32, &'a Mesh) {
@@ -49,4 +49,35 @@ pub fn check_closed(mesh: &Mesh) -> f32 {
             a.dot(b.cross(c)) / 6.0
         })
         .sum()
+}
+
+/// Every triangle has an area and no vanishing altitude.
+pub fn check_no_degenerate_triangles(scene: &Scene) {
+    for m in scene.meshes() {
+        for t in 0..m.indices.len() {
+            let [a, b, c] = m.triangle(t);
+            let area = triangle_area([a, b, c]);
+            let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
+            // Area over the longest edge: the smallest altitude / 2.
+            assert!(
+                area > 1e-7 && area / longest > 1e-5,
+                "{}: {} triangle {t} has area {area} and longest edge {longest}",
+                scene.name,
+                m.name
+            );
+        }
+    }
+}
+
+/// Each mesh named in `names` is closed ([`check_closed`]) with a positive volume no larger than its bounding box's.
+pub fn check_closed_meshes(scene: &Scene, names: &[&str]) {
+    for name in names {
+        let (_, m) = mesh(scene, name);
+        let volume = check_closed(m);
+        let extent = m.bounds().extent();
+        assert!(
+            volume > 0.0 && volume <= extent.x * extent.y * extent.z,
+            "{name}: {volume}"
+        );
+    }
 }
