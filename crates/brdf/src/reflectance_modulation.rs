@@ -144,6 +144,14 @@ impl FlippedRadialReflectance {
         Ok(Self { values })
     }
 
+    /// A table of `len` entries of any modulation `f(cos θ)` under the same flipped index (a BRDF's directional albedo, for one).
+    pub fn from_fn(len: u32, f: impl Fn(f32) -> Rgb) -> Result<Self> {
+        check_size("len", len)?;
+        let m = len as f32;
+        let values = (0..len).map(|k| f((k as f32 + 0.5) / m)).collect();
+        Ok(Self { values })
+    }
+
     /// Linear interpolation at `cos θ` in [0, 1] with clamp-to-edge (a GPU's linear filter); zero for `cos θ ≤ 0`.
     pub fn eval(&self, cos_theta: f32) -> Rgb {
         if !(cos_theta > 0.0) || self.values.is_empty() {

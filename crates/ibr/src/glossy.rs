@@ -119,12 +119,52 @@ pub fn pixel_kernel(kernel: &KernelTexture, radius: f32) -> Vec<(i32, i32, f32)>
 
 /// `M * K`: each covered pixel the weighted mean of the covered pixels under the resampled kernel (module documentation); uncovered pixels stay empty.
 pub fn convolve(image: &ReflectedImage, taps: &[(i32, i32, f32)]) -> ReflectedImage {
+    convolve_in(image, None, taps)
+}
+
+/// Whether pixel `k` gets a value: covered by M, or inside the reflector's `mask`.
+fn in_domain(image: &ReflectedImage, mask: Option<&[bool]>, k: usize) -> bool {
+    image.depth[k].is_finite() || mask.is_some_and(|m| m[k])
+}
+
+/// Whether pixel `k` is void: inside the reflector's `mask`, uncovered by M and by its eight neighbours. An uncovered pixel beside a covered one is a crack between reprojected points (a point drawn a pixel too small), left out of the weights; a pixel amid uncovered ones is where the mirrored ray left the scene, black.
+pub fn is_void(image: &ReflectedImage, mask: Option<&[bool]>, k: usize) -> bool {
+    let Some(mask) = mask else {
+        return false;
+    };
+    if !mask[k] || image.depth[k].is_finite() {
+        return false;
+    }
+    let (w, h) = (image.width as i64, image.height as i64);
+    let (x, y) = (k as i64 % w, k as i64 / w);
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let (sx, sy) = (x + dx, y + dy);
+            if sx >= 0
+                && sy >= 0
+                && sx < w
+                && sy < h
+                && image.depth[(sy * w + sx) as usize].is_finite()
+            {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// `M * K` at the pixels M covers and those of the reflector's `mask` (row-major, true where the reflector is seen), each the weighted mean over the pixels M covers and the void pixels ([`is_void`]): where the mirrored ray leaves the scene M is black, and the glossy lobe blurs the scene's edge into the void as into any dark surface; other pixels, cracks and those outside the reflector, stay out of the weights, so neither the reflector's own silhouette nor a crack darkens it, and a crack takes the mean of its neighbours. Pixels outside both stay empty.
+pub fn convolve_in(
+    image: &ReflectedImage,
+    mask: Option<&[bool]>,
+    taps: &[(i32, i32, f32)],
+) -> ReflectedImage {
     let (w, h) = (image.width as i32, image.height as i32);
     let mut out = image.clone();
     for y in 0..h {
         for x in 0..w {
             let k = (y * w + x) as usize;
-            if !image.depth[k].is_finite() {
+            if !in_domain(image, mask, k) {
                 continue;
             }
             let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
@@ -136,6 +176,8 @@ pub fn convolve(image: &ReflectedImage, taps: &[(i32, i32, f32)]) -> ReflectedIm
                 let s = (sy * w + sx) as usize;
                 if image.depth[s].is_finite() {
                     sum += image.radiance[s] * t;
+                    weight += t;
+                } else if is_void(image, mask, s) {
                     weight += t;
                 }
             }
@@ -163,11 +205,22 @@ pub fn modulate(
     plane: &Plane,
     table: &FlippedRadialReflectance,
 ) -> Vec<Rgb> {
+    modulate_in(blurred, None, view, plane, table)
+}
+
+/// [`modulate`] over the domain of [`convolve_in`]: the pixels M covers and those of `mask`.
+pub fn modulate_in(
+    blurred: &ReflectedImage,
+    mask: Option<&[bool]>,
+    view: &PinholeView,
+    plane: &Plane,
+    table: &FlippedRadialReflectance,
+) -> Vec<Rgb> {
     let mut out = vec![Rgb::ZERO; blurred.radiance.len()];
     for y in 0..blurred.height {
         for x in 0..blurred.width {
             let k = (y * blurred.width + x) as usize;
-            if blurred.depth[k].is_finite() {
+            if in_domain(blurred, mask, k) {
                 out[k] = blurred.radiance[k] * table.eval(pixel_cos_theta(view, plane, x, y));
             }
         }

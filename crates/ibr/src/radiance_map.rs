@@ -58,6 +58,16 @@ impl RadianceMap {
         height: u32,
         source: &dyn RadianceSource,
     ) -> Self {
+        Self::capture_texels(camera, width, height, &|_, q, dir| source.trace(q, dir))
+    }
+
+    /// Captures the map of `camera` from `texel(k, q, dir)`: the radiance and hit distance of texel `k` (row-major), whose ray leaves element point `q` in unit direction `dir` (a GPU image read back, with its distances ray cast, goes through here).
+    pub fn capture_texels(
+        camera: &SampleCamera,
+        width: u32,
+        height: u32,
+        texel: &(dyn Fn(usize, Vec3, Vec3) -> Option<(Rgb, f32)> + Sync),
+    ) -> Self {
         let h = camera.height();
         let texels: Vec<([f16; 3], f32)> = (0..width * height)
             .into_par_iter()
@@ -65,7 +75,7 @@ impl RadianceMap {
                 let st = SampleCamera::texel_st(k % width, k / width, width, height);
                 let q = camera.element_point(st.x, st.y);
                 let dir = (q - camera.position).normalize();
-                match source.trace(q, dir) {
+                match texel(k as usize, q, dir) {
                     Some((radiance, t)) if t.is_finite() && t >= 0.0 => {
                         // z grows along the ray by dir·n per unit distance, from h at q.
                         let z = h + t * dir.dot(camera.element.normal);

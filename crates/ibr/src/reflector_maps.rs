@@ -2,12 +2,12 @@
 
 use lustre_geometry::Rgb;
 
-use crate::error::Result;
+use crate::error::{IbrError, Result};
 use crate::quadtree::{MapQuadtree, QuadtreeSettings};
 use crate::radiance_map::{RadianceMap, RadianceSource};
 use crate::reflector::Reflector;
 use crate::reprojection::{PointSizing, ReflectedImage, reconstruct, reproject};
-use crate::sampling::{SamplingSettings, sample_cameras};
+use crate::sampling::{SampleCamera, SamplingSettings, sample_cameras};
 use crate::selection::{SelectionRule, select};
 use crate::view::PinholeView;
 
@@ -48,18 +48,40 @@ impl ReflectorMaps {
         source: &dyn RadianceSource,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Self> {
+        let (w, h) = sampling.map_resolution;
+        Self::capture_with(
+            reflector,
+            sampling,
+            quadtree,
+            &mut |camera| Ok::<_, IbrError>(RadianceMap::capture(camera, w, h, source)),
+            progress,
+        )
+    }
+
+    /// Samples `reflector` under `sampling` and has `draw` capture each camera's map at `sampling.map_resolution` (a renderer that draws whole maps at once, as the GPU does), calling `progress(done, total)` after each map (section 8.1.3).
+    pub fn capture_with<E: From<IbrError>>(
+        reflector: &Reflector,
+        sampling: &SamplingSettings,
+        quadtree: &QuadtreeSettings,
+        draw: &mut dyn FnMut(&SampleCamera) -> std::result::Result<RadianceMap, E>,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> std::result::Result<Self, E> {
         sampling.validate()?;
         quadtree.validate()?;
         let (nu, nv) = sampling.planar_resolution;
         let elements = reflector.elements(nu, nv)?;
         let cameras = sample_cameras(&elements, sampling)?;
-        let (w, h) = sampling.map_resolution;
         let mut maps = Vec::with_capacity(cameras.len());
         for (k, camera) in cameras.iter().enumerate() {
-            maps.push(RadianceMap::capture(camera, w, h, source));
+            maps.push(draw(camera)?);
             progress(k + 1, cameras.len());
         }
-        Self::from_maps(reflector.clone(), *sampling, maps, quadtree)
+        Ok(Self::from_maps(
+            reflector.clone(),
+            *sampling,
+            maps,
+            quadtree,
+        )?)
     }
 
     /// The bundle of already captured `maps` (e.g. read from a cache or from the GPU), their quadtrees built under `quadtree`.
@@ -82,7 +104,7 @@ impl ReflectorMaps {
     }
 
     /// The maps' sample cameras, in order.
-    pub fn cameras(&self) -> Vec<crate::sampling::SampleCamera> {
+    pub fn cameras(&self) -> Vec<SampleCamera> {
         self.maps.iter().map(|m| m.camera).collect()
     }
 

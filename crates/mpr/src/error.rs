@@ -80,6 +80,12 @@ pub enum MprError {
         /// The cause.
         message: String,
     },
+    /// Radiance maps refused (lustre-ibr: settings, reflector, kernel or table).
+    #[error("radiance maps: {0}")]
+    Ibr(#[from] lustre_ibr::IbrError),
+    /// A BRDF lustre-brdf refused to build or tabulate.
+    #[error("BRDF: {0}")]
+    Brdf(#[from] lustre_brdf::BrdfError),
     /// Waiting for the device failed (device lost or timeout).
     #[error("waiting for the GPU failed: {0}")]
     Poll(#[from] wgpu::PollError),

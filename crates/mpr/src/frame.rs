@@ -499,11 +499,26 @@ impl FrameGraph {
     /// vertex radiance, direct light, diffuse textures), splats, tone map to
     /// `output`. Returns the views drawn (scene passes, table 3).
     pub fn render(&self, ctx: &GpuContext, frame: &FrameInputs<'_>) -> Result<usize> {
+        self.render_view(ctx, frame, View::from_camera(frame.camera))
+    }
+
+    /// [`FrameGraph::render`] from `root` instead of `frame.camera`'s own
+    /// view: a view with a clip plane, a mirrored frame or emitters hidden
+    /// (a radiance map's sample camera, [`crate::ibr`]).
+    pub fn render_view(
+        &self,
+        ctx: &GpuContext,
+        frame: &FrameInputs<'_>,
+        root: View,
+    ) -> Result<usize> {
         self.reset_timing();
         self.tonemap.prepare(&ctx.queue, frame.tonemap)?;
         let passes = self.resolve(frame)?;
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
-        let tree = self.view_tree(ctx, frame.camera)?;
+        let tree = match &self.specular {
+            Some(specular) => specular.view_tree(root, ctx.clip_method())?,
+            None => ViewTree::single(root),
+        };
         let slots = self.write_views(ctx, &mut views, &tree, frame.targets)?;
         if let Some((inputs, pass)) = passes.splat {
             pass.prepare(&ctx.queue, inputs.filtering);

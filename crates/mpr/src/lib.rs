@@ -43,6 +43,7 @@ pub mod beam_paths;
 mod device;
 mod error;
 pub mod frame;
+pub mod ibr;
 pub mod kernel_texture;
 pub mod material;
 pub mod pass_timing;

@@ -100,6 +100,10 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             crate::passes::splat_lowres::SPLAT_LOWRES_WGSL.to_owned(),
         ),
         ("passes/tonemap.wgsl", TONEMAP_WGSL.to_owned()),
+        (
+            "passes/reflector_blend.wgsl",
+            crate::passes::reflector_blend::REFLECTOR_BLEND_WGSL.to_owned(),
+        ),
         ("passes/beams.wgsl", crate::passes::beams::beams_wgsl()),
         ("passes/shadow.wgsl", SHADOW_WGSL.to_owned()),
         (

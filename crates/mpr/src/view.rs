@@ -62,6 +62,50 @@ impl View {
         }
     }
 
+    /// The view of a pinhole camera (`lustre_ibr::PinholeView`: axes,
+    /// focal lengths and principal point in pixels), level 0, stencil 0, no
+    /// clip plane: pixel `(x, y)` of a `width × height` target is the
+    /// pinhole's pixel `(x, y)`, with reverse-Z depth `near / z` and the far
+    /// plane at infinity. Axes that form a left-handed frame (a radiance
+    /// map's camera, Bastos et al. 1999, section 8.1.3) give a mirrored view.
+    pub fn from_pinhole(pinhole: &lustre_ibr::PinholeView, near: f32) -> Self {
+        let (r, u, f) = (pinhole.right, pinhole.up, pinhole.forward);
+        // World to view: x along `right`, y along `up`, looking down −z.
+        let view = Mat4::from_cols(
+            Vec4::new(r.x, u.x, -f.x, 0.0),
+            Vec4::new(r.y, u.y, -f.y, 0.0),
+            Vec4::new(r.z, u.z, -f.z, 0.0),
+            Vec4::new(
+                -r.dot(pinhole.eye),
+                -u.dot(pinhole.eye),
+                f.dot(pinhole.eye),
+                1.0,
+            ),
+        );
+        let (w, h) = (pinhole.width as f32, pinhole.height as f32);
+        // x_ndc = (2 fx / w) xc/zc + (2 cx / w − 1), y_ndc = (2 fy / h) yc/zc + (1 − 2 cy / h), zc = −z_view.
+        let (sx, sy) = (2.0 * pinhole.focal.x / w, 2.0 * pinhole.focal.y / h);
+        let (ox, oy) = (
+            2.0 * pinhole.principal.x / w - 1.0,
+            1.0 - 2.0 * pinhole.principal.y / h,
+        );
+        let projection = Mat4::from_cols(
+            Vec4::new(sx, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, sy, 0.0, 0.0),
+            Vec4::new(-ox, -oy, 0.0, -1.0),
+            Vec4::new(0.0, 0.0, near, 0.0),
+        );
+        Self {
+            view,
+            projection,
+            eye: pinhole.eye,
+            clip_plane: None,
+            stencil_reference: 0,
+            level: 0,
+            shows_emitters: true,
+        }
+    }
+
     /// World to clip.
     pub fn view_projection(&self) -> Mat4 {
         self.projection * self.view

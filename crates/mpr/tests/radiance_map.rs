@@ -169,6 +169,7 @@ fn gpu_reprojection_matches_the_cpu_twin() {
             &reflector.plane,
             &taps,
             &table,
+            None,
             &out,
         )
         .unwrap();

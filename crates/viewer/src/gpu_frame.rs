@@ -9,9 +9,10 @@
 use anyhow::Context;
 use lustre_beams::BeamSet;
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
-use lustre_geometry::{Camera, Light, Scene};
+use lustre_geometry::{Bvh, Camera, Light, Scene};
 use lustre_image::Image;
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
+use lustre_mpr::ibr::IbrReflectors;
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::pass_timing::PassTimes;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextures};
@@ -26,7 +27,8 @@ use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffer
 use lustre_photon::{Kernel, SplatEstimator};
 
 use crate::render::{
-    FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg,
+    FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg, Technique,
+    ibr_settings,
 };
 
 /// The format of the tone-mapped output every frame is drawn into.
@@ -117,6 +119,10 @@ pub struct GpuFrame {
     aa_splats: bool,
     /// The lighting terms drawn.
     pub components: Components,
+    /// The glossy reflectors drawn from radiance maps (`--technique ibr`, Bastos et al. 1999).
+    pub ibr: Option<IbrReflectors>,
+    /// Milliseconds the radiance maps took to capture.
+    pub ibr_capture_ms: f64,
 }
 
 impl GpuFrame {
@@ -143,7 +149,11 @@ impl GpuFrame {
             fog_radiance: mean_radiance(scene),
             ..lighting.glossy_images
         };
-        let imaged = imaged_surfaces(scene, &glossy_images);
+        let imaged = if args.technique == Technique::Ibr {
+            IbrReflectors::surfaces(scene)
+        } else {
+            imaged_surfaces(scene, &glossy_images)
+        };
         // Streamed photons are splatted batch by batch after the frame.
         let splats = match lighting.splats {
             Some(estimator) => Some(
@@ -246,7 +256,7 @@ impl GpuFrame {
             && args.light_samples > 1
             && args.paired_lights
             && scene.lights().iter().any(|l| !l.is_delta());
-        Ok(Self {
+        Self {
             ctx,
             graph,
             targets,
@@ -270,7 +280,50 @@ impl GpuFrame {
             light_samples: args.light_samples,
             aa_splats: args.aa_splats,
             components: Components::default(),
-        })
+            ibr: None,
+            ibr_capture_ms: 0.0,
+        }
+        .with_radiance_maps(args, scene, camera)
+    }
+
+    /// With `--technique ibr`, the radiance maps of every glossy planar
+    /// reflector captured from this frame's lighting (Bastos et al. 1999,
+    /// section 8.1.3), with a progress bar on a terminal.
+    fn with_radiance_maps(
+        mut self,
+        args: &RenderArgs,
+        scene: &Scene,
+        camera: &Camera,
+    ) -> anyhow::Result<Self> {
+        if args.technique != Technique::Ibr {
+            return Ok(self);
+        }
+        let inputs = self.inputs(camera);
+        let start = std::time::Instant::now();
+        let bvh = Bvh::build(scene);
+        let bar = indicatif::ProgressBar::new(0).with_style(
+            indicatif::ProgressStyle::with_template(
+                "capturing radiance maps {bar:40} {pos}/{len} ({eta} left)",
+            )
+            .context("progress bar template")?,
+        );
+        let ibr = IbrReflectors::capture(
+            &self.ctx,
+            &self.graph,
+            &inputs,
+            scene,
+            &bvh,
+            &ibr_settings(args),
+            &mut |done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )
+        .with_context(|| format!("radiance maps of scene `{}`", scene.name))?;
+        bar.finish_and_clear();
+        self.ibr = Some(ibr);
+        self.ibr_capture_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(self)
     }
 
     /// The frame's inputs for `camera`, drawn into the sRGB output.
@@ -331,6 +384,9 @@ impl GpuFrame {
                 self.graph.update_shadows(ctx, &self.scene_buffers, lights)
             },
         )?;
+        if let Some(ibr) = &self.ibr {
+            ibr.add(ctx, &self.graph, &self.inputs(camera))?;
+        }
         ctx.device
             .poll(wgpu::PollType::wait_indefinitely())
             .context("waiting for the frame")?;

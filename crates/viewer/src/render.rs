@@ -44,9 +44,11 @@ use lustre_beams::{BeamInput, BeamSet, BuildOptions, GlossyVolume, SplitPoint};
 use lustre_geometry::camera_path::CameraPath;
 use lustre_geometry::obj::Studio;
 use lustre_geometry::{Bvh, Camera, Scene};
+use lustre_ibr::{SamplingSettings, SelectionRule};
 use lustre_image::{Image, Precision};
 use lustre_mpr::beam_paths::scatterer_surfaces;
 use lustre_mpr::frame::SplatInputs;
+use lustre_mpr::ibr::{IbrSettings, Modulation};
 use lustre_mpr::passes::beams::Traversal;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::passes::direct::DirectLights;
@@ -90,6 +92,10 @@ pub enum Technique {
     /// Multi-pass pipeline rendering (Diefenbach & Badler 1997): `splat-direct`'s
     /// light with the mirror faces' stencilled specular images to `--spec-depth`.
     Mpr,
+    /// `splat-direct`'s light with each planar glossy reflector drawn from
+    /// radiance maps (Bastos et al. 1999): `k_d D + k_s (M * K) R`, the maps
+    /// captured from the frame's own lighting, in place of its splats.
+    Ibr,
     /// `mpr` with the light that point lights send through mirrors, rough
     /// conductors, water and glass panes onto the next surface drawn as
     /// specular and glossy polygon beams (Duvenhage et al. 2010), in place of
@@ -100,7 +106,10 @@ pub enum Technique {
 impl Technique {
     /// Whether the technique draws direct light from point lights (section 2.2.1) and splats only the indirect photons.
     pub fn direct_light(self) -> bool {
-        matches!(self, Self::SplatDirect | Self::Mpr | Self::Beams)
+        matches!(
+            self,
+            Self::SplatDirect | Self::Mpr | Self::Beams | Self::Ibr
+        )
     }
 
     /// Whether the technique draws the multi-pass pipeline's frame (Diefenbach & Badler 1997): specular images, shadow volumes, virtual lights.
@@ -116,11 +125,51 @@ impl Technique {
     /// The density estimator of a per-vertex technique, `None` for the splatting ones.
     fn estimator(self, radius: f32, k: usize) -> Option<Estimator> {
         match self {
-            Self::Splat | Self::SplatDirect | Self::Mpr | Self::Beams => None,
+            Self::Splat | Self::SplatDirect | Self::Mpr | Self::Beams | Self::Ibr => None,
             Self::Detp => Some(Estimator::Detp { radius }),
             Self::Impact => Some(Estimator::ImpactCount),
             Self::Photonmap => Some(Estimator::PhotonMaps { k }),
         }
+    }
+}
+
+/// How `--technique ibr` chooses its radiance maps (Bastos et al. 1999, section 8.1.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum IbrSelectionArg {
+    /// Least angle between the mirrored eye's and the camera's direction to the element.
+    Angle,
+    /// Least distance between the camera and the mirrored eye.
+    Distance,
+}
+
+/// How `--technique ibr` tabulates R (Bastos et al. 1999, section 8.2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum IbrModulationArg {
+    /// The glossy lobe's directional albedo over k_s.
+    Albedo,
+    /// Equation 4's F/(π cos² θ).
+    Paper,
+}
+
+/// The radiance maps' settings of `--technique ibr`.
+pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
+    IbrSettings {
+        sampling: SamplingSettings {
+            planar_resolution: args.ibr_elements,
+            arc_step_degrees: args.ibr_arc_step,
+            map_resolution: (args.ibr_map_size, args.ibr_map_size),
+            ..SamplingSettings::default()
+        },
+        maps_per_hemisphere: args.ibr_maps,
+        selection: match args.ibr_selection {
+            IbrSelectionArg::Angle => SelectionRule::MinimalAngle,
+            IbrSelectionArg::Distance => SelectionRule::Distance,
+        },
+        modulation: match args.ibr_modulation {
+            IbrModulationArg::Albedo => Modulation::Albedo,
+            IbrModulationArg::Paper => Modulation::Paper,
+        },
+        ..IbrSettings::default()
     }
 }
 
@@ -444,6 +493,32 @@ pub struct RenderArgs {
     /// reflectance times the scene's mean radiance instead of a further image.
     #[arg(long, default_value_t = DEFAULT_SPEC_DEPTH)]
     pub spec_depth: u32,
+    /// `--technique ibr`: radiance maps reprojected per reflector element
+    /// and frame, the nearest to the mirrored eye (Bastos et al. 1999,
+    /// section 8.1.3: "the k best").
+    #[arg(long, default_value_t = 2)]
+    pub ibr_maps: usize,
+    /// `--technique ibr`: reflector elements along each reflector's two
+    /// sides (the planar resolution of section 8.1.3), one hemisphere of
+    /// sample cameras each.
+    #[arg(long, default_value = "1x1", value_parser = crate::parse_size)]
+    pub ibr_elements: (u32, u32),
+    /// `--technique ibr`: arc between neighbouring sample cameras on a
+    /// hemisphere, degrees (30: 17 cameras, 45: 7, 60: 6).
+    #[arg(long, default_value_t = 30.0)]
+    pub ibr_arc_step: f32,
+    /// `--technique ibr`: texels of each radiance map along each side.
+    #[arg(long, default_value_t = 96)]
+    pub ibr_map_size: u32,
+    /// `--technique ibr`: how the maps are chosen per frame.
+    #[arg(long, value_enum, default_value_t = IbrSelectionArg::Angle)]
+    pub ibr_selection: IbrSelectionArg,
+    /// `--technique ibr`: the reflectance modulation R: the glossy lobe's
+    /// directional albedo over k_s (a uniform environment reflects the
+    /// lobe's albedo) or equation 4's F/(π cos² θ), whose magnitude the
+    /// paper leaves to k_s (brighter than the lobe beyond 56°).
+    #[arg(long, value_enum, default_value_t = IbrModulationArg::Albedo)]
+    pub ibr_modulation: IbrModulationArg,
     /// `--technique mpr` and `beams`: glossy images (Diefenbach & Badler 1997, section 3,
     /// "glossy marble"): N mirror images per planar glossy face, sheared
     /// about its normal by the lobe's roughness and averaged; the face's
@@ -1459,7 +1534,9 @@ fn splat_setup(
 ) -> anyhow::Result<Splatting> {
     let selection = match args.technique {
         Technique::Splat => BounceSelection::All,
-        Technique::SplatDirect | Technique::Mpr | Technique::Beams => BounceSelection::Indirect,
+        Technique::SplatDirect | Technique::Mpr | Technique::Beams | Technique::Ibr => {
+            BounceSelection::Indirect
+        }
         Technique::Detp | Technique::Impact | Technique::Photonmap => {
             bail!("--technique {:?} does not splat", args.technique)
         }

@@ -6,6 +6,8 @@
 //! CPU functions; the GPU pass reads their output.
 
 use glam::{Vec2, Vec3};
+use lustre_brdf::{ALBEDO_STRATA, sampled_albedo};
+use lustre_geometry::Rgb;
 use lustre_geometry::light::hammersley_centred;
 use lustre_geometry::material::{ConductorFresnel, MaterialModel};
 
@@ -98,6 +100,50 @@ pub fn glossy_lobe(model: &MaterialModel) -> Option<GlossyLobe> {
         && lobe.factor.is_finite()
         && lobe.factor.max_element() > 0.0)
         .then_some(lobe)
+}
+
+/// The directional albedo `∫ f_s cos θ_l dω_l` of `model`'s glossy part
+/// (the lobes [`glossy_lobe`] gathers; Lambertian lobes and diffuse terms
+/// left out) for a view at `cos θ` from the normal, estimated by
+/// [`sampled_albedo`] over lustre-brdf's model: the reflectance that a
+/// uniform incident radiance of 1 leaves towards the viewer.
+pub fn glossy_albedo(model: &MaterialModel, cos_theta: f32) -> Result<Rgb, lustre_brdf::BrdfError> {
+    let c = cos_theta.clamp(1e-4, 1.0);
+    let wo = Vec3::new((1.0 - c * c).sqrt(), 0.0, c);
+    let albedo = |m: &MaterialModel| -> Result<Rgb, lustre_brdf::BrdfError> {
+        Ok(sampled_albedo(
+            lustre_brdf::from_model(m)?.as_ref(),
+            wo,
+            ALBEDO_STRATA,
+        ))
+    };
+    match model {
+        MaterialModel::RoughConductor { .. } => albedo(model),
+        MaterialModel::Phong {
+            specular, exponent, ..
+        } => albedo(&MaterialModel::Phong {
+            diffuse: Rgb::ZERO,
+            specular: *specular,
+            exponent: *exponent,
+        }),
+        MaterialModel::Ward {
+            specular,
+            alpha_x,
+            alpha_y,
+            ..
+        } => albedo(&MaterialModel::Ward {
+            diffuse: Rgb::ZERO,
+            specular: *specular,
+            alpha_x: *alpha_x,
+            alpha_y: *alpha_y,
+        }),
+        MaterialModel::Blend {
+            weight,
+            first,
+            second,
+        } => Ok(glossy_albedo(first, c)? * (1.0 - weight) + glossy_albedo(second, c)? * *weight),
+        _ => Ok(Rgb::ZERO),
+    }
 }
 
 /// The `N` shear slopes `Δ = 2m` of a lobe of roughness `α` (module docs):

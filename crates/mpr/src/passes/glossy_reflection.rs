@@ -29,6 +29,7 @@ struct GpuParams {
     pinhole: GpuPinhole,
     normal: [f32; 4],
     counts: [u32; 4],
+    mask: [u32; 4],
 }
 
 /// The convolution and modulation pipeline.
@@ -77,7 +78,8 @@ impl GlossyReflectionPass {
         })
     }
 
-    /// Records `(M * K) R` of `m` (seen by `view`, reflector in `plane`) with kernel `taps` and reflectance `table` into `output`.
+    /// Records `(M * K) R` of `m` (seen by `view`, reflector in `plane`) with kernel `taps` and reflectance `table` into `output`; with `mask` (the frame's surface-id texture and the reflector's id) over the domain of [`lustre_ibr::glossy::convolve_in`], else over the pixels M covers.
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
         ctx: &GpuContext,
@@ -87,6 +89,7 @@ impl GlossyReflectionPass {
         plane: &Plane,
         taps: &[(i32, i32, f32)],
         table: &FlippedRadialReflectance,
+        mask: Option<(&wgpu::Texture, u32)>,
         output: &wgpu::Texture,
     ) -> Result<()> {
         let params = GpuParams {
@@ -97,6 +100,12 @@ impl GlossyReflectionPass {
                 view.height,
                 taps.len() as u32,
                 table.values.len() as u32,
+            ],
+            mask: [
+                mask.map_or(0, |(_, id)| id),
+                u32::from(mask.is_some()),
+                0,
+                0,
             ],
         };
         let mut gpu_taps: Vec<[f32; 4]> = taps
@@ -144,6 +153,21 @@ impl GlossyReflectionPass {
                 ..Default::default()
             });
             let out = output.create_view(&Default::default());
+            let stand_in;
+            let ids = match mask {
+                Some((ids, _)) => ids.create_view(&Default::default()),
+                None => {
+                    stand_in = texture_2d(
+                        ctx,
+                        "glossy-reflection-no-mask",
+                        1,
+                        1,
+                        crate::target::SURFACE_ID_FORMAT,
+                        wgpu::TextureUsages::TEXTURE_BINDING,
+                    );
+                    stand_in.create_view(&Default::default())
+                }
+            };
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("glossy-reflection"),
                 layout: &self.pipeline.get_bind_group_layout(0),
@@ -171,6 +195,10 @@ impl GlossyReflectionPass {
                     wgpu::BindGroupEntry {
                         binding: 5,
                         resource: wgpu::BindingResource::TextureView(&out),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: wgpu::BindingResource::TextureView(&ids),
                     },
                 ],
             })

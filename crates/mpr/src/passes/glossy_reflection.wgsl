@@ -1,5 +1,6 @@
 // "How it is reflected" (Bastos et al. 1999, section 8.2): the reflected
-// image M convolved with the resampled kernel K over the pixels M covers,
+// image M convolved with the resampled kernel K over the pixels M covers
+// and, where the frame's surface ids are given, the reflector's own pixels,
 // then modulated by R(cos θ) from the flipped 1D table. CPU twin:
 // lustre_ibr::glossy (convolve, modulate).
 //
@@ -20,6 +21,8 @@ struct Params {
     normal: vec4f,
     // width, height, tap count, table length.
     counts: vec4u,
+    // x: the reflector's surface id, y: 1 when the id target masks the domain.
+    mask: vec4u,
 };
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -30,9 +33,36 @@ struct Params {
 // R per table entry (rgb).
 @group(0) @binding(4) var<storage, read> table: array<vec4f>;
 @group(0) @binding(5) var out_term: texture_storage_2d<rgba32float, write>;
+// The frame's surface ids (a 1x1 stand-in when unmasked).
+@group(0) @binding(6) var ids: texture_2d<u32>;
 
 fn covered(p: vec2i) -> bool {
     return textureLoad(m_depth, p, 0) > 0.0;
+}
+
+// The reflector's own pixel.
+fn in_mask(p: vec2i) -> bool {
+    return params.mask.y == 1u && textureLoad(ids, p, 0).x == params.mask.x;
+}
+
+// A void pixel: the reflector's own, uncovered by M and by its eight
+// neighbours, where the mirrored ray left the scene and M is black; an
+// uncovered pixel beside a covered one is a crack, left out
+// (lustre_ibr::glossy::is_void).
+fn is_void(p: vec2i) -> bool {
+    if (!in_mask(p) || covered(p)) {
+        return false;
+    }
+    let size = vec2i(params.counts.xy);
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let s = p + vec2i(dx, dy);
+            if (s.x >= 0 && s.y >= 0 && s.x < size.x && s.y < size.y && covered(s)) {
+                return false;
+            }
+        }
+    }
+    return true;
 }
 
 fn reflectance(c: f32) -> vec3f {
@@ -56,7 +86,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let p = vec2i(id.xy);
-    if (!covered(p)) {
+    if (!covered(p) && !in_mask(p)) {
         textureStore(out_term, p, vec4f(0.0));
         return;
     }
@@ -70,6 +100,8 @@ fn cs_main(@builtin(global_invocation_id) id: vec3u) {
         }
         if (covered(s)) {
             sum += textureLoad(m_color, s, 0).xyz * tap.z;
+            weight += tap.z;
+        } else if (is_void(s)) {
             weight += tap.z;
         }
     }

@@ -13,6 +13,7 @@ pub mod gouraud;
 pub mod light_volume;
 pub mod radiance_map;
 pub mod redraw;
+pub mod reflector_blend;
 pub mod shadow;
 pub mod shadow_volume;
 pub mod shadowed_direct;

@@ -1,0 +1,456 @@
+//! Glossy planar reflectors drawn from radiance maps in the frame (Bastos et
+//! al. 1999, sections 8.1 and 8.2): `L = k_d D + k_s (M * K) R` at every
+//! pixel of a reflector.
+//!
+//! **Capture (section 8.1.3).** Each sample camera of each reflector
+//! ([`lustre_ibr::sampling`]) draws the frame graph's own frame, the scene's
+//! real global illumination (direct light, diffuse textures, splats), from
+//! its pinhole through the reflector element ([`View::from_pinhole`]),
+//! everything behind the reflector's plane clipped and the emitters hidden
+//! (see *Composition*). Its HDR image is read back as the map's radiance;
+//! each texel's depth is the distance its ray travels to the first surface,
+//! cast on the CPU's BVH through the texel centre the rasteriser sampled.
+//! This departs from the paper in one way: the paper's maps hold the
+//! view-independent radiosity D, ours the radiance the frame draws towards
+//! the sample camera. A ray from the camera through element point `q` to a
+//! scene point `x` is the ray along which `x` sends light to `q`, so a glossy
+//! surface seen in a map shows the radiance it sends to the reflector
+//! there, not only its diffuse part.
+//!
+//! **Per frame (sections 8.1.3, 8.2).** For each reflector the camera sees
+//! from its front: the `k` maps per hemisphere nearest the mirrored eye
+//! ([`lustre_ibr::select`]) are reprojected as sized points into the
+//! mirrored view (M, [`crate::passes::radiance_map`]); M's depth is read
+//! back for the kernel's radius ([`lustre_ibr::glossy::kernel_radius`],
+//! the mean of `d/(e + d)` over M); `(M * K) R` is computed over M
+//! ([`crate::passes::glossy_reflection`]) and `k_s` times it added at the
+//! reflector's pixels ([`crate::passes::reflector_blend`]).
+//!
+//! **Magnitude of `R`.** The paper's K is `D G` normalised to unit sum and
+//! its R is `F/(π cos² θ)` (equation 4's second factor), which leaves the
+//! magnitude to `k_s`: with unit-sum K, `k_s (M * K) R` of a uniform
+//! environment of radiance 1 is `k_s F/(π cos² θ)`, larger than one beyond
+//! 56° for `k_s F = 1`, while the lobe reflects at most its albedo. So
+//! [`Modulation::Albedo`] (the default) tabulates, under the same flipped
+//! index, the glossy lobe's directional albedo `∫ f_s cos θ_l dω_l` over
+//! `k_s` ([`crate::passes::glossy_lobe::glossy_albedo`]): the paper's R
+//! times the integral that normalising K took out of it, which makes a
+//! uniform environment come back at the lobe's albedo.
+//! [`Modulation::Paper`] keeps equation 4's R with the lobe's Fresnel term.
+//!
+//! **Composition.** The frame already holds `k_d D` at the reflector (the
+//! direct pass's light and the diffuse textures' Lambertian lobe) and the
+//! highlight of the point lights through the reflector's glossy lobe (the
+//! direct pass evaluates the full BRDF), so the maps hide the emitters, as
+//! the glossy images of [`crate::passes::glossy_image`] do, and the
+//! reflector's photon splats must be dropped by the caller
+//! ([`crate::passes::splat::SplatBuffers::new_excluding_imaged`] with
+//! [`IbrReflectors::surfaces`]).
+
+use std::sync::Mutex;
+
+use glam::{Vec3, Vec4};
+use lustre_brdf::Fresnel;
+use lustre_brdf::kernel_texture::KernelTexture;
+use lustre_brdf::microfacet::{Distribution, Shadowing};
+use lustre_brdf::reflectance_modulation::FlippedRadialReflectance;
+use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
+use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene, SurfaceKind};
+use lustre_ibr::glossy::{kernel_radius, pixel_kernel};
+use lustre_ibr::{
+    MemoryReport, PinholeView, QuadtreeSettings, RadianceMap, ReflectedImage, Reflector,
+    ReflectorMaps, SampleCamera, SamplingSettings, SelectionRule, select,
+};
+
+use crate::frame::{FrameGraph, FrameInputs};
+use crate::passes::glossy_lobe::{glossy_albedo, glossy_lobe};
+use crate::passes::glossy_reflection::GlossyReflectionPass;
+use crate::passes::radiance_map::{
+    REFLECTED_NEAR, RadianceMapBuffers, RadianceMapPass, ReflectedTargets,
+};
+use crate::passes::reflector_blend::ReflectorBlendPass;
+use crate::passes::splat_lowres::SplatResolution;
+use crate::readback::{read_depth, read_rgba_f32};
+use crate::target::RenderTargets;
+use crate::view::{View, ViewBuffer};
+use crate::{GpuContext, MprError, Result};
+
+/// Entries of the flipped reflectance table (section 9).
+pub const TABLE_ENTRIES: u32 = 128;
+
+/// Texels per side of the kernel texture K (section 8.2.1).
+pub const KERNEL_TEXELS: usize = 33;
+
+/// How the reflectance modulation R is tabulated (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Modulation {
+    /// The glossy lobe's directional albedo over `k_s`: a uniform environment reflects the lobe's albedo.
+    #[default]
+    Albedo,
+    /// Equation 4's `F/(π cos² θ)`, the magnitude left to `k_s`.
+    Paper,
+}
+
+/// How the reflectors are sampled, selected and shaded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IbrSettings {
+    /// Reflector elements, cameras per hemisphere, map resolution (section 8.1.3).
+    pub sampling: SamplingSettings,
+    /// The maps' quadtrees.
+    pub quadtree: QuadtreeSettings,
+    /// Maps reprojected per hemisphere and frame.
+    pub maps_per_hemisphere: usize,
+    /// How the maps are chosen.
+    pub selection: SelectionRule,
+    /// How R is tabulated.
+    pub modulation: Modulation,
+}
+
+impl Default for IbrSettings {
+    fn default() -> Self {
+        Self {
+            sampling: SamplingSettings {
+                map_resolution: (96, 96),
+                ..SamplingSettings::default()
+            },
+            quadtree: QuadtreeSettings::default(),
+            maps_per_hemisphere: 2,
+            selection: SelectionRule::MinimalAngle,
+            modulation: Modulation::Albedo,
+        }
+    }
+}
+
+/// One reflector on the GPU: its maps, kernel, table and `k_s`.
+#[derive(Debug)]
+pub struct IbrReflector {
+    /// The maps and quadtrees.
+    pub maps: ReflectorMaps,
+    buffers: RadianceMapBuffers,
+    kernel: KernelTexture,
+    table: FlippedRadialReflectance,
+    ks: Vec3,
+}
+
+/// The per-frame textures at the frame's size.
+#[derive(Debug)]
+struct FrameTextures {
+    size: (u32, u32),
+    reflected: ReflectedTargets,
+    term: wgpu::Texture,
+}
+
+/// Every glossy planar reflector of a scene drawn from radiance maps (module documentation).
+#[derive(Debug)]
+pub struct IbrReflectors {
+    reflectors: Vec<IbrReflector>,
+    settings: IbrSettings,
+    radiance_map: RadianceMapPass,
+    glossy: GlossyReflectionPass,
+    blend: ReflectorBlendPass,
+    textures: Mutex<Option<FrameTextures>>,
+}
+
+/// The reflectors of `scene`: its planar surfaces whose material has a glossy lobe ([`glossy_lobe`]), with the lobe's model.
+pub fn reflector_surfaces(scene: &Scene) -> Vec<(u32, MaterialModel)> {
+    scene
+        .surfaces()
+        .iter()
+        .enumerate()
+        .filter_map(|(id, surface)| {
+            let SurfaceKind::Planar(_) = surface.kind else {
+                return None;
+            };
+            let material = scene.materials().get(surface.material as usize)?;
+            glossy_lobe(&material.model)?;
+            Some((id as u32, material.model.clone()))
+        })
+        .collect()
+}
+
+/// The Fresnel term of `model`'s glossy lobe for equation 4's R (a blend's glossy side; none is `F = 1`).
+fn lobe_fresnel(model: &MaterialModel) -> Fresnel {
+    match model {
+        MaterialModel::RoughConductor {
+            fresnel: ConductorFresnel::Complex { eta, k },
+            ..
+        } => Fresnel::Conductor { eta: *eta, k: *k },
+        MaterialModel::Blend { first, second, .. } => {
+            if glossy_lobe(second).is_some() {
+                lobe_fresnel(second)
+            } else {
+                lobe_fresnel(first)
+            }
+        }
+        _ => Fresnel::One,
+    }
+}
+
+/// The view of sample camera `camera` for a `w × h` capture: its pinhole, everything on the far side of the reflector's plane from the scene clipped, emitters hidden.
+pub fn capture_view(ctx: &GpuContext, camera: &SampleCamera, w: u32, h: u32) -> View {
+    let pinhole = camera.pinhole(w, h);
+    let e = &camera.element;
+    // The scene lies along +normal from the element; keep n·p − n·c ≥ a hair.
+    let offset = e.normal.dot(e.centre);
+    let keep =
+        Vec4::new(e.normal.x, e.normal.y, e.normal.z, -offset) - Vec4::W * (1e-4 * camera.height());
+    let mut view = View::from_pinhole(&pinhole, 0.5 * camera.height())
+        .with_clip_plane(keep, ctx.clip_method());
+    view.shows_emitters = false;
+    view
+}
+
+impl IbrReflectors {
+    /// Captures the maps of every reflector of `scene` by drawing `frame`'s
+    /// lighting through `graph` from each sample camera (module
+    /// documentation); `bvh` gives the texels' depths; `progress(done,
+    /// total)` after each map. `frame.targets` and `frame.output` are not
+    /// touched.
+    pub fn capture(
+        ctx: &GpuContext,
+        graph: &FrameGraph,
+        frame: &FrameInputs<'_>,
+        scene: &Scene,
+        bvh: &Bvh,
+        settings: &IbrSettings,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Self> {
+        if settings.maps_per_hemisphere == 0 {
+            return Err(MprError::InvalidSetting {
+                what: "radiance maps",
+                message: "at least one map per hemisphere must be reprojected".into(),
+            });
+        }
+        settings.sampling.validate()?;
+        settings.quadtree.validate()?;
+        let surfaces = reflector_surfaces(scene);
+        let (w, h) = settings.sampling.map_resolution;
+        let targets = RenderTargets::with_hdr_format(ctx, w, h, frame.targets.hdr_format())?;
+        let output = ctx.checked("radiance-map capture output", || {
+            crate::passes::radiance_map::texture_2d(
+                ctx,
+                "radiance-map-capture",
+                w,
+                h,
+                graph.tonemap.output_format(),
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+        })?;
+        let output_view = output.create_view(&Default::default());
+        let inputs = FrameInputs {
+            targets: &targets,
+            output: &output_view,
+            splats: frame.splats.map(|s| crate::frame::SplatInputs {
+                resolution: SplatResolution::Full,
+                ..s
+            }),
+            ..*frame
+        };
+        let per_reflector = {
+            let (nu, nv) = settings.sampling.planar_resolution;
+            let step = settings.sampling.arc_step_degrees.to_radians();
+            let polar = settings.sampling.max_polar_degrees.to_radians();
+            (nu * nv) as usize * lustre_ibr::sampling::hemisphere_directions(step, polar).len()
+        };
+        let total = per_reflector * surfaces.len();
+        let mut done = 0;
+        let mut reflectors = Vec::with_capacity(surfaces.len());
+        for (surface, model) in surfaces {
+            let reflector = Reflector::from_surface(scene, surface)?;
+            let maps = ReflectorMaps::capture_with(
+                &reflector,
+                &settings.sampling,
+                &settings.quadtree,
+                &mut |camera: &SampleCamera| -> Result<RadianceMap> {
+                    graph.render_view(ctx, &inputs, capture_view(ctx, camera, w, h))?;
+                    let hdr = read_rgba_f32(ctx, &targets.hdr.texture)?;
+                    Ok(RadianceMap::capture_texels(camera, w, h, &|k, q, dir| {
+                        let hit = bvh.closest_hit(&Ray::segment(q, dir, 1e-4, f32::INFINITY))?;
+                        let c = hdr[k];
+                        Some((Rgb::new(c[0], c[1], c[2]), hit.t))
+                    }))
+                },
+                &mut |_, _| {
+                    done += 1;
+                    progress(done, total);
+                },
+            )?;
+            let lobe = glossy_lobe(&model).ok_or_else(|| MprError::InvalidSetting {
+                what: "radiance maps",
+                message: format!("surface {surface} has no glossy lobe"),
+            })?;
+            let distribution =
+                Distribution::new(MicrofacetDistribution::Beckmann, lobe.alpha, "reflector")?;
+            let kernel = KernelTexture::new(&distribution, Shadowing::Smith, KERNEL_TEXELS)?;
+            let ks = lobe.factor;
+            let table = match settings.modulation {
+                Modulation::Paper => {
+                    FlippedRadialReflectance::new(&lobe_fresnel(&model), TABLE_ENTRIES)?
+                }
+                Modulation::Albedo => {
+                    let albedo = (0..TABLE_ENTRIES)
+                        .map(|k| glossy_albedo(&model, (k as f32 + 0.5) / TABLE_ENTRIES as f32))
+                        .collect::<std::result::Result<Vec<_>, _>>()?;
+                    FlippedRadialReflectance::from_fn(TABLE_ENTRIES, |c| {
+                        let k = ((c * TABLE_ENTRIES as f32 - 0.5).round() as usize)
+                            .min(TABLE_ENTRIES as usize - 1);
+                        albedo[k] / ks.max(Vec3::splat(1e-6))
+                    })?
+                }
+            };
+            let buffers = RadianceMapBuffers::upload(ctx, &maps)?;
+            reflectors.push(IbrReflector {
+                maps,
+                buffers,
+                kernel,
+                table,
+                ks,
+            });
+        }
+        Ok(Self {
+            reflectors,
+            settings: *settings,
+            radiance_map: RadianceMapPass::new(ctx)?,
+            glossy: GlossyReflectionPass::new(ctx)?,
+            blend: ReflectorBlendPass::new(ctx, frame.targets.hdr_format())?,
+            textures: Mutex::new(None),
+        })
+    }
+
+    /// The reflectors' surface ids, true at each (the surfaces whose photon splats the caller drops).
+    pub fn surfaces(scene: &Scene) -> Vec<bool> {
+        let mut out = vec![false; scene.surfaces().len()];
+        for (surface, _) in reflector_surfaces(scene) {
+            out[surface as usize] = true;
+        }
+        out
+    }
+
+    /// The reflectors.
+    pub fn reflectors(&self) -> &[IbrReflector] {
+        &self.reflectors
+    }
+
+    /// The memory of each reflector's maps (the paper's table 1).
+    pub fn memory(&self) -> Vec<MemoryReport> {
+        self.reflectors.iter().map(|r| r.maps.memory()).collect()
+    }
+
+    /// The settings the maps were captured and are drawn with.
+    pub fn settings(&self) -> &IbrSettings {
+        &self.settings
+    }
+
+    /// Adds `k_s (M * K) R` of every reflector seen from `frame.camera` into
+    /// the frame that `graph` left in `frame.targets`' HDR target, and tone
+    /// maps the sum to `frame.output` (module documentation). The surface
+    /// ids are drawn again through the pixel centres first, so a jittered
+    /// accumulation's last sample does not shift the reflectors' masks.
+    pub fn add(&self, ctx: &GpuContext, graph: &FrameGraph, frame: &FrameInputs<'_>) -> Result<()> {
+        let targets = frame.targets;
+        let (w, h) = (targets.width, targets.height);
+        let mut textures = self.textures.lock().unwrap_or_else(|e| e.into_inner());
+        if textures.as_ref().map(|t| t.size) != Some((w, h)) {
+            *textures = Some(FrameTextures {
+                size: (w, h),
+                reflected: ReflectedTargets::new(ctx, w, h)?,
+                term: GlossyReflectionPass::output(ctx, w, h)?,
+            });
+        }
+        let Some(textures) = textures.as_ref() else {
+            return Ok(());
+        };
+        let (views, slot) = ViewBuffer::for_camera(ctx, frame.camera)?;
+        ctx.checked_result("radiance-map surface ids", || {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            graph
+                .depth
+                .encode(&mut encoder, frame.scene, targets, &views, slot, true);
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })?;
+        for reflector in &self.reflectors {
+            self.add_reflector(ctx, reflector, frame.camera, targets, textures)?;
+        }
+        ctx.checked_result("radiance-map tone map", || {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            graph
+                .tonemap
+                .encode(&ctx.device, &mut encoder, &targets.hdr.view, frame.output);
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })
+    }
+
+    /// M, `(M * K) R` and the blend of one reflector.
+    fn add_reflector(
+        &self,
+        ctx: &GpuContext,
+        reflector: &IbrReflector,
+        camera: &Camera,
+        targets: &RenderTargets,
+        textures: &FrameTextures,
+    ) -> Result<()> {
+        let plane = reflector.maps.reflector.plane;
+        // The reflector's front faces the scene: an eye behind it sees no reflection.
+        if plane.signed_distance(camera.position) <= 0.0 {
+            return Ok(());
+        }
+        let (w, h) = (targets.width, targets.height);
+        let view = PinholeView::mirrored(camera, &plane, w, h);
+        let selected = select(
+            &reflector.maps.cameras(),
+            view.eye,
+            self.settings.maps_per_hemisphere,
+            self.settings.selection,
+        );
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        self.radiance_map.encode(
+            ctx,
+            &mut encoder,
+            &reflector.maps,
+            &reflector.buffers,
+            &selected,
+            &view,
+            &textures.reflected,
+        )?;
+        ctx.queue.submit([encoder.finish()]);
+        // The kernel's radius from M's depths (reverse Z: near / z).
+        let depth = read_depth(ctx, &textures.reflected.depth)?;
+        let mut m = ReflectedImage::new(w, h);
+        for (out, z) in m.depth.iter_mut().zip(&depth) {
+            if *z > 0.0 {
+                *out = REFLECTED_NEAR / z;
+            }
+        }
+        let radius = kernel_radius(&m, &view, &plane, reflector.kernel.half_angle);
+        let taps = pixel_kernel(&reflector.kernel, radius);
+        ctx.checked_result("radiance-map glossy term", || {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            self.glossy.encode(
+                ctx,
+                &mut encoder,
+                &textures.reflected,
+                &view,
+                &plane,
+                &taps,
+                &reflector.table,
+                Some((
+                    &targets.surface_id.texture,
+                    reflector.maps.reflector.surface,
+                )),
+                &textures.term,
+            )?;
+            self.blend.encode(
+                ctx,
+                &mut encoder,
+                targets,
+                &textures.term,
+                reflector.maps.reflector.surface,
+                reflector.ks,
+            )?;
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })
+    }
+}
