@@ -50,24 +50,10 @@ pub fn kernel_radius(
     let (mut sum, mut n) = (0.0f64, 0u64);
     for y in 0..image.height {
         for x in 0..image.width {
-            let k = (y * image.width + x) as usize;
-            let z = image.depth[k];
-            if !z.is_finite() {
-                continue;
+            if let Some(ratio) = depth_ratio(image, view, plane, x, y) {
+                sum += f64::from(ratio);
+                n += 1;
             }
-            // Depth of the reflector along the view axis at this pixel.
-            let d = view.direction(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            let denom = d.dot(plane.normal);
-            if denom.abs() < 1e-6 {
-                continue;
-            }
-            let t = -plane.signed_distance(view.eye) / denom;
-            let e = t * d.dot(view.forward);
-            if !(e > 0.0) || z < e {
-                continue;
-            }
-            sum += f64::from((z - e) / z);
-            n += 1;
         }
     }
     if n == 0 {
@@ -76,32 +62,127 @@ pub fn kernel_radius(
     view.focal.y * half_angle.tan() * (sum / n as f64) as f32
 }
 
+/// `d/(e + d)` at pixel `(x, y)`: M's depth `z = e + d` along the view axis over the reflector's depth `e` there; `None` where M is uncovered or the ray misses the reflector's plane.
+pub fn depth_ratio(
+    image: &ReflectedImage,
+    view: &PinholeView,
+    plane: &Plane,
+    x: u32,
+    y: u32,
+) -> Option<f32> {
+    let z = image.depth[(y * image.width + x) as usize];
+    if !z.is_finite() {
+        return None;
+    }
+    // Depth of the reflector along the view axis at this pixel.
+    let d = view.direction(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+    let denom = d.dot(plane.normal);
+    if denom.abs() < 1e-6 {
+        return None;
+    }
+    let t = -plane.signed_distance(view.eye) / denom;
+    let e = t * d.dot(view.forward);
+    if !(e > 0.0) || z < e {
+        return None;
+    }
+    Some((z - e) / z)
+}
+
+/// K's bilinear weight at `(u, v)` in units of its half-width (centres span (-1, 1)); zero beyond.
+fn kernel_lookup(kernel: &KernelTexture, u: f32, v: f32) -> f32 {
+    let n = kernel.size as f32;
+    let (x, y) = ((u + 1.0) * 0.5 * n - 0.5, (v + 1.0) * 0.5 * n - 0.5);
+    if x < -0.5 || y < -0.5 || x > n - 0.5 || y > n - 0.5 {
+        return 0.0;
+    }
+    let (x, y) = (x.clamp(0.0, n - 1.0), y.clamp(0.0, n - 1.0));
+    let (i, j) = (x.floor() as usize, y.floor() as usize);
+    let (i1, j1) = ((i + 1).min(kernel.size - 1), (j + 1).min(kernel.size - 1));
+    let (fx, fy) = (x - i as f32, y - j as f32);
+    kernel.weight(i, j) * (1.0 - fx) * (1.0 - fy)
+        + kernel.weight(i1, j) * fx * (1.0 - fy)
+        + kernel.weight(i, j1) * (1.0 - fx) * fy
+        + kernel.weight(i1, j1) * fx * fy
+}
+
+/// The most pixels a depth-varying kernel reaches from its centre (a cap on the gather's cost).
+pub const MAX_KERNEL_REACH: i32 = 48;
+
+/// `M * K` with the kernel sized per pixel by its own depth, section 9's
+/// "more accurate method" in the limit of one depth layer per pixel: pixel
+/// `p` gathers with radius `r(p) = fy tan φmax d/(e + d)` at its own
+/// reflected point ([`depth_ratio`]), so geometry that touches the
+/// reflector stays sharp and distant geometry blurs, as a glossy lobe
+/// does; uncovered pixels of the domain use `mean_ratio` (the
+/// space-invariant kernel's). The domain and weights are
+/// [`convolve_in`]'s; the reach is capped at [`MAX_KERNEL_REACH`] pixels.
+pub fn convolve_by_depth(
+    image: &ReflectedImage,
+    mask: Option<&[bool]>,
+    kernel: &KernelTexture,
+    view: &PinholeView,
+    plane: &Plane,
+    mean_ratio: f32,
+) -> ReflectedImage {
+    let (w, h) = (image.width as i32, image.height as i32);
+    let scale = view.focal.y * kernel.half_angle.tan();
+    let mut out = image.clone();
+    for y in 0..h {
+        for x in 0..w {
+            let k = (y * w + x) as usize;
+            if !in_domain(image, mask, k) {
+                continue;
+            }
+            let ratio = depth_ratio(image, view, plane, x as u32, y as u32).unwrap_or(mean_ratio);
+            let radius = scale * ratio;
+            if !(radius >= 0.5) {
+                if !image.depth[k].is_finite() {
+                    out.radiance[k] = Rgb::ZERO;
+                }
+                continue;
+            }
+            let reach = (radius.ceil() as i32).min(MAX_KERNEL_REACH);
+            let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
+            for dy in -reach..=reach {
+                for dx in -reach..=reach {
+                    let (sx, sy) = (x + dx, y + dy);
+                    if sx < 0 || sy < 0 || sx >= w || sy >= h {
+                        continue;
+                    }
+                    let t = kernel_lookup(kernel, dx as f32 / radius, dy as f32 / radius);
+                    if !(t > 0.0) {
+                        continue;
+                    }
+                    let s = (sy * w + sx) as usize;
+                    if image.depth[s].is_finite() {
+                        sum += image.radiance[s] * t;
+                        weight += t;
+                    } else if is_void(image, mask, s) {
+                        weight += t;
+                    }
+                }
+            }
+            out.radiance[k] = if weight > 0.0 {
+                sum / weight
+            } else {
+                Rgb::ZERO
+            };
+        }
+    }
+    out
+}
+
 /// K resampled at the integer pixel offsets within `radius` pixels: `(dx, dy, weight)` with weights summing to one; the single offset (0, 0) for a radius under half a pixel.
 pub fn pixel_kernel(kernel: &KernelTexture, radius: f32) -> Vec<(i32, i32, f32)> {
     if !(radius >= 0.5) {
         return vec![(0, 0, 1.0)];
     }
     let reach = radius.ceil() as i32;
-    let n = kernel.size as f32;
-    // Texel coordinate of offset o pixels: o/r spans (-1, 1) over the kernel's centres' range.
-    let lookup = |u: f32, v: f32| -> f32 {
-        let (x, y) = ((u + 1.0) * 0.5 * n - 0.5, (v + 1.0) * 0.5 * n - 0.5);
-        if x < -0.5 || y < -0.5 || x > n - 0.5 || y > n - 0.5 {
-            return 0.0;
-        }
-        let (x, y) = (x.clamp(0.0, n - 1.0), y.clamp(0.0, n - 1.0));
-        let (i, j) = (x.floor() as usize, y.floor() as usize);
-        let (i1, j1) = ((i + 1).min(kernel.size - 1), (j + 1).min(kernel.size - 1));
-        let (fx, fy) = (x - i as f32, y - j as f32);
-        kernel.weight(i, j) * (1.0 - fx) * (1.0 - fy)
-            + kernel.weight(i1, j) * fx * (1.0 - fy)
-            + kernel.weight(i, j1) * (1.0 - fx) * fy
-            + kernel.weight(i1, j1) * fx * fy
-    };
+    // Offset o pixels is o/r in K's half-widths.
     let mut taps = Vec::new();
     for dy in -reach..=reach {
         for dx in -reach..=reach {
-            let w = lookup(dx as f32 / radius, dy as f32 / radius);
+            let w = kernel_lookup(kernel, dx as f32 / radius, dy as f32 / radius);
             if w > 0.0 {
                 taps.push((dx, dy, w));
             }

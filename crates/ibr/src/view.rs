@@ -58,13 +58,17 @@ impl PinholeView {
 
     /// The reflected view of `camera` about `plane`: eye and axes mirrored, so that it images a point where the eye sees the point's mirror image (module documentation).
     pub fn mirrored(camera: &Camera, plane: &Plane, width: u32, height: u32) -> Self {
-        let v = Self::from_camera(camera, width, height);
+        Self::from_camera(camera, width, height).reflected(plane)
+    }
+
+    /// This view reflected about `plane`: eye and axes mirrored, pixels kept.
+    pub fn reflected(&self, plane: &Plane) -> Self {
         Self {
-            eye: plane.reflect_point(v.eye),
-            right: plane.reflect_vector(v.right),
-            up: plane.reflect_vector(v.up),
-            forward: plane.reflect_vector(v.forward),
-            ..v
+            eye: plane.reflect_point(self.eye),
+            right: plane.reflect_vector(self.right),
+            up: plane.reflect_vector(self.up),
+            forward: plane.reflect_vector(self.forward),
+            ..*self
         }
     }
 

@@ -9,7 +9,10 @@ use lustre_geometry::material::MicrofacetDistribution;
 use lustre_geometry::{Camera, Plane, Rgb};
 use lustre_ibr::PinholeView;
 use lustre_ibr::ReflectedImage;
-use lustre_ibr::glossy::{convolve, kernel_radius, modulate, pixel_cos_theta, pixel_kernel};
+use lustre_ibr::glossy::{
+    convolve, convolve_by_depth, convolve_in, depth_ratio, is_void, kernel_radius, modulate,
+    modulate_in, pixel_cos_theta, pixel_kernel,
+};
 
 fn kernel(alpha: f32) -> KernelTexture {
     let d = Distribution::new(MicrofacetDistribution::Beckmann, alpha, "test").unwrap();
@@ -134,4 +137,105 @@ fn modulation_is_equation_4s_reflectance_at_each_pixel() {
         }
     }
     assert!(checked > 1000);
+}
+
+#[test]
+fn a_crack_takes_its_neighbours_mean_and_the_void_is_black() {
+    // A constant M over a reflector that covers the whole image, with a
+    // one-pixel crack (a row of uncovered pixels amid covered ones) and a
+    // void block (uncovered, 12 × 12, where the mirrored rays leave the scene).
+    let (w, h) = (40u32, 40u32);
+    let c = Rgb::new(1.0, 2.0, 3.0);
+    let mut im = filled(w, h, c);
+    let mask = vec![true; (w * h) as usize];
+    for x in 0..w {
+        im.depth[(20 * w + x) as usize] = f32::INFINITY;
+        im.radiance[(20 * w + x) as usize] = Rgb::ZERO;
+    }
+    for y in 2..14 {
+        for x in 2..14 {
+            im.depth[(y * w + x) as usize] = f32::INFINITY;
+            im.radiance[(y * w + x) as usize] = Rgb::ZERO;
+        }
+    }
+    // The crack's pixels have covered neighbours; the void's inner 10 × 10 none.
+    assert!(!is_void(&im, Some(&mask), (20 * w + 30) as usize));
+    assert!(!is_void(&im, Some(&mask), (2 * w + 5) as usize));
+    assert!(is_void(&im, Some(&mask), (3 * w + 5) as usize));
+    assert!(!is_void(&im, None, (3 * w + 5) as usize));
+    let taps = pixel_kernel(&kernel(0.1), 5.0);
+    let out = convolve_in(&im, Some(&mask), &taps);
+    // The crack, far from the void: exactly M (the weights skip it, no darkening).
+    for x in 25..40 {
+        let r = out.radiance[(20 * w + x) as usize];
+        assert!((r - c).abs().max_element() < 1e-5, "crack pixel {x}: {r}");
+    }
+    // Inside the void, farther than the kernel's reach from M: black.
+    assert_eq!(out.radiance[(8 * w + 8) as usize], Rgb::ZERO);
+    // Beside the void, the lobe picks up black: M times the covered
+    // weight over the covered and void weight (the void block's rim, beside
+    // covered pixels, counts as cracks and stays out).
+    let x = 14u32;
+    let weight_in = |lo: i32, hi: i32| -> f32 {
+        taps.iter()
+            .filter(|&&(dx, dy, _)| {
+                let (sx, sy) = (x as i32 + dx, 8 + dy);
+                (lo..hi).contains(&sx) && (lo..hi).contains(&sy)
+            })
+            .map(|t| t.2)
+            .sum()
+    };
+    let (void, block) = (weight_in(3, 13), weight_in(2, 14));
+    let covered = 1.0 - block;
+    let want = c * (covered / (covered + void));
+    let got = out.radiance[(8 * w + x) as usize];
+    assert!(void > 0.05, "the void is in reach: {void}");
+    assert!(
+        (got - want).abs().max_element() < 1e-4 * 3.0,
+        "beside the void {got}, want {want}"
+    );
+    // Without the mask, the void takes no part and no value (the stencilled rule).
+    let plain = convolve(&im, &taps);
+    assert!((plain.radiance[(8 * w + x) as usize] - c).abs().max_element() < 1e-5);
+    assert_eq!(plain.radiance[(20 * w + 30) as usize], Rgb::ZERO);
+    // The modulation lights every pixel of the mask, the crack included, and nothing else.
+    let camera = Camera::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, Vec3::Z, 50.0);
+    let plane = Plane::from_point_normal(Vec3::ZERO, Vec3::Y);
+    let view = PinholeView::mirrored(&camera, &plane, w, h);
+    let table = FlippedRadialReflectance::new(&Fresnel::One, 64).unwrap();
+    let term = modulate_in(&out, Some(&mask), &view, &plane, &table);
+    assert!(term[(20 * w + 30) as usize].max_element() > 0.0);
+    let unmasked = modulate(&plain, &view, &plane, &table);
+    assert_eq!(unmasked[(20 * w + 30) as usize], Rgb::ZERO);
+}
+
+#[test]
+fn the_kernel_by_depth_is_the_space_invariant_one_at_equal_depth_and_sharp_at_contact() {
+    // The eye 1.5 m above a floor mirror looking straight down.
+    let e = 1.5f32;
+    let camera = Camera::look_at(Vec3::new(0.0, e, 0.0), Vec3::ZERO, Vec3::Z, 50.0);
+    let plane = Plane::from_point_normal(Vec3::ZERO, Vec3::Y);
+    let (w, h) = (48u32, 40u32);
+    let view = PinholeView::mirrored(&camera, &plane, w, h);
+    let k = kernel(0.08);
+    // A random-looking M all at d = 2.5 m: d/(e + d) is the same at every pixel.
+    let mut im = filled(w, h, Rgb::ONE);
+    for (i, r) in im.radiance.iter_mut().enumerate() {
+        let v = ((i as u32).wrapping_mul(2_654_435_761) >> 24) as f32 / 255.0;
+        *r = Rgb::new(v, 1.0 - v, 0.5);
+    }
+    // Depth along the view axis: e + d (the axis is the floor's normal here).
+    im.depth.fill(e + 2.5);
+    let ratio = depth_ratio(&im, &view, &plane, 10, 10).unwrap();
+    assert!((ratio - 2.5 / 4.0).abs() < 1e-5, "d/(e + d) = {ratio}");
+    let radius = kernel_radius(&im, &view, &plane, k.half_angle);
+    let invariant = convolve(&im, &pixel_kernel(&k, radius));
+    let by_depth = convolve_by_depth(&im, None, &k, &view, &plane, ratio);
+    for (a, b) in invariant.radiance.iter().zip(&by_depth.radiance) {
+        assert!((*a - *b).abs().max_element() < 1e-4, "{a} vs {b}");
+    }
+    // Geometry touching the mirror (d → 0): the kernel shrinks below half a pixel, M unchanged.
+    im.depth.fill(e * 1.0001);
+    let sharp = convolve_by_depth(&im, None, &k, &view, &plane, ratio);
+    assert_eq!(sharp.radiance, im.radiance);
 }

@@ -22,7 +22,10 @@
 //! ([`lustre_ibr::select`]) are reprojected as sized points into the
 //! mirrored view (M, [`crate::passes::radiance_map`]); M's depth is read
 //! back for the kernel's radius ([`lustre_ibr::glossy::kernel_radius`],
-//! the mean of `d/(e + d)` over M); `(M * K) R` is computed over M
+//! the mean of `d/(e + d)` over M; with [`KernelSizing::ByDepth`] each
+//! pixel's own, section 9's "more accurate method" that keeps contact
+//! reflections sharp, but also shows the reconstruction's blocks there,
+//! and measured worse on glosbox); `(M * K) R` is computed over M
 //! ([`crate::passes::glossy_reflection`]) and `k_s` times it added at the
 //! reflector's pixels ([`crate::passes::reflector_blend`]).
 //!
@@ -55,7 +58,7 @@ use lustre_brdf::kernel_texture::KernelTexture;
 use lustre_brdf::microfacet::{Distribution, Shadowing};
 use lustre_brdf::reflectance_modulation::FlippedRadialReflectance;
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
-use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene, SurfaceKind};
+use lustre_geometry::{Bvh, Ray, Rgb, Scene, SurfaceKind};
 use lustre_ibr::glossy::{kernel_radius, pixel_kernel};
 use lustre_ibr::{
     MemoryReport, PinholeView, QuadtreeSettings, RadianceMap, ReflectedImage, Reflector,
@@ -64,7 +67,7 @@ use lustre_ibr::{
 
 use crate::frame::{FrameGraph, FrameInputs};
 use crate::passes::glossy_lobe::{glossy_albedo, glossy_lobe};
-use crate::passes::glossy_reflection::GlossyReflectionPass;
+use crate::passes::glossy_reflection::{Convolution, GlossyReflectionPass};
 use crate::passes::radiance_map::{
     REFLECTED_NEAR, RadianceMapBuffers, RadianceMapPass, ReflectedTargets,
 };
@@ -91,6 +94,16 @@ pub enum Modulation {
     Paper,
 }
 
+/// How the kernel is sized over the reflected image (section 8.2.1, section 9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum KernelSizing {
+    /// The paper's space-invariant kernel, its radius from the mean `d/(e + d)` over M.
+    #[default]
+    SpaceInvariant,
+    /// Section 9's "more accurate method": each pixel's kernel from its own depth.
+    ByDepth,
+}
+
 /// How the reflectors are sampled, selected and shaded.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IbrSettings {
@@ -104,6 +117,13 @@ pub struct IbrSettings {
     pub selection: SelectionRule,
     /// How R is tabulated.
     pub modulation: Modulation,
+    /// Capture passes: 1 draws the other reflectors in the maps without
+    /// their reflections (the frame's splats of them are dropped); each
+    /// further pass draws them from the previous pass's maps, one more
+    /// reflection between reflectors.
+    pub bounces: u32,
+    /// How the kernel is sized.
+    pub kernel: KernelSizing,
 }
 
 impl Default for IbrSettings {
@@ -117,6 +137,8 @@ impl Default for IbrSettings {
             maps_per_hemisphere: 2,
             selection: SelectionRule::MinimalAngle,
             modulation: Modulation::Albedo,
+            bounces: 2,
+            kernel: KernelSizing::SpaceInvariant,
         }
     }
 }
@@ -130,6 +152,48 @@ pub struct IbrReflector {
     kernel: KernelTexture,
     table: FlippedRadialReflectance,
     ks: Vec3,
+}
+
+impl IbrReflector {
+    /// `reflector` with its kernel, table and `k_s` from `model`'s glossy lobe, and no maps yet.
+    fn new(
+        ctx: &GpuContext,
+        reflector: Reflector,
+        model: &MaterialModel,
+        settings: &IbrSettings,
+    ) -> Result<Self> {
+        let surface = reflector.surface;
+        let lobe = glossy_lobe(model).ok_or_else(|| MprError::InvalidSetting {
+            what: "radiance maps",
+            message: format!("surface {surface} has no glossy lobe"),
+        })?;
+        let distribution =
+            Distribution::new(MicrofacetDistribution::Beckmann, lobe.alpha, "reflector")?;
+        let kernel = KernelTexture::new(&distribution, Shadowing::Smith, KERNEL_TEXELS)?;
+        let ks = lobe.factor;
+        let table = match settings.modulation {
+            Modulation::Paper => FlippedRadialReflectance::new(&lobe_fresnel(model), TABLE_ENTRIES)?,
+            Modulation::Albedo => {
+                let albedo = (0..TABLE_ENTRIES)
+                    .map(|k| glossy_albedo(model, (k as f32 + 0.5) / TABLE_ENTRIES as f32))
+                    .collect::<std::result::Result<Vec<_>, _>>()?;
+                FlippedRadialReflectance::from_fn(TABLE_ENTRIES, |c| {
+                    let k = ((c * TABLE_ENTRIES as f32 - 0.5).round() as usize)
+                        .min(TABLE_ENTRIES as usize - 1);
+                    albedo[k] / ks.max(Vec3::splat(1e-6))
+                })?
+            }
+        };
+        let maps = ReflectorMaps::from_maps(reflector, settings.sampling, Vec::new(), &settings.quadtree)?;
+        let buffers = RadianceMapBuffers::upload(ctx, &maps)?;
+        Ok(Self {
+            maps,
+            buffers,
+            kernel,
+            table,
+            ks,
+        })
+    }
 }
 
 /// The per-frame textures at the frame's size.
@@ -215,6 +279,12 @@ impl IbrReflectors {
         settings: &IbrSettings,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Self> {
+        if settings.bounces == 0 {
+            return Err(MprError::InvalidSetting {
+                what: "radiance maps",
+                message: "at least one capture pass is needed".into(),
+            });
+        }
         if settings.maps_per_hemisphere == 0 {
             return Err(MprError::InvalidSetting {
                 what: "radiance maps",
@@ -252,69 +322,55 @@ impl IbrReflectors {
             let polar = settings.sampling.max_polar_degrees.to_radians();
             (nu * nv) as usize * lustre_ibr::sampling::hemisphere_directions(step, polar).len()
         };
-        let total = per_reflector * surfaces.len();
+        let total = per_reflector * surfaces.len() * settings.bounces as usize;
         let mut done = 0;
         let mut reflectors = Vec::with_capacity(surfaces.len());
-        for (surface, model) in surfaces {
-            let reflector = Reflector::from_surface(scene, surface)?;
-            let maps = ReflectorMaps::capture_with(
-                &reflector,
-                &settings.sampling,
-                &settings.quadtree,
-                &mut |camera: &SampleCamera| -> Result<RadianceMap> {
-                    graph.render_view(ctx, &inputs, capture_view(ctx, camera, w, h))?;
-                    let hdr = read_rgba_f32(ctx, &targets.hdr.texture)?;
-                    Ok(RadianceMap::capture_texels(camera, w, h, &|k, q, dir| {
-                        let hit = bvh.closest_hit(&Ray::segment(q, dir, 1e-4, f32::INFINITY))?;
-                        let c = hdr[k];
-                        Some((Rgb::new(c[0], c[1], c[2]), hit.t))
-                    }))
-                },
-                &mut |_, _| {
-                    done += 1;
-                    progress(done, total);
-                },
-            )?;
-            let lobe = glossy_lobe(&model).ok_or_else(|| MprError::InvalidSetting {
-                what: "radiance maps",
-                message: format!("surface {surface} has no glossy lobe"),
-            })?;
-            let distribution =
-                Distribution::new(MicrofacetDistribution::Beckmann, lobe.alpha, "reflector")?;
-            let kernel = KernelTexture::new(&distribution, Shadowing::Smith, KERNEL_TEXELS)?;
-            let ks = lobe.factor;
-            let table = match settings.modulation {
-                Modulation::Paper => {
-                    FlippedRadialReflectance::new(&lobe_fresnel(&model), TABLE_ENTRIES)?
-                }
-                Modulation::Albedo => {
-                    let albedo = (0..TABLE_ENTRIES)
-                        .map(|k| glossy_albedo(&model, (k as f32 + 0.5) / TABLE_ENTRIES as f32))
-                        .collect::<std::result::Result<Vec<_>, _>>()?;
-                    FlippedRadialReflectance::from_fn(TABLE_ENTRIES, |c| {
-                        let k = ((c * TABLE_ENTRIES as f32 - 0.5).round() as usize)
-                            .min(TABLE_ENTRIES as usize - 1);
-                        albedo[k] / ks.max(Vec3::splat(1e-6))
-                    })?
-                }
-            };
-            let buffers = RadianceMapBuffers::upload(ctx, &maps)?;
-            reflectors.push(IbrReflector {
-                maps,
-                buffers,
-                kernel,
-                table,
-                ks,
-            });
+        for (surface, model) in &surfaces {
+            let reflector = Reflector::from_surface(scene, *surface)?;
+            reflectors.push(IbrReflector::new(ctx, reflector, model, settings)?);
         }
-        Ok(Self {
+        let mut this = Self {
             reflectors,
             settings: *settings,
             radiance_map: RadianceMapPass::new(ctx)?,
             glossy: GlossyReflectionPass::new(ctx)?,
             blend: ReflectorBlendPass::new(ctx, frame.targets.hdr_format())?,
             textures: Mutex::new(None),
-        })
+        };
+        for bounce in 0..settings.bounces {
+            let mut captured = Vec::with_capacity(this.reflectors.len());
+            for reflector in &this.reflectors {
+                captured.push(ReflectorMaps::capture_with(
+                    &reflector.maps.reflector,
+                    &settings.sampling,
+                    &settings.quadtree,
+                    &mut |camera: &SampleCamera| -> Result<RadianceMap> {
+                        let view = capture_view(ctx, camera, w, h);
+                        graph.render_view(ctx, &inputs, view)?;
+                        if bounce > 0 {
+                            // The other reflectors as the frame draws them, from the last bounce's maps.
+                            this.add_from(ctx, &inputs, graph, view, &camera.pinhole(w, h))?;
+                        }
+                        let hdr = read_rgba_f32(ctx, &targets.hdr.texture)?;
+                        Ok(RadianceMap::capture_texels(camera, w, h, &|k, q, dir| {
+                            let hit =
+                                bvh.closest_hit(&Ray::segment(q, dir, 1e-4, f32::INFINITY))?;
+                            let c = hdr[k];
+                            Some((Rgb::new(c[0], c[1], c[2]), hit.t))
+                        }))
+                    },
+                    &mut |_, _| {
+                        done += 1;
+                        progress(done, total);
+                    },
+                )?);
+            }
+            for (reflector, maps) in this.reflectors.iter_mut().zip(captured) {
+                reflector.buffers = RadianceMapBuffers::upload(ctx, &maps)?;
+                reflector.maps = maps;
+            }
+        }
+        Ok(this)
     }
 
     /// The reflectors' surface ids, true at each (the surfaces whose photon splats the caller drops).
@@ -347,6 +403,36 @@ impl IbrReflectors {
     /// ids are drawn again through the pixel centres first, so a jittered
     /// accumulation's last sample does not shift the reflectors' masks.
     pub fn add(&self, ctx: &GpuContext, graph: &FrameGraph, frame: &FrameInputs<'_>) -> Result<()> {
+        let (w, h) = (frame.targets.width, frame.targets.height);
+        self.add_from(
+            ctx,
+            frame,
+            graph,
+            View::from_camera(frame.camera),
+            &PinholeView::from_camera(frame.camera, w, h),
+        )?;
+        ctx.checked_result("radiance-map tone map", || {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            graph.tonemap.encode(
+                &ctx.device,
+                &mut encoder,
+                &frame.targets.hdr.view,
+                frame.output,
+            );
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })
+    }
+
+    /// [`IbrReflectors::add`] seen from `view`, whose pinhole is `pinhole`, without the tone map: the surface ids drawn again under `view`, then every reflector's term.
+    fn add_from(
+        &self,
+        ctx: &GpuContext,
+        frame: &FrameInputs<'_>,
+        graph: &FrameGraph,
+        view: View,
+        pinhole: &PinholeView,
+    ) -> Result<()> {
         let targets = frame.targets;
         let (w, h) = (targets.width, targets.height);
         let mut textures = self.textures.lock().unwrap_or_else(|e| e.into_inner());
@@ -360,7 +446,8 @@ impl IbrReflectors {
         let Some(textures) = textures.as_ref() else {
             return Ok(());
         };
-        let (views, slot) = ViewBuffer::for_camera(ctx, frame.camera)?;
+        let mut views = ViewBuffer::new(ctx, 1);
+        let slot = views.write(ctx, &[view])?[0];
         ctx.checked_result("radiance-map surface ids", || {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             graph
@@ -370,16 +457,11 @@ impl IbrReflectors {
             Ok(())
         })?;
         for reflector in &self.reflectors {
-            self.add_reflector(ctx, reflector, frame.camera, targets, textures)?;
+            if !reflector.maps.maps.is_empty() {
+                self.add_reflector(ctx, reflector, pinhole, targets, textures)?;
+            }
         }
-        ctx.checked_result("radiance-map tone map", || {
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            graph
-                .tonemap
-                .encode(&ctx.device, &mut encoder, &targets.hdr.view, frame.output);
-            ctx.queue.submit([encoder.finish()]);
-            Ok(())
-        })
+        Ok(())
     }
 
     /// M, `(M * K) R` and the blend of one reflector.
@@ -387,17 +469,17 @@ impl IbrReflectors {
         &self,
         ctx: &GpuContext,
         reflector: &IbrReflector,
-        camera: &Camera,
+        eye: &PinholeView,
         targets: &RenderTargets,
         textures: &FrameTextures,
     ) -> Result<()> {
         let plane = reflector.maps.reflector.plane;
         // The reflector's front faces the scene: an eye behind it sees no reflection.
-        if plane.signed_distance(camera.position) <= 0.0 {
+        if plane.signed_distance(eye.eye) <= 1e-6 {
             return Ok(());
         }
         let (w, h) = (targets.width, targets.height);
-        let view = PinholeView::mirrored(camera, &plane, w, h);
+        let view = eye.reflected(&plane);
         let selected = select(
             &reflector.maps.cameras(),
             view.eye,
@@ -424,7 +506,18 @@ impl IbrReflectors {
             }
         }
         let radius = kernel_radius(&m, &view, &plane, reflector.kernel.half_angle);
-        let taps = pixel_kernel(&reflector.kernel, radius);
+        let scale = view.focal.y * reflector.kernel.half_angle.tan();
+        let taps = match self.settings.kernel {
+            KernelSizing::SpaceInvariant => pixel_kernel(&reflector.kernel, radius),
+            KernelSizing::ByDepth => Vec::new(),
+        };
+        let convolution = match self.settings.kernel {
+            KernelSizing::SpaceInvariant => Convolution::SpaceInvariant(&taps),
+            KernelSizing::ByDepth => Convolution::ByDepth {
+                kernel: &reflector.kernel,
+                mean_ratio: if scale > 0.0 { radius / scale } else { 0.0 },
+            },
+        };
         ctx.checked_result("radiance-map glossy term", || {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             self.glossy.encode(
@@ -433,7 +526,7 @@ impl IbrReflectors {
                 &textures.reflected,
                 &view,
                 &plane,
-                &taps,
+                convolution,
                 &reflector.table,
                 Some((
                     &targets.surface_id.texture,

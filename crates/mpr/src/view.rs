@@ -66,8 +66,9 @@ impl View {
     /// focal lengths and principal point in pixels), level 0, stencil 0, no
     /// clip plane: pixel `(x, y)` of a `width × height` target is the
     /// pinhole's pixel `(x, y)`, with reverse-Z depth `near / z` and the far
-    /// plane at infinity. Axes that form a left-handed frame (a radiance
-    /// map's camera, Bastos et al. 1999, section 8.1.3) give a mirrored view.
+    /// plane at infinity. Axes that form a left-handed frame (a pinhole
+    /// reflected about a plane) give a mirrored view. Radiance maps' sample
+    /// cameras draw through it (Bastos et al. 1999, section 8.1.3).
     pub fn from_pinhole(pinhole: &lustre_ibr::PinholeView, near: f32) -> Self {
         let (r, u, f) = (pinhole.right, pinhole.up, pinhole.forward);
         // World to view: x along `right`, y along `up`, looking down −z.
@@ -717,6 +718,65 @@ mod tests {
         // The bottom strip does not hold the box above the centre.
         let bottom = surfaces_in_region(&boxes, m, [0, 60, 200, 40], width, height);
         assert!(!bottom.contains(&4), "{bottom:?}");
+    }
+
+    /// A pinhole's view projects every point to the pixel and reverse-Z
+    /// depth the pinhole gives it: a camera's pinhole, its mirror image
+    /// (left-handed: a mirrored view) and a radiance map's off-axis one.
+    #[test]
+    fn a_pinhole_view_projects_as_its_pinhole() {
+        use lustre_ibr::{Reflector, SampleCamera};
+        let camera = Camera::look_at(
+            Vec3::new(0.2, 1.0, 3.0),
+            Vec3::new(0.0, 0.8, 0.0),
+            Vec3::Y,
+            40.0,
+        )
+        .with_aspect(1.5);
+        let reflector = Reflector::from_points(
+            0,
+            Plane::from_point_normal(Vec3::ZERO, Vec3::Y),
+            &[
+                Vec3::new(-1.0, 0.0, -1.0),
+                Vec3::new(1.0, 0.0, -1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(-1.0, 0.0, 1.0),
+            ],
+        )
+        .unwrap();
+        let element = reflector.elements(2, 2).unwrap()[1];
+        let sample = SampleCamera::new(0, element, 0.9, 2.0);
+        let near = 0.01;
+        let eye = lustre_ibr::PinholeView::from_camera(&camera, 90, 60);
+        for (pinhole, mirrored) in [
+            (eye, false),
+            (eye.reflected(&reflector.plane), true),
+            (sample.pinhole(64, 48), false),
+        ] {
+            let view = View::from_pinhole(&pinhole, near);
+            assert_eq!(view.is_mirrored(), mirrored);
+            let m = view.view_projection();
+            let mut seen = 0;
+            for i in 0..200u32 {
+                let h = |s: u32| ((i.wrapping_mul(2_654_435_761) >> s) & 0xff) as f32 / 255.0;
+                let p = Vec3::new(4.0 * h(0) - 2.0, 3.0 * h(8) - 0.5, 4.0 * h(16) - 2.0);
+                let Some((pixel, z)) = pinhole.project(p) else {
+                    continue;
+                };
+                let clip = m * p.extend(1.0);
+                assert!(clip.w > 0.0);
+                let ndc = clip.truncate() / clip.w;
+                let (w, hgt) = (pinhole.width as f32, pinhole.height as f32);
+                let got = Vec2::new((ndc.x + 1.0) * 0.5 * w, (1.0 - ndc.y) * 0.5 * hgt);
+                assert!(
+                    (got - pixel).length() < 1e-3 * w,
+                    "{p}: pixel {got} vs {pixel}"
+                );
+                assert!((ndc.z - near / z).abs() < 1e-5 * (near / z).max(1e-3), "depth");
+                seen += 1;
+            }
+            assert!(seen > 50, "{seen} points in front");
+        }
     }
 
     /// The paraxial interface scaling keeps the plane, scales depths by the

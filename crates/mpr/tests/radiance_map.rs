@@ -9,12 +9,14 @@ use lustre_brdf::reflectance_modulation::FlippedRadialReflectance;
 use lustre_geometry::material::MicrofacetDistribution;
 use lustre_geometry::{Bvh, Ray, Rgb, SurfaceKind, builtin};
 use lustre_ibr::ReflectedImage;
-use lustre_ibr::glossy::{convolve, kernel_radius, modulate, pixel_kernel};
+use lustre_ibr::glossy::{
+    convolve, convolve_by_depth, convolve_in, kernel_radius, modulate, modulate_in, pixel_kernel,
+};
 use lustre_ibr::{
     PinholeView, PointSizing, QuadtreeSettings, Reflector, ReflectorMaps, SamplingSettings,
     SelectionRule, select,
 };
-use lustre_mpr::passes::glossy_reflection::GlossyReflectionPass;
+use lustre_mpr::passes::glossy_reflection::{Convolution, GlossyReflectionPass};
 use lustre_mpr::passes::radiance_map::{RadianceMapBuffers, RadianceMapPass, ReflectedTargets};
 use lustre_mpr::readback::{read_depth, read_rgba_f32};
 
@@ -167,7 +169,7 @@ fn gpu_reprojection_matches_the_cpu_twin() {
             &targets,
             &view,
             &reflector.plane,
-            &taps,
+            Convolution::SpaceInvariant(&taps),
             &table,
             None,
             &out,
@@ -194,4 +196,82 @@ fn gpu_reprojection_matches_the_cpu_twin() {
     }
     // Every covered pixel lit, none beyond: the term stays inside the stencilled region.
     assert_eq!(lit, depth.iter().filter(|z| **z > 0.0).count());
+
+    // Masked by a surface-id texture (the reflector's pixels: the image's
+    // lower half, so that uncovered pixels there are cracks or void), with
+    // both kernels: the GPU against convolve_in / convolve_by_depth.
+    let surface = 7u32;
+    let mask: Vec<bool> = (0..w * h).map(|k| k / w >= h / 2).collect();
+    let ids: Vec<u32> = mask.iter().map(|&m| if m { surface } else { 0 }).collect();
+    let id_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("test-ids"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: lustre_mpr::target::SURFACE_ID_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    ctx.queue.write_texture(
+        id_texture.as_image_copy(),
+        bytemuck::cast_slice(&ids),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * w),
+            rows_per_image: Some(h),
+        },
+        id_texture.size(),
+    );
+    let scale = view.focal.y * kernel.half_angle.tan();
+    let mean_ratio = radius / scale;
+    for by_depth in [false, true] {
+        let blurred = if by_depth {
+            convolve_by_depth(&m, Some(&mask), &kernel, &view, &reflector.plane, mean_ratio)
+        } else {
+            convolve_in(&m, Some(&mask), &taps)
+        };
+        let cpu_term = modulate_in(&blurred, Some(&mask), &view, &reflector.plane, &table);
+        let convolution = if by_depth {
+            Convolution::ByDepth {
+                kernel: &kernel,
+                mean_ratio,
+            }
+        } else {
+            Convolution::SpaceInvariant(&taps)
+        };
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        glossy
+            .encode(
+                &ctx,
+                &mut encoder,
+                &targets,
+                &view,
+                &reflector.plane,
+                convolution,
+                &table,
+                Some((&id_texture, surface)),
+                &out,
+            )
+            .unwrap();
+        ctx.queue.submit([encoder.finish()]);
+        let gpu_term = read_rgba_f32(&ctx, &out).unwrap();
+        let (mut lit, mut uncovered_lit) = (0, 0);
+        for (k, (g, c)) in gpu_term.iter().zip(&cpu_term).enumerate() {
+            let g = Rgb::new(g[0], g[1], g[2]);
+            assert!(
+                (g - *c).abs().max_element() <= 1e-4 * c.max_element().max(1e-3),
+                "by depth {by_depth}, pixel {k}: GPU {g} vs CPU {c}"
+            );
+            lit += usize::from(c.max_element() > 0.0);
+            uncovered_lit += usize::from(c.max_element() > 0.0 && !(depth[k] > 0.0));
+        }
+        eprintln!("by depth {by_depth}: {lit} pixels lit, {uncovered_lit} of them uncovered by M");
+        // The mask's uncovered pixels beside M (cracks, and the void's rim within the kernel's reach) are filled.
+        assert!(uncovered_lit > 0);
+    }
 }

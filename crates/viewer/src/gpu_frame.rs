@@ -299,6 +299,13 @@ impl GpuFrame {
             return Ok(self);
         }
         let inputs = self.inputs(camera);
+        if lustre_mpr::ibr::reflector_surfaces(scene).is_empty() {
+            eprintln!(
+                "--technique ibr: scene `{}` has no planar glossy surface; every surface is drawn as splat-direct draws it",
+                scene.name
+            );
+            return Ok(self);
+        }
         let start = std::time::Instant::now();
         let bvh = Bvh::build(scene);
         let bar = indicatif::ProgressBar::new(0).with_style(

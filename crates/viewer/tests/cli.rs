@@ -380,6 +380,58 @@ fn render_refuses_bad_options_before_writing_anything() {
             ],
             "samples exceed",
         ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "ibr",
+                "--ibr-maps",
+                "0",
+                "--out",
+                out,
+            ],
+            "--ibr-maps 0",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "ibr",
+                "--ibr-bounces",
+                "0",
+                "--out",
+                out,
+            ],
+            "--ibr-bounces 0",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "ibr",
+                "--ibr-arc-step",
+                "0.5",
+                "--out",
+                out,
+            ],
+            "arc step",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "ibr",
+                "--ibr-elements",
+                "0x2",
+                "--out",
+                out,
+            ],
+            "not a size",
+        ),
     ];
     for (args, expected) in cases {
         let result = lustre(&args);

@@ -8,6 +8,7 @@
 //! `R(cos θ)` at its ray. Uncovered pixels are zero.
 
 use bytemuck::{Pod, Zeroable};
+use lustre_brdf::kernel_texture::KernelTexture;
 use lustre_brdf::reflectance_modulation::FlippedRadialReflectance;
 use lustre_geometry::Plane;
 use lustre_ibr::PinholeView;
@@ -30,6 +31,21 @@ struct GpuParams {
     normal: [f32; 4],
     counts: [u32; 4],
     mask: [u32; 4],
+    by_depth: [f32; 4],
+}
+
+/// How M is convolved with K.
+#[derive(Debug, Clone, Copy)]
+pub enum Convolution<'a> {
+    /// The paper's space-invariant kernel: K resampled at pixel offsets ([`lustre_ibr::glossy::pixel_kernel`]).
+    SpaceInvariant(&'a [(i32, i32, f32)]),
+    /// K sized per pixel by its own depth (section 9; [`lustre_ibr::glossy::convolve_by_depth`]); `mean_ratio` for the pixels M leaves uncovered.
+    ByDepth {
+        /// The kernel texture.
+        kernel: &'a KernelTexture,
+        /// The mean `d/(e + d)` over M.
+        mean_ratio: f32,
+    },
 }
 
 /// The convolution and modulation pipeline.
@@ -78,7 +94,7 @@ impl GlossyReflectionPass {
         })
     }
 
-    /// Records `(M * K) R` of `m` (seen by `view`, reflector in `plane`) with kernel `taps` and reflectance `table` into `output`; with `mask` (the frame's surface-id texture and the reflector's id) over the domain of [`lustre_ibr::glossy::convolve_in`], else over the pixels M covers.
+    /// Records `(M * K) R` of `m` (seen by `view`, reflector in `plane`) convolved as `convolution` says and modulated by `table` into `output`; with `mask` (the frame's surface-id texture and the reflector's id) over the domain of [`lustre_ibr::glossy::convolve_in`], else over the pixels M covers.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
@@ -87,14 +103,28 @@ impl GlossyReflectionPass {
         m: &ReflectedTargets,
         view: &PinholeView,
         plane: &Plane,
-        taps: &[(i32, i32, f32)],
+        convolution: Convolution<'_>,
         table: &FlippedRadialReflectance,
         mask: Option<(&wgpu::Texture, u32)>,
         output: &wgpu::Texture,
     ) -> Result<()> {
+        let (taps, by_depth, kernel_weights): (&[(i32, i32, f32)], _, &[f32]) = match convolution
+        {
+            Convolution::SpaceInvariant(taps) => (taps, [0.0; 4], &[]),
+            Convolution::ByDepth { kernel, mean_ratio } => (
+                &[],
+                [
+                    view.focal.y * kernel.half_angle.tan(),
+                    mean_ratio,
+                    crate::passes::radiance_map::REFLECTED_NEAR,
+                    kernel.size as f32,
+                ],
+                &kernel.weights,
+            ),
+        };
         let params = GpuParams {
             pinhole: GpuPinhole::new(view),
-            normal: plane.normal.extend(0.0).to_array(),
+            normal: plane.normal.extend(-plane.offset).to_array(),
             counts: [
                 view.width,
                 view.height,
@@ -104,10 +134,15 @@ impl GlossyReflectionPass {
             mask: [
                 mask.map_or(0, |(_, id)| id),
                 u32::from(mask.is_some()),
-                0,
+                u32::from(matches!(convolution, Convolution::ByDepth { .. })),
                 0,
             ],
+            by_depth,
         };
+        let mut gpu_kernel = kernel_weights.to_vec();
+        if gpu_kernel.is_empty() {
+            gpu_kernel.push(0.0);
+        }
         let mut gpu_taps: Vec<[f32; 4]> = taps
             .iter()
             .map(|&(dx, dy, w)| [dx as f32, dy as f32, w, 0.0])
@@ -145,6 +180,11 @@ impl GlossyReflectionPass {
             let table = buffer(
                 "glossy-reflection-table",
                 bytemuck::cast_slice(&gpu_table),
+                wgpu::BufferUsages::STORAGE,
+            );
+            let kernel = buffer(
+                "glossy-reflection-kernel",
+                bytemuck::cast_slice(&gpu_kernel),
                 wgpu::BufferUsages::STORAGE,
             );
             let color = m.color.create_view(&Default::default());
@@ -199,6 +239,10 @@ impl GlossyReflectionPass {
                     wgpu::BindGroupEntry {
                         binding: 6,
                         resource: wgpu::BindingResource::TextureView(&ids),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: kernel.as_entire_binding(),
                     },
                 ],
             })
