@@ -196,7 +196,12 @@ fn a_crack_takes_its_neighbours_mean_and_the_void_is_black() {
     );
     // Without the mask, the void takes no part and no value (the stencilled rule).
     let plain = convolve(&im, &taps);
-    assert!((plain.radiance[(8 * w + x) as usize] - c).abs().max_element() < 1e-5);
+    assert!(
+        (plain.radiance[(8 * w + x) as usize] - c)
+            .abs()
+            .max_element()
+            < 1e-5
+    );
     assert_eq!(plain.radiance[(20 * w + 30) as usize], Rgb::ZERO);
     // The modulation lights every pixel of the mask, the crack included, and nothing else.
     let camera = Camera::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, Vec3::Z, 50.0);

@@ -26,8 +26,17 @@
 //! pixel's own, section 9's "more accurate method" that keeps contact
 //! reflections sharp, but also shows the reconstruction's blocks there,
 //! and measured worse on glosbox); `(M * K) R` is computed over M
-//! ([`crate::passes::glossy_reflection`]) and `k_s` times it added at the
-//! reflector's pixels ([`crate::passes::reflector_blend`]).
+//! and the reflector's void ([`crate::passes::glossy_reflection`]) and
+//! `k_s` times it added at the reflector's pixels
+//! ([`crate::passes::reflector_blend`]). The term is added once, through
+//! the pixel centres, after a jittered accumulation (as splats drawn once
+//! are), so the reflector's silhouette is not antialiased.
+//!
+//! **Bounces.** With [`IbrSettings::bounces`] 1 a reflector seen in
+//! another's maps shows the frame's light without its glossy reflection
+//! (its splats are dropped); each further capture pass draws the other
+//! reflectors from the previous pass's maps (glosbox: the floor 3 % too
+//! dark with one pass, within 0.3 % with two).
 //!
 //! **Magnitude of `R`.** The paper's K is `D G` normalised to unit sum and
 //! its R is `F/(π cos² θ)` (equation 4's second factor), which leaves the
@@ -172,7 +181,9 @@ impl IbrReflector {
         let kernel = KernelTexture::new(&distribution, Shadowing::Smith, KERNEL_TEXELS)?;
         let ks = lobe.factor;
         let table = match settings.modulation {
-            Modulation::Paper => FlippedRadialReflectance::new(&lobe_fresnel(model), TABLE_ENTRIES)?,
+            Modulation::Paper => {
+                FlippedRadialReflectance::new(&lobe_fresnel(model), TABLE_ENTRIES)?
+            }
             Modulation::Albedo => {
                 let albedo = (0..TABLE_ENTRIES)
                     .map(|k| glossy_albedo(model, (k as f32 + 0.5) / TABLE_ENTRIES as f32))
@@ -184,7 +195,8 @@ impl IbrReflector {
                 })?
             }
         };
-        let maps = ReflectorMaps::from_maps(reflector, settings.sampling, Vec::new(), &settings.quadtree)?;
+        let maps =
+            ReflectorMaps::from_maps(reflector, settings.sampling, Vec::new(), &settings.quadtree)?;
         let buffers = RadianceMapBuffers::upload(ctx, &maps)?;
         Ok(Self {
             maps,

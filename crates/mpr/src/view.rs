@@ -772,7 +772,10 @@ mod tests {
                     (got - pixel).length() < 1e-3 * w,
                     "{p}: pixel {got} vs {pixel}"
                 );
-                assert!((ndc.z - near / z).abs() < 1e-5 * (near / z).max(1e-3), "depth");
+                assert!(
+                    (ndc.z - near / z).abs() < 1e-5 * (near / z).max(1e-3),
+                    "depth"
+                );
                 seen += 1;
             }
             assert!(seen > 50, "{seen} points in front");

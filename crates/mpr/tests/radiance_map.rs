@@ -231,7 +231,14 @@ fn gpu_reprojection_matches_the_cpu_twin() {
     let mean_ratio = radius / scale;
     for by_depth in [false, true] {
         let blurred = if by_depth {
-            convolve_by_depth(&m, Some(&mask), &kernel, &view, &reflector.plane, mean_ratio)
+            convolve_by_depth(
+                &m,
+                Some(&mask),
+                &kernel,
+                &view,
+                &reflector.plane,
+                mean_ratio,
+            )
         } else {
             convolve_in(&m, Some(&mask), &taps)
         };

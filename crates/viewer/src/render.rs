@@ -23,6 +23,11 @@
 //!   planar glossy faces too, each from N mirror views sheared about its
 //!   normal and averaged (section 3, "glossy marble"), their splats dropped.
 //!
+//! - `ibr` (Bastos et al. 1999): `splat-direct`'s light with every planar
+//!   glossy surface drawn as `k_d D + k_s (M * K) R` from radiance maps
+//!   captured from the frame's own lighting (`lustre_mpr::ibr`), its splats
+//!   dropped.
+//!
 //! Every technique's frame is antialiased by `--aa N` jittered accumulation
 //! (Diefenbach & Badler 1997, section 7).
 //!
@@ -191,6 +196,12 @@ pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
 fn check_ibr(args: &RenderArgs) -> anyhow::Result<()> {
     if args.ibr_maps == 0 {
         bail!("--ibr-maps 0: at least one radiance map per hemisphere is reprojected");
+    }
+    if args.diffuse != DiffuseArg::Texture {
+        bail!(
+            "--technique ibr needs --diffuse texture: the reflectors' Lambertian lobes come \
+             from the diffuse textures (their splats are dropped)"
+        );
     }
     if args.ibr_bounces == 0 {
         bail!("--ibr-bounces 0: at least one capture pass is needed");

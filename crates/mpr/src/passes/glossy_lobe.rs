@@ -318,4 +318,39 @@ mod tests {
         assert_eq!(fog_factor(3.0, 2.0), 0.0);
         assert_eq!(fog_factor(3.0, f32::INFINITY), 1.0);
     }
+
+    /// The glossy albedo leaves the Lambertian side out, scales a blend's
+    /// glossy side by its weight, and is the lobe's reflectance: near 1 for
+    /// a smooth rough mirror with F = 1 (a little less at grazing, where
+    /// Smith's masking takes its share), never above 1.
+    #[test]
+    fn glossy_albedo_is_the_glossy_sides_reflectance() {
+        use lustre_geometry::material::MicrofacetDistribution;
+        let mirror = MaterialModel::RoughConductor {
+            distribution: MicrofacetDistribution::Beckmann,
+            alpha: 0.05,
+            fresnel: ConductorFresnel::None,
+            specular: Vec3::ONE,
+        };
+        let white = MaterialModel::Diffuse {
+            reflectance: Vec3::splat(0.8),
+        };
+        assert_eq!(glossy_albedo(&white, 0.5).unwrap(), Vec3::ZERO);
+        let floor = MaterialModel::Blend {
+            weight: 0.3,
+            first: Box::new(white),
+            second: Box::new(mirror.clone()),
+        };
+        for c in [1.0f32, 0.5, 0.2, 0.05] {
+            let a = glossy_albedo(&mirror, c).unwrap();
+            let b = glossy_albedo(&floor, c).unwrap();
+            assert!(
+                (b - a * 0.3).abs().max_element() < 1e-5,
+                "{c}: {b} vs 0.3 × {a}"
+            );
+            assert!(a.max_element() <= 1.0 + 1e-3, "{c}: {a}");
+            let floor_value = if c >= 0.2 { 0.97 } else { 0.6 };
+            assert!(a.min_element() > floor_value, "{c}: {a}");
+        }
+    }
 }

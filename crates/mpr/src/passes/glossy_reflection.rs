@@ -108,8 +108,7 @@ impl GlossyReflectionPass {
         mask: Option<(&wgpu::Texture, u32)>,
         output: &wgpu::Texture,
     ) -> Result<()> {
-        let (taps, by_depth, kernel_weights): (&[(i32, i32, f32)], _, &[f32]) = match convolution
-        {
+        let (taps, by_depth, kernel_weights): (&[(i32, i32, f32)], _, &[f32]) = match convolution {
             Convolution::SpaceInvariant(taps) => (taps, [0.0; 4], &[]),
             Convolution::ByDepth { kernel, mean_ratio } => (
                 &[],
