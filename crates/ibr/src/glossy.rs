@@ -142,31 +142,16 @@ pub fn convolve_by_depth(
                 continue;
             }
             let reach = (radius.ceil() as i32).min(MAX_KERNEL_REACH);
-            let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
-            for dy in -reach..=reach {
-                for dx in -reach..=reach {
-                    let (sx, sy) = (x + dx, y + dy);
-                    if sx < 0 || sy < 0 || sx >= w || sy >= h {
-                        continue;
-                    }
-                    let t = kernel_lookup(kernel, dx as f32 / radius, dy as f32 / radius);
-                    if !(t > 0.0) {
-                        continue;
-                    }
-                    let s = (sy * w + sx) as usize;
-                    if image.depth[s].is_finite() {
-                        sum += image.radiance[s] * t;
-                        weight += t;
-                    } else if is_void(image, mask, s) {
-                        weight += t;
-                    }
-                }
-            }
-            out.radiance[k] = if weight > 0.0 {
-                sum / weight
-            } else {
-                Rgb::ZERO
-            };
+            let taps = (-reach..=reach).flat_map(|dy| {
+                (-reach..=reach).map(move |dx| {
+                    (
+                        dx,
+                        dy,
+                        kernel_lookup(kernel, dx as f32 / radius, dy as f32 / radius),
+                    )
+                })
+            });
+            out.radiance[k] = weighted_mean(image, mask, x, y, taps);
         }
     }
     out
@@ -201,6 +186,36 @@ pub fn pixel_kernel(kernel: &KernelTexture, radius: f32) -> Vec<(i32, i32, f32)>
 /// `M * K`: each covered pixel the weighted mean of the covered pixels under the resampled kernel (module documentation); uncovered pixels stay empty.
 pub fn convolve(image: &ReflectedImage, taps: &[(i32, i32, f32)]) -> ReflectedImage {
     convolve_in(image, None, taps)
+}
+
+/// The mean of M under `taps` `(dx, dy, weight)` about pixel `(x, y)`, weighted over the pixels M covers and the void ones (black; [`convolve_in`]); zero where none is under a positive weight.
+fn weighted_mean(
+    image: &ReflectedImage,
+    mask: Option<&[bool]>,
+    x: i32,
+    y: i32,
+    taps: impl Iterator<Item = (i32, i32, f32)>,
+) -> Rgb {
+    let (w, h) = (image.width as i32, image.height as i32);
+    let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
+    for (dx, dy, t) in taps {
+        let (sx, sy) = (x + dx, y + dy);
+        if !(t > 0.0) || sx < 0 || sy < 0 || sx >= w || sy >= h {
+            continue;
+        }
+        let s = (sy * w + sx) as usize;
+        if image.depth[s].is_finite() {
+            sum += image.radiance[s] * t;
+            weight += t;
+        } else if is_void(image, mask, s) {
+            weight += t;
+        }
+    }
+    if weight > 0.0 {
+        sum / weight
+    } else {
+        Rgb::ZERO
+    }
 }
 
 /// Whether pixel `k` gets a value: covered by M, or inside the reflector's `mask`.
@@ -248,25 +263,7 @@ pub fn convolve_in(
             if !in_domain(image, mask, k) {
                 continue;
             }
-            let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
-            for &(dx, dy, t) in taps {
-                let (sx, sy) = (x + dx, y + dy);
-                if sx < 0 || sy < 0 || sx >= w || sy >= h {
-                    continue;
-                }
-                let s = (sy * w + sx) as usize;
-                if image.depth[s].is_finite() {
-                    sum += image.radiance[s] * t;
-                    weight += t;
-                } else if is_void(image, mask, s) {
-                    weight += t;
-                }
-            }
-            out.radiance[k] = if weight > 0.0 {
-                sum / weight
-            } else {
-                Rgb::ZERO
-            };
+            out.radiance[k] = weighted_mean(image, mask, x, y, taps.iter().copied());
         }
     }
     out
