@@ -47,6 +47,11 @@ pub fn kernel_radius(
     plane: &Plane,
     half_angle: f32,
 ) -> f32 {
+    view.focal.y * half_angle.tan() * mean_depth_ratio(image, view, plane)
+}
+
+/// The mean of [`depth_ratio`] `d/(e + d)` over the pixels M covers; zero when it covers none.
+pub fn mean_depth_ratio(image: &ReflectedImage, view: &PinholeView, plane: &Plane) -> f32 {
     let (mut sum, mut n) = (0.0f64, 0u64);
     for y in 0..image.height {
         for x in 0..image.width {
@@ -59,7 +64,7 @@ pub fn kernel_radius(
     if n == 0 {
         return 0.0;
     }
-    view.focal.y * half_angle.tan() * (sum / n as f64) as f32
+    (sum / n as f64) as f32
 }
 
 /// `d/(e + d)` at pixel `(x, y)`: M's depth `z = e + d` along the view axis over the reflector's depth `e` there; `None` where M is uncovered or the ray misses the reflector's plane.

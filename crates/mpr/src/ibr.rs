@@ -68,7 +68,7 @@ use lustre_brdf::microfacet::{Distribution, Shadowing};
 use lustre_brdf::reflectance_modulation::FlippedRadialReflectance;
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
 use lustre_geometry::{Bvh, Ray, Rgb, Scene, SurfaceKind};
-use lustre_ibr::glossy::{kernel_radius, pixel_kernel};
+use lustre_ibr::glossy::{kernel_radius, mean_depth_ratio, pixel_kernel};
 use lustre_ibr::{
     MemoryReport, PinholeView, QuadtreeSettings, RadianceMap, ReflectedImage, Reflector,
     ReflectorMaps, SampleCamera, SamplingSettings, SelectionRule, select,
@@ -328,13 +328,8 @@ impl IbrReflectors {
             }),
             ..*frame
         };
-        let per_reflector = {
-            let (nu, nv) = settings.sampling.planar_resolution;
-            let step = settings.sampling.arc_step_degrees.to_radians();
-            let polar = settings.sampling.max_polar_degrees.to_radians();
-            (nu * nv) as usize * lustre_ibr::sampling::hemisphere_directions(step, polar).len()
-        };
-        let total = per_reflector * surfaces.len() * settings.bounces as usize;
+        // Every reflector has as many maps as the sampling gives one: its count times the reflectors and passes.
+        let passes = surfaces.len() * settings.bounces as usize;
         let mut done = 0;
         let mut reflectors = Vec::with_capacity(surfaces.len());
         for (surface, model) in &surfaces {
@@ -371,9 +366,9 @@ impl IbrReflectors {
                             Some((Rgb::new(c[0], c[1], c[2]), hit.t))
                         }))
                     },
-                    &mut |_, _| {
+                    &mut |_, per_reflector| {
                         done += 1;
-                        progress(done, total);
+                        progress(done, per_reflector * passes);
                     },
                 )?);
             }
@@ -458,8 +453,7 @@ impl IbrReflectors {
         let Some(textures) = textures.as_ref() else {
             return Ok(());
         };
-        let mut views = ViewBuffer::new(ctx, 1);
-        let slot = views.write(ctx, &[view])?[0];
+        let (views, slot) = ViewBuffer::for_view(ctx, view)?;
         ctx.checked_result("radiance-map surface ids", || {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             graph
@@ -517,17 +511,19 @@ impl IbrReflectors {
                 *out = REFLECTED_NEAR / z;
             }
         }
-        let radius = kernel_radius(&m, &view, &plane, reflector.kernel.half_angle);
-        let scale = view.focal.y * reflector.kernel.half_angle.tan();
+        let mean_ratio = mean_depth_ratio(&m, &view, &plane);
         let taps = match self.settings.kernel {
-            KernelSizing::SpaceInvariant => pixel_kernel(&reflector.kernel, radius),
+            KernelSizing::SpaceInvariant => pixel_kernel(
+                &reflector.kernel,
+                kernel_radius(&m, &view, &plane, reflector.kernel.half_angle),
+            ),
             KernelSizing::ByDepth => Vec::new(),
         };
         let convolution = match self.settings.kernel {
             KernelSizing::SpaceInvariant => Convolution::SpaceInvariant(&taps),
             KernelSizing::ByDepth => Convolution::ByDepth {
                 kernel: &reflector.kernel,
-                mean_ratio: if scale > 0.0 { radius / scale } else { 0.0 },
+                mean_ratio,
             },
         };
         ctx.checked_result("radiance-map glossy term", || {

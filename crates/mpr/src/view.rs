@@ -591,8 +591,13 @@ impl ViewBuffer {
 
     /// A buffer holding the one view of `camera`, and its slot (for passes drawn outside a [`crate::FrameGraph`]).
     pub fn for_camera(ctx: &GpuContext, camera: &Camera) -> Result<(Self, ViewSlot)> {
+        Self::for_view(ctx, View::from_camera(camera))
+    }
+
+    /// A buffer holding `view` alone, and its slot.
+    pub fn for_view(ctx: &GpuContext, view: View) -> Result<(Self, ViewSlot)> {
         let mut views = Self::new(ctx, 1);
-        let slots = views.write(ctx, &[View::from_camera(camera)])?;
+        let slots = views.write(ctx, &[view])?;
         Ok((views, slots[0]))
     }
 
