@@ -39,7 +39,11 @@ pub const CACHE_MAGIC: &[u8; 8] = b"LUSTRIBR";
 pub const CACHE_VERSION: u32 = 1;
 
 /// Writes `reflectors` under `key` to `path`, atomically (module documentation).
-pub fn write(path: &Path, key: u64, reflectors: &[ReflectorMaps]) -> Result<()> {
+pub fn write<'a>(
+    path: &Path,
+    key: u64,
+    reflectors: impl ExactSizeIterator<Item = &'a ReflectorMaps>,
+) -> Result<()> {
     let mut b = Vec::new();
     b.extend_from_slice(CACHE_MAGIC);
     put_u32(&mut b, CACHE_VERSION);

@@ -38,7 +38,7 @@ fn the_cache_round_trips_and_refuses_bad_files() {
     let dir = std::env::temp_dir().join(format!("lustre-ibr-cache-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("maps.ibr");
-    cache::write(&path, 42, &maps).unwrap();
+    cache::write(&path, 42, maps.iter()).unwrap();
     // Nothing but the file itself: no temporary left behind.
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
     let back = cache::read(&path, 42, &QuadtreeSettings::default()).unwrap();

@@ -113,6 +113,19 @@ pub enum KernelSizing {
     ByDepth,
 }
 
+/// Where the reflected image M comes from (section 8.1; the paper's graph compares the two).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ReflectedSource {
+    /// The selected radiance maps reprojected as sized points (section 8.1.3).
+    #[default]
+    RadianceMaps,
+    /// The frame drawn again from the mirrored view, the scene's full
+    /// geometry (the multi-pass specular image, Diefenbach & Badler): no
+    /// maps are captured, and the other reflectors appear in it as the frame
+    /// draws them without their glossy terms.
+    Geometry,
+}
+
 /// How the reflectors are sampled, selected and shaded.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IbrSettings {
@@ -133,6 +146,8 @@ pub struct IbrSettings {
     pub bounces: u32,
     /// How the kernel is sized.
     pub kernel: KernelSizing,
+    /// Where M comes from.
+    pub reflected: ReflectedSource,
 }
 
 impl Default for IbrSettings {
@@ -148,6 +163,7 @@ impl Default for IbrSettings {
             modulation: Modulation::Albedo,
             bounces: 2,
             kernel: KernelSizing::SpaceInvariant,
+            reflected: ReflectedSource::RadianceMaps,
         }
     }
 }
@@ -214,6 +230,44 @@ struct FrameTextures {
     size: (u32, u32),
     reflected: ReflectedTargets,
     term: wgpu::Texture,
+    /// [`ReflectedSource::Geometry`]'s mirrored frame.
+    geometry: Option<GeometryTargets>,
+}
+
+/// The targets the mirrored frame of [`ReflectedSource::Geometry`] is drawn into; M reads their HDR and depth.
+#[derive(Debug)]
+struct GeometryTargets {
+    targets: RenderTargets,
+    output: wgpu::TextureView,
+}
+
+impl GeometryTargets {
+    fn new(ctx: &GpuContext, graph: &FrameGraph, like: &RenderTargets) -> Result<Self> {
+        let (w, h) = (like.width, like.height);
+        let targets = RenderTargets::with_hdr_format(ctx, w, h, like.hdr_format())?;
+        let output = ctx.checked("geometry-based reflected image output", || {
+            crate::passes::radiance_map::texture_2d(
+                ctx,
+                "geometry-reflected-output",
+                w,
+                h,
+                graph.tonemap.output_format(),
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+        })?;
+        Ok(Self {
+            targets,
+            output: output.create_view(&Default::default()),
+        })
+    }
+
+    /// M as the glossy pass reads it: the mirrored frame's HDR radiance and reverse-Z depth (near [`REFLECTED_NEAR`]).
+    fn reflected(&self) -> ReflectedTargets {
+        ReflectedTargets {
+            color: self.targets.hdr.texture.clone(),
+            depth: self.targets.depth.texture.clone(),
+        }
+    }
 }
 
 /// Every glossy planar reflector of a scene drawn from radiance maps (module documentation).
@@ -281,7 +335,7 @@ impl IbrReflectors {
     /// lighting through `graph` from each sample camera (module
     /// documentation); `bvh` gives the texels' depths; `progress(done,
     /// total)` after each map. `frame.targets` and `frame.output` are not
-    /// touched.
+    /// touched. With [`ReflectedSource::Geometry`] nothing is captured.
     pub fn capture(
         ctx: &GpuContext,
         graph: &FrameGraph,
@@ -291,21 +345,10 @@ impl IbrReflectors {
         settings: &IbrSettings,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Self> {
-        if settings.bounces == 0 {
-            return Err(MprError::InvalidSetting {
-                what: "radiance maps",
-                message: "at least one capture pass is needed".into(),
-            });
+        let mut this = Self::without_maps(ctx, scene, settings, frame.targets.hdr_format())?;
+        if settings.reflected == ReflectedSource::Geometry {
+            return Ok(this);
         }
-        if settings.maps_per_hemisphere == 0 {
-            return Err(MprError::InvalidSetting {
-                what: "radiance maps",
-                message: "at least one map per hemisphere must be reprojected".into(),
-            });
-        }
-        settings.sampling.validate()?;
-        settings.quadtree.validate()?;
-        let surfaces = reflector_surfaces(scene);
         let (w, h) = settings.sampling.map_resolution;
         let targets = RenderTargets::with_hdr_format(ctx, w, h, frame.targets.hdr_format())?;
         let output = ctx.checked("radiance-map capture output", || {
@@ -329,21 +372,8 @@ impl IbrReflectors {
             ..*frame
         };
         // Every reflector has as many maps as the sampling gives one: its count times the reflectors and passes.
-        let passes = surfaces.len() * settings.bounces as usize;
+        let passes = this.reflectors.len() * settings.bounces as usize;
         let mut done = 0;
-        let mut reflectors = Vec::with_capacity(surfaces.len());
-        for (surface, model) in &surfaces {
-            let reflector = Reflector::from_surface(scene, *surface)?;
-            reflectors.push(IbrReflector::new(ctx, reflector, model, settings)?);
-        }
-        let mut this = Self {
-            reflectors,
-            settings: *settings,
-            radiance_map: RadianceMapPass::new(ctx)?,
-            glossy: GlossyReflectionPass::new(ctx)?,
-            blend: ReflectorBlendPass::new(ctx, frame.targets.hdr_format())?,
-            textures: Mutex::new(None),
-        };
         for bounce in 0..settings.bounces {
             let mut captured = Vec::with_capacity(this.reflectors.len());
             for reflector in &this.reflectors {
@@ -378,6 +408,91 @@ impl IbrReflectors {
             }
         }
         Ok(this)
+    }
+
+    /// Every reflector of `scene` with its kernel, table and `k_s`, and no maps yet; `hdr_format` is the frame's HDR target's.
+    fn without_maps(
+        ctx: &GpuContext,
+        scene: &Scene,
+        settings: &IbrSettings,
+        hdr_format: wgpu::TextureFormat,
+    ) -> Result<Self> {
+        if settings.bounces == 0 {
+            return Err(MprError::InvalidSetting {
+                what: "radiance maps",
+                message: "at least one capture pass is needed".into(),
+            });
+        }
+        if settings.maps_per_hemisphere == 0 {
+            return Err(MprError::InvalidSetting {
+                what: "radiance maps",
+                message: "at least one map per hemisphere must be reprojected".into(),
+            });
+        }
+        settings.sampling.validate()?;
+        settings.quadtree.validate()?;
+        let mut reflectors = Vec::new();
+        for (surface, model) in reflector_surfaces(scene) {
+            let reflector = Reflector::from_surface(scene, surface)?;
+            reflectors.push(IbrReflector::new(ctx, reflector, &model, settings)?);
+        }
+        Ok(Self {
+            reflectors,
+            settings: *settings,
+            radiance_map: RadianceMapPass::new(ctx)?,
+            glossy: GlossyReflectionPass::new(ctx)?,
+            blend: ReflectorBlendPass::new(ctx, hdr_format)?,
+            textures: Mutex::new(None),
+        })
+    }
+
+    /// The reflectors of `scene` drawn from `maps`, captured before (a
+    /// [`lustre_ibr::cache`] file) under `settings`: one per reflector of
+    /// `scene`, in order, each on the same surface and plane and sampled as
+    /// `settings.sampling` says, else [`MprError::InvalidSetting`]; `frame`
+    /// as [`IbrReflectors::capture`] takes it.
+    pub fn from_maps(
+        ctx: &GpuContext,
+        frame: &FrameInputs<'_>,
+        scene: &Scene,
+        settings: &IbrSettings,
+        maps: Vec<ReflectorMaps>,
+    ) -> Result<Self> {
+        let mut this = Self::without_maps(ctx, scene, settings, frame.targets.hdr_format())?;
+        let mismatch = |message: String| MprError::InvalidSetting {
+            what: "radiance maps",
+            message,
+        };
+        if maps.len() != this.reflectors.len() {
+            return Err(mismatch(format!(
+                "{} reflectors' maps for a scene with {} reflectors",
+                maps.len(),
+                this.reflectors.len()
+            )));
+        }
+        for (reflector, maps) in this.reflectors.iter_mut().zip(maps) {
+            let (want, got) = (&reflector.maps.reflector, &maps.reflector);
+            if want.surface != got.surface || want.plane != got.plane {
+                return Err(mismatch(format!(
+                    "maps of surface {} where the scene's reflector is surface {}",
+                    got.surface, want.surface
+                )));
+            }
+            if maps.sampling != settings.sampling {
+                return Err(mismatch(format!(
+                    "surface {}'s maps were sampled as {:?}, not as {:?}",
+                    got.surface, maps.sampling, settings.sampling
+                )));
+            }
+            reflector.buffers = RadianceMapBuffers::upload(ctx, &maps)?;
+            reflector.maps = maps;
+        }
+        Ok(this)
+    }
+
+    /// Every reflector's maps, to write to a [`lustre_ibr::cache`] file.
+    pub fn maps(&self) -> impl ExactSizeIterator<Item = &ReflectorMaps> {
+        self.reflectors.iter().map(|r| &r.maps)
     }
 
     /// The reflectors' surface ids, true at each (the surfaces whose photon splats the caller drops).
@@ -444,10 +559,15 @@ impl IbrReflectors {
         let (w, h) = (targets.width, targets.height);
         let mut textures = self.textures.lock().unwrap_or_else(|e| e.into_inner());
         if textures.as_ref().map(|t| t.size) != Some((w, h)) {
+            let geometry = match self.settings.reflected {
+                ReflectedSource::RadianceMaps => None,
+                ReflectedSource::Geometry => Some(GeometryTargets::new(ctx, graph, targets)?),
+            };
             *textures = Some(FrameTextures {
                 size: (w, h),
                 reflected: ReflectedTargets::new(ctx, w, h)?,
                 term: GlossyReflectionPass::output(ctx, w, h)?,
+                geometry,
             });
         }
         let Some(textures) = textures.as_ref() else {
@@ -463,8 +583,8 @@ impl IbrReflectors {
             Ok(())
         })?;
         for reflector in &self.reflectors {
-            if !reflector.maps.maps.is_empty() {
-                self.add_reflector(ctx, reflector, pinhole, targets, textures)?;
+            if !reflector.maps.maps.is_empty() || textures.geometry.is_some() {
+                self.add_reflector(ctx, graph, frame, reflector, pinhole, textures)?;
             }
         }
         Ok(())
@@ -474,11 +594,13 @@ impl IbrReflectors {
     fn add_reflector(
         &self,
         ctx: &GpuContext,
+        graph: &FrameGraph,
+        frame: &FrameInputs<'_>,
         reflector: &IbrReflector,
         eye: &PinholeView,
-        targets: &RenderTargets,
         textures: &FrameTextures,
     ) -> Result<()> {
+        let targets = frame.targets;
         let plane = reflector.maps.reflector.plane;
         // The reflector's front faces the scene: an eye behind it sees no reflection.
         if plane.signed_distance(eye.eye) <= 1e-6 {
@@ -486,25 +608,47 @@ impl IbrReflectors {
         }
         let (w, h) = (targets.width, targets.height);
         let view = eye.reflected(&plane);
-        let selected = select(
-            &reflector.maps.cameras(),
-            view.eye,
-            self.settings.maps_per_hemisphere,
-            self.settings.selection,
-        );
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        self.radiance_map.encode(
-            ctx,
-            &mut encoder,
-            &reflector.maps,
-            &reflector.buffers,
-            &selected,
-            &view,
-            &textures.reflected,
-        )?;
-        ctx.queue.submit([encoder.finish()]);
+        let geometry_m;
+        let reflected = match &textures.geometry {
+            Some(geometry) => {
+                // The scene lies along +normal; keep n·p − offset ≥ a hair, as View::reflected does.
+                let hair = 1e-4 * plane.signed_distance(eye.eye);
+                let keep = plane.normal.extend(-plane.offset) - Vec4::W * hair;
+                let mut mirrored = View::from_pinhole(&view, REFLECTED_NEAR)
+                    .with_clip_plane(keep, ctx.clip_method());
+                mirrored.shows_emitters = false;
+                let inputs = FrameInputs {
+                    targets: &geometry.targets,
+                    output: &geometry.output,
+                    ..*frame
+                };
+                graph.render_view(ctx, &inputs, mirrored)?;
+                geometry_m = geometry.reflected();
+                &geometry_m
+            }
+            None => {
+                let selected = select(
+                    &reflector.maps.cameras(),
+                    view.eye,
+                    self.settings.maps_per_hemisphere,
+                    self.settings.selection,
+                );
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                self.radiance_map.encode(
+                    ctx,
+                    &mut encoder,
+                    &reflector.maps,
+                    &reflector.buffers,
+                    &selected,
+                    &view,
+                    &textures.reflected,
+                )?;
+                ctx.queue.submit([encoder.finish()]);
+                &textures.reflected
+            }
+        };
         // The kernel's radius from M's depths (reverse Z: near / z).
-        let depth = read_depth(ctx, &textures.reflected.depth)?;
+        let depth = read_depth(ctx, &reflected.depth)?;
         let mut m = ReflectedImage::new(w, h);
         for (out, z) in m.depth.iter_mut().zip(&depth) {
             if *z > 0.0 {
@@ -531,7 +675,7 @@ impl IbrReflectors {
             self.glossy.encode(
                 ctx,
                 &mut encoder,
-                &textures.reflected,
+                reflected,
                 &view,
                 &plane,
                 convolution,

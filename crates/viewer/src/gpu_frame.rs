@@ -121,8 +121,10 @@ pub struct GpuFrame {
     pub components: Components,
     /// The glossy reflectors drawn from radiance maps (`--technique ibr`, Bastos et al. 1999).
     pub ibr: Option<IbrReflectors>,
-    /// Milliseconds the radiance maps took to capture.
+    /// Milliseconds the radiance maps took to capture (or to read from `--ibr-cache`).
     pub ibr_capture_ms: f64,
+    /// Whether the radiance maps came from `--ibr-cache`.
+    pub ibr_cached: bool,
 }
 
 impl GpuFrame {
@@ -282,6 +284,7 @@ impl GpuFrame {
             components: Components::default(),
             ibr: None,
             ibr_capture_ms: 0.0,
+            ibr_cached: false,
         }
         .with_radiance_maps(args, scene, camera)
     }
@@ -307,6 +310,29 @@ impl GpuFrame {
             return Ok(self);
         }
         let start = std::time::Instant::now();
+        let settings = ibr_settings(args);
+        let cache = args
+            .ibr_cache
+            .as_deref()
+            .map(|path| (path, crate::ibr_cache::key(args, scene)));
+        if let Some((path, key)) = cache.filter(|(path, _)| path.exists()) {
+            let cached = lustre_ibr::cache::read(path, key, &settings.quadtree)
+                .map_err(anyhow::Error::from)
+                .and_then(|maps| {
+                    Ok(IbrReflectors::from_maps(
+                        &self.ctx, &inputs, scene, &settings, maps,
+                    )?)
+                });
+            match cached {
+                Ok(ibr) => {
+                    self.ibr = Some(ibr);
+                    self.ibr_cached = true;
+                    self.ibr_capture_ms = start.elapsed().as_secs_f64() * 1e3;
+                    return Ok(self);
+                }
+                Err(e) => eprintln!("{e:#}; capturing the radiance maps again"),
+            }
+        }
         let bvh = Bvh::build(scene);
         let bar = indicatif::ProgressBar::new(0).with_style(
             indicatif::ProgressStyle::with_template(
@@ -320,7 +346,7 @@ impl GpuFrame {
             &inputs,
             scene,
             &bvh,
-            &ibr_settings(args),
+            &settings,
             &mut |done, total| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
@@ -328,6 +354,10 @@ impl GpuFrame {
         )
         .with_context(|| format!("radiance maps of scene `{}`", scene.name))?;
         bar.finish_and_clear();
+        if let Some((path, key)) = cache {
+            lustre_ibr::cache::write(path, key, ibr.maps())
+                .with_context(|| format!("--ibr-cache {}", path.display()))?;
+        }
         self.ibr = Some(ibr);
         self.ibr_capture_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(self)

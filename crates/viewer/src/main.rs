@@ -4,6 +4,7 @@
 //! [`trace`]).
 
 mod gpu_frame;
+mod ibr_cache;
 mod render;
 mod render_density;
 mod render_frames;

@@ -53,7 +53,7 @@ use lustre_ibr::{SamplingSettings, SelectionRule};
 use lustre_image::{Image, Precision};
 use lustre_mpr::beam_paths::scatterer_surfaces;
 use lustre_mpr::frame::SplatInputs;
-use lustre_mpr::ibr::{IbrSettings, KernelSizing, Modulation};
+use lustre_mpr::ibr::{IbrSettings, KernelSizing, Modulation, ReflectedSource};
 use lustre_mpr::passes::beams::Traversal;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::passes::direct::DirectLights;
@@ -165,6 +165,15 @@ pub enum IbrModulationArg {
     Paper,
 }
 
+/// Where `--technique ibr` takes the reflected image M from (Bastos et al. 1999, section 9's comparison).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum IbrReflectedArg {
+    /// The selected radiance maps reprojected (the paper's technique).
+    Maps,
+    /// The frame drawn again from the mirrored view, no maps captured.
+    Geometry,
+}
+
 /// The radiance maps' settings of `--technique ibr`.
 pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
     IbrSettings {
@@ -188,6 +197,10 @@ pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
             IbrModulationArg::Albedo => Modulation::Albedo,
             IbrModulationArg::Paper => Modulation::Paper,
         },
+        reflected: match args.ibr_reflected {
+            IbrReflectedArg::Maps => ReflectedSource::RadianceMaps,
+            IbrReflectedArg::Geometry => ReflectedSource::Geometry,
+        },
         ..IbrSettings::default()
     }
 }
@@ -205,6 +218,28 @@ fn check_ibr(args: &RenderArgs) -> anyhow::Result<()> {
     }
     if args.ibr_bounces == 0 {
         bail!("--ibr-bounces 0: at least one capture pass is needed");
+    }
+    if let Some(cache) = &args.ibr_cache {
+        if args.ibr_reflected == IbrReflectedArg::Geometry {
+            bail!(
+                "--ibr-cache with --ibr-reflected geometry: geometry-based reflections capture no maps to cache"
+            );
+        }
+        if cache.is_dir() {
+            bail!(
+                "--ibr-cache {}: is a directory, not a file",
+                cache.display()
+            );
+        }
+        if let Some(dir) = cache.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if !dir.is_dir() {
+                bail!(
+                    "--ibr-cache {}: directory {} does not exist",
+                    cache.display(),
+                    dir.display()
+                );
+            }
+        }
     }
     ibr_settings(args)
         .sampling
@@ -572,6 +607,18 @@ pub struct RenderArgs {
     /// 256²: relMSE 0.0030 against 0.0028, and slower).
     #[arg(long, value_enum, default_value_t = IbrKernelArg::Invariant)]
     pub ibr_kernel: IbrKernelArg,
+    /// `--technique ibr`: the reflected image M from the radiance maps
+    /// (the paper's) or from the scene's geometry drawn again from each
+    /// reflector's mirrored view, every frame (the paper's comparison:
+    /// no capture, a full frame per reflector).
+    #[arg(long, value_enum, default_value_t = IbrReflectedArg::Maps)]
+    pub ibr_reflected: IbrReflectedArg,
+    /// `--technique ibr`: a radiance-map cache file. Its maps are used when
+    /// it was written for this scene, lighting and sampling (a key over the
+    /// scene and every option that changes the maps); otherwise the maps are
+    /// captured and written there. Delete it after changing the renderer.
+    #[arg(long, value_name = "FILE")]
+    pub ibr_cache: Option<PathBuf>,
     /// `--technique mpr` and `beams`: glossy images (Diefenbach & Badler 1997, section 3,
     /// "glossy marble"): N mirror images per planar glossy face, sheared
     /// about its normal by the lobe's roughness and averaged; the face's
@@ -1090,6 +1137,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 "kernel": format!("{:?}", settings.kernel),
                 "bounces": settings.bounces,
                 "bytes": ibr.memory().iter().map(|m| m.bytes).sum::<usize>(),
+                "reflected": format!("{:?}", settings.reflected),
+                "cache": args.ibr_cache.as_ref().map(|path| json!({
+                    "path": path.display().to_string(),
+                    "hit": gpu.ibr_cached,
+                })),
             })
         });
     let sidecar = sidecar_path(&args.out);

@@ -445,6 +445,34 @@ fn render_refuses_bad_options_before_writing_anything() {
             ],
             "not a size",
         ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "ibr",
+                "--ibr-reflected",
+                "geometry",
+                "--ibr-cache",
+                "maps.ibr",
+                "--out",
+                out,
+            ],
+            "capture no maps to cache",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "ibr",
+                "--ibr-cache",
+                "no-such-directory/maps.ibr",
+                "--out",
+                out,
+            ],
+            "does not exist",
+        ),
     ];
     for (args, expected) in cases {
         let result = lustre(&args);
@@ -457,6 +485,77 @@ fn render_refuses_bad_options_before_writing_anything() {
         std::fs::read_dir(&dir).unwrap().next().is_none(),
         "files were written"
     );
+}
+
+/// `--ibr-cache`: the first render captures the radiance maps and writes
+/// them, the next one with the same lighting and sampling (another image
+/// size) draws from them and gives the image a capture gives, and one with
+/// other sampling or a damaged file captures again and rewrites the file.
+#[test]
+fn the_radiance_map_cache_is_reused_only_for_the_maps_it_holds() {
+    let dir = scratch("ibr-cache");
+    let cache = dir.join("glosbox.ibr");
+    let render = |out: &str, size: &str, map_size: &str| {
+        let out_path = dir.join(out);
+        let args = [
+            "render",
+            "glosbox",
+            "--technique",
+            "ibr",
+            "--photons",
+            "5000",
+            "--seed",
+            "3",
+            "--size",
+            size,
+            "--ibr-arc-step",
+            "60",
+            "--ibr-map-size",
+            map_size,
+            "--ibr-bounces",
+            "1",
+            "--ibr-cache",
+            cache.to_str().unwrap(),
+            "--out",
+            out_path.to_str().unwrap(),
+        ];
+        let out = render_or_skip("the_radiance_map_cache", &args)?;
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        let hit = sidecar(&out_path)["radiance_maps"]["cache"]["hit"].as_bool();
+        Some((lustre_image::read_exr(&out_path).unwrap(), hit, stderr))
+    };
+    let Some((captured, hit, _)) = render("a.exr", "32x24", "16") else {
+        return;
+    };
+    assert_eq!(hit, Some(false));
+    let written = std::fs::read(&cache).unwrap();
+    let (from_cache, hit, stderr) = render("b.exr", "32x24", "16").unwrap();
+    assert_eq!(hit, Some(true), "{stderr}");
+    assert_eq!(captured.into_pixels(), from_cache.into_pixels());
+    let (_, hit, _) = render("c.exr", "40x30", "16").unwrap();
+    assert_eq!(hit, Some(true), "the image size does not change the maps");
+    let (_, hit, stderr) = render("d.exr", "32x24", "12").unwrap();
+    assert_eq!(hit, Some(false));
+    assert!(stderr.contains("made for other settings"), "{stderr}");
+    assert_ne!(
+        std::fs::read(&cache).unwrap(),
+        written,
+        "the cache was rewritten"
+    );
+    let mut damaged = std::fs::read(&cache).unwrap();
+    let middle = damaged.len() / 2;
+    damaged[middle] ^= 0xff;
+    std::fs::write(&cache, damaged).unwrap();
+    let (_, hit, stderr) = render("e.exr", "32x24", "12").unwrap();
+    assert_eq!(hit, Some(false));
+    assert!(stderr.contains("checksum"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
 }
 
 /// A Phong material with kd + ks > 1 is not energy conserving: the MTL loader
