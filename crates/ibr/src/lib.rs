@@ -37,6 +37,7 @@ pub mod radiance_map;
 pub mod reflector;
 pub mod reflector_maps;
 pub mod reprojection;
+pub mod resolution;
 pub mod sampling;
 pub mod selection;
 pub mod view;

@@ -72,6 +72,18 @@ impl PinholeView {
         }
     }
 
+    /// The same view on a grid `scale` times coarser: `⌈width/scale⌉ × ⌈height/scale⌉` pixels, focal lengths and principal point divided by `scale`, so coarse pixel coordinates are the fine ones over `scale` ([`crate::resolution`]).
+    pub fn coarsened(&self, scale: u32) -> Self {
+        let s = scale.max(1);
+        Self {
+            focal: self.focal / s as f32,
+            principal: self.principal / s as f32,
+            width: self.width.div_ceil(s),
+            height: self.height.div_ceil(s),
+            ..*self
+        }
+    }
+
     /// Camera coordinates `(xc, yc, zc)` of world point `x`.
     pub fn camera_coordinates(&self, x: Vec3) -> Vec3 {
         let d = x - self.eye;

@@ -12,12 +12,15 @@ use lustre_ibr::ReflectedImage;
 use lustre_ibr::glossy::{
     convolve, convolve_by_depth, convolve_in, kernel_radius, modulate, modulate_in, pixel_kernel,
 };
+use lustre_ibr::resolution::{coarse_mask, upsample};
 use lustre_ibr::{
     PinholeView, PointSizing, QuadtreeSettings, Reflector, ReflectorMaps, SamplingSettings,
     SelectionRule, select,
 };
-use lustre_mpr::passes::glossy_reflection::{Convolution, GlossyReflectionPass};
+use lustre_mpr::RenderTargets;
+use lustre_mpr::passes::glossy_reflection::{Convolution, GlossyReflectionPass, SurfaceMask};
 use lustre_mpr::passes::radiance_map::{RadianceMapBuffers, RadianceMapPass, ReflectedTargets};
+use lustre_mpr::passes::reflector_blend::ReflectorBlendPass;
 use lustre_mpr::readback::{read_depth, read_rgba_f32};
 
 #[test]
@@ -227,22 +230,53 @@ fn gpu_reprojection_matches_the_cpu_twin() {
         },
         id_texture.size(),
     );
+    // The same on M's grid twice as coarse as the frame's ids
+    // (lustre_ibr::resolution): ids of 2w × 2h pixels with a ragged edge,
+    // read at each M pixel's centre frame pixel.
+    let fine: Vec<bool> = (0..4 * w * h)
+        .map(|k| (k / (2 * w)) + (k % (2 * w)) % 3 >= h)
+        .collect();
+    let fine_ids: Vec<u32> = fine.iter().map(|&m| if m { surface } else { 0 }).collect();
+    let fine_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("test-fine-ids"),
+        size: wgpu::Extent3d {
+            width: 2 * w,
+            height: 2 * h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: lustre_mpr::target::SURFACE_ID_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    ctx.queue.write_texture(
+        fine_texture.as_image_copy(),
+        bytemuck::cast_slice(&fine_ids),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(8 * w),
+            rows_per_image: Some(2 * h),
+        },
+        fine_texture.size(),
+    );
+    let coarse = coarse_mask(&fine, 2 * w, 2 * h, 2);
+    assert_ne!(coarse, mask, "the ragged edge shows on the coarse grid");
     let scale = view.focal.y * kernel.half_angle.tan();
     let mean_ratio = radius / scale;
-    for by_depth in [false, true] {
+    let mut coarse_term = Vec::new();
+    for (by_depth, ids, mask, mask_scale) in [
+        (false, &id_texture, &mask, 1),
+        (true, &id_texture, &mask, 1),
+        (false, &fine_texture, &coarse, 2),
+    ] {
         let blurred = if by_depth {
-            convolve_by_depth(
-                &m,
-                Some(&mask),
-                &kernel,
-                &view,
-                &reflector.plane,
-                mean_ratio,
-            )
+            convolve_by_depth(&m, Some(mask), &kernel, &view, &reflector.plane, mean_ratio)
         } else {
-            convolve_in(&m, Some(&mask), &taps)
+            convolve_in(&m, Some(mask), &taps)
         };
-        let cpu_term = modulate_in(&blurred, Some(&mask), &view, &reflector.plane, &table);
+        let cpu_term = modulate_in(&blurred, Some(mask), &view, &reflector.plane, &table);
         let convolution = if by_depth {
             Convolution::ByDepth {
                 kernel: &kernel,
@@ -261,7 +295,11 @@ fn gpu_reprojection_matches_the_cpu_twin() {
                 &reflector.plane,
                 convolution,
                 &table,
-                Some((&id_texture, surface)),
+                Some(SurfaceMask {
+                    ids,
+                    surface,
+                    scale: mask_scale,
+                }),
                 &out,
             )
             .unwrap();
@@ -272,7 +310,7 @@ fn gpu_reprojection_matches_the_cpu_twin() {
             let g = Rgb::new(g[0], g[1], g[2]);
             assert!(
                 (g - *c).abs().max_element() <= 1e-4 * c.max_element().max(1e-3),
-                "by depth {by_depth}, pixel {k}: GPU {g} vs CPU {c}"
+                "by depth {by_depth}, mask scale {mask_scale}, pixel {k}: GPU {g} vs CPU {c}"
             );
             lit += usize::from(c.max_element() > 0.0);
             uncovered_lit += usize::from(c.max_element() > 0.0 && !(depth[k] > 0.0));
@@ -280,5 +318,55 @@ fn gpu_reprojection_matches_the_cpu_twin() {
         eprintln!("by depth {by_depth}: {lit} pixels lit, {uncovered_lit} of them uncovered by M");
         // The mask's uncovered pixels beside M (cracks, and the void's rim within the kernel's reach) are filled.
         assert!(uncovered_lit > 0);
+        if mask_scale == 2 {
+            coarse_term = gpu_term;
+        }
     }
+
+    // The blend of the coarse term into a frame twice as fine, against
+    // lustre_ibr::resolution::upsample of the same term: k_s times the
+    // bilinear mean over the valid coarse pixels at the reflector's pixels,
+    // nothing elsewhere.
+    let frame = RenderTargets::new(&ctx, 2 * w, 2 * h).unwrap();
+    ctx.queue.write_texture(
+        frame.surface_id.texture.as_image_copy(),
+        bytemuck::cast_slice(&fine_ids),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(8 * w),
+            rows_per_image: Some(2 * h),
+        },
+        frame.surface_id.texture.size(),
+    );
+    let ks = Rgb::new(0.5, 0.25, 1.0);
+    let blend = ReflectorBlendPass::new(&ctx, frame.hdr_format()).unwrap();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    blend
+        .encode(&ctx, &mut encoder, &frame, &out, surface, ks, 2)
+        .unwrap();
+    ctx.queue.submit([encoder.finish()]);
+    let blended = read_rgba_f32(&ctx, &frame.hdr.texture).unwrap();
+    let term: Vec<Rgb> = coarse_term
+        .iter()
+        .map(|t| Rgb::new(t[0], t[1], t[2]))
+        .collect();
+    let valid: Vec<bool> = coarse_term.iter().map(|t| t[3] > 0.5).collect();
+    let mut added = 0;
+    for y in 0..2 * h {
+        for x in 0..2 * w {
+            let k = (y * 2 * w + x) as usize;
+            let expected = if fine[k] {
+                upsample(&term, &valid, w, 2, x, y) * ks
+            } else {
+                Rgb::ZERO
+            };
+            let g = Rgb::new(blended[k][0], blended[k][1], blended[k][2]);
+            assert!(
+                (g - expected).abs().max_element() <= 2e-3 * expected.max_element().max(1e-2),
+                "blend at ({x}, {y}): GPU {g} vs CPU {expected}"
+            );
+            added += usize::from(expected.max_element() > 0.0);
+        }
+    }
+    assert!(added > 0, "the blend added nothing");
 }

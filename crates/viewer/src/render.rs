@@ -53,7 +53,9 @@ use lustre_ibr::{SamplingSettings, SelectionRule};
 use lustre_image::{Image, Precision};
 use lustre_mpr::beam_paths::scatterer_surfaces;
 use lustre_mpr::frame::SplatInputs;
-use lustre_mpr::ibr::{IbrSettings, KernelSizing, Modulation, ReflectedSource};
+use lustre_mpr::ibr::{
+    IbrSettings, KernelSizing, Modulation, ReflectedResolution, ReflectedSource,
+};
 use lustre_mpr::passes::beams::Traversal;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::passes::direct::DirectLights;
@@ -174,6 +176,15 @@ pub enum IbrReflectedArg {
     Geometry,
 }
 
+/// The resolution of `--technique ibr`'s reflected images (Bastos et al. 1999, section 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum IbrResolutionArg {
+    /// Chosen from each reflector's glossiness.
+    Glossiness,
+    /// The frame's.
+    Frame,
+}
+
 /// The radiance maps' settings of `--technique ibr`.
 pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
     IbrSettings {
@@ -196,6 +207,10 @@ pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
         modulation: match args.ibr_modulation {
             IbrModulationArg::Albedo => Modulation::Albedo,
             IbrModulationArg::Paper => Modulation::Paper,
+        },
+        resolution: match args.ibr_resolution {
+            IbrResolutionArg::Glossiness => ReflectedResolution::FromGlossiness,
+            IbrResolutionArg::Frame => ReflectedResolution::Frame,
         },
         reflected: match args.ibr_reflected {
             IbrReflectedArg::Maps => ReflectedSource::RadianceMaps,
@@ -613,6 +628,13 @@ pub struct RenderArgs {
     /// no capture, a full frame per reflector).
     #[arg(long, value_enum, default_value_t = IbrReflectedArg::Maps)]
     pub ibr_reflected: IbrReflectedArg,
+    /// `--technique ibr`: the reflected image's resolution, chosen from each
+    /// reflector's glossiness (section 2: M's pixels as wide as keeps the
+    /// kernel's support 8 pixels wide, a rougher lobe a coarser M; the
+    /// kernel's radius from the depths of the reflector's last M) or the
+    /// frame's (the kernel then spans as many frame pixels as it must).
+    #[arg(long, value_enum, default_value_t = IbrResolutionArg::Glossiness)]
+    pub ibr_resolution: IbrResolutionArg,
     /// `--technique ibr`: a radiance-map cache file. Its maps are used when
     /// it was written for this scene, lighting and sampling (a key over the
     /// scene and every option that changes the maps); otherwise the maps are
@@ -1000,10 +1022,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // A walkthrough: every frame of the camera path from the same lighting, each read back and written.
     let mut path_frame_ms = Vec::new();
     let mut path_write_ms = 0.0;
+    let mut ibr_times = Vec::new();
     for (i, camera) in cameras.iter().enumerate() {
         let start = Instant::now();
         gpu.draw(camera, args.aa)?;
         path_frame_ms.push(ms(start));
+        if let Some(ibr) = &gpu.ibr {
+            ibr_times.push(ibr.take_times());
+        }
         if camera_path.is_some() {
             let start = Instant::now();
             let image = gpu.read_hdr()?;
@@ -1137,7 +1163,26 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 "kernel": format!("{:?}", settings.kernel),
                 "bounces": settings.bounces,
                 "bytes": ibr.memory().iter().map(|m| m.bytes).sum::<usize>(),
+                // Table 1's columns per reflector.
+                "table": ibr.memory().iter().map(|m| json!({
+                    "surface": m.surface,
+                    "material": scene.surfaces().get(m.surface as usize)
+                        .and_then(|s| scene.materials().get(s.material as usize))
+                        .map(|mat| mat.name.clone()),
+                    "hemispheres": m.hemispheres,
+                    "maps_per_hemisphere": m.maps_per_hemisphere,
+                    "resolution": m.resolution,
+                    "bytes": m.bytes,
+                })).collect::<Vec<_>>(),
                 "reflected": format!("{:?}", settings.reflected),
+                "resolution": format!("{:?}", settings.resolution),
+                // Each stage's median over the frames drawn (milliseconds, the GPU waited for).
+                "frame_ms": {
+                    "reflected": median(ibr_times.iter().map(|t| t.reflected_ms).collect()),
+                    "depth_readback": median(ibr_times.iter().map(|t| t.depth_readback_ms).collect()),
+                    "convolution_modulation": median(ibr_times.iter().map(|t| t.convolution_modulation_ms).collect()),
+                    "total": median(ibr_times.iter().map(|t| t.total_ms).collect()),
+                },
                 "cache": args.ibr_cache.as_ref().map(|path| json!({
                     "path": path.display().to_string(),
                     "hit": gpu.ibr_cached,

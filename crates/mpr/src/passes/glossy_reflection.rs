@@ -48,6 +48,17 @@ pub enum Convolution<'a> {
     },
 }
 
+/// The reflector's pixels that bound the convolution's domain: the frame's surface ids where they equal `surface`, M's pixel `p` reading the frame pixel at its centre, `p · scale + scale/2` ([`lustre_ibr::resolution::coarse_mask`]).
+#[derive(Debug, Clone, Copy)]
+pub struct SurfaceMask<'a> {
+    /// The frame's surface-id texture.
+    pub ids: &'a wgpu::Texture,
+    /// The reflector's surface id.
+    pub surface: u32,
+    /// Frame pixels per pixel of M along each axis (1: the same grid).
+    pub scale: u32,
+}
+
 /// The convolution and modulation pipeline.
 #[derive(Debug)]
 pub struct GlossyReflectionPass {
@@ -94,7 +105,7 @@ impl GlossyReflectionPass {
         })
     }
 
-    /// Records `(M * K) R` of `m` (seen by `view`, reflector in `plane`) convolved as `convolution` says and modulated by `table` into `output`; with `mask` (the frame's surface-id texture and the reflector's id) over the domain of [`lustre_ibr::glossy::convolve_in`], else over the pixels M covers.
+    /// Records `(M * K) R` of `m` (seen by `view`, reflector in `plane`) convolved as `convolution` says and modulated by `table` into `output`; with `mask` over the domain of [`lustre_ibr::glossy::convolve_in`], else over the pixels M covers.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &self,
@@ -105,7 +116,7 @@ impl GlossyReflectionPass {
         plane: &Plane,
         convolution: Convolution<'_>,
         table: &FlippedRadialReflectance,
-        mask: Option<(&wgpu::Texture, u32)>,
+        mask: Option<SurfaceMask<'_>>,
         output: &wgpu::Texture,
     ) -> Result<()> {
         let (taps, by_depth, kernel_weights): (&[(i32, i32, f32)], _, &[f32]) = match convolution {
@@ -131,10 +142,10 @@ impl GlossyReflectionPass {
                 table.values.len() as u32,
             ],
             mask: [
-                mask.map_or(0, |(_, id)| id),
+                mask.map_or(0, |m| m.surface),
                 u32::from(mask.is_some()),
                 u32::from(matches!(convolution, Convolution::ByDepth { .. })),
-                0,
+                mask.map_or(1, |m| m.scale.max(1)),
             ],
             by_depth,
         };
@@ -194,7 +205,7 @@ impl GlossyReflectionPass {
             let out = output.create_view(&Default::default());
             let stand_in;
             let ids = match mask {
-                Some((ids, _)) => ids.create_view(&Default::default()),
+                Some(mask) => mask.ids.create_view(&Default::default()),
                 None => {
                     stand_in = texture_2d(
                         ctx,

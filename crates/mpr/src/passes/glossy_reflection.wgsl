@@ -22,7 +22,9 @@ struct Params {
     // width, height, tap count, table length.
     counts: vec4u,
     // x: the reflector's surface id, y: 1 when the id target masks the
-    // domain, z: 1 for the kernel sized by each pixel's depth (section 9).
+    // domain, z: 1 for the kernel sized by each pixel's depth (section 9),
+    // w: frame pixels per M pixel (lustre_ibr::resolution; the id target is
+    // the frame's).
     mask: vec4u,
     // By depth: fy tan(phi_max), the mean d/(e + d), M's reverse-Z near,
     // K's texels per side.
@@ -49,9 +51,15 @@ fn covered(p: vec2i) -> bool {
     return textureLoad(m_depth, p, 0) > 0.0;
 }
 
-// The reflector's own pixel.
+// The reflector's own pixel: the id at the frame pixel in the centre of M's
+// pixel p (lustre_ibr::resolution::coarse_mask).
 fn in_mask(p: vec2i) -> bool {
-    return params.mask.y == 1u && textureLoad(ids, p, 0).x == params.mask.x;
+    if (params.mask.y != 1u) {
+        return false;
+    }
+    let s = i32(max(params.mask.w, 1u));
+    let q = min(p * s + vec2i(s / 2), vec2i(textureDimensions(ids)) - 1);
+    return textureLoad(ids, q, 0).x == params.mask.x;
 }
 
 // A void pixel: the reflector's own, uncovered by M and by its eight

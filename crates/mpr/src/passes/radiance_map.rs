@@ -159,7 +159,7 @@ impl RadianceMapBuffers {
 }
 
 /// The reflected image M's targets: radiance and depth.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct ReflectedTargets {
     /// Radiance ([`REFLECTED_FORMAT`]).
     pub color: wgpu::Texture,

@@ -4,6 +4,9 @@
 //! `k_s` and added into the HDR target at the pixels where the reflector is
 //! the visible surface. The surface-id target plays the paper's stencil
 //! mask; `k_d D` is already in the frame (direct light and diffuse textures).
+//! A term on a grid `scale` times coarser than the frame (the reflected
+//! image's resolution chosen from the glossiness, [`lustre_ibr::resolution`])
+//! is read bilinearly over its valid pixels ([`lustre_ibr::resolution::upsample`]).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -73,7 +76,7 @@ impl ReflectorBlendPass {
         })
     }
 
-    /// Records `hdr += ks · term` at the pixels of `targets` whose surface id is `surface`; `term` is the glossy term's texture at the targets' size.
+    /// Records `hdr += ks · term` at the pixels of `targets` whose surface id is `surface`; `term` is the glossy term's texture on a grid `scale` times coarser than the targets (1: their size), alpha 1 where it holds a value.
     pub fn encode(
         &self,
         ctx: &GpuContext,
@@ -82,20 +85,27 @@ impl ReflectorBlendPass {
         term: &wgpu::Texture,
         surface: u32,
         ks: Vec3,
+        scale: u32,
     ) -> Result<()> {
         let size = term.size();
-        if (size.width, size.height) != (targets.width, targets.height) {
+        let scale = scale.max(1);
+        if (size.width, size.height)
+            != (
+                targets.width.div_ceil(scale),
+                targets.height.div_ceil(scale),
+            )
+        {
             return Err(MprError::InvalidSetting {
                 what: "reflector blend",
                 message: format!(
-                    "the glossy term is {}x{}, the frame {}x{}",
+                    "the glossy term is {}x{}, the frame {}x{} at {scale} pixels per term pixel",
                     size.width, size.height, targets.width, targets.height
                 ),
             });
         }
         let params = GpuParams {
             ks: ks.extend(0.0).to_array(),
-            surface: [surface, 0, 0, 0],
+            surface: [surface, scale, 0, 0],
         };
         let bind_group = ctx.checked("reflector-blend bindings", || {
             let device = &ctx.device;

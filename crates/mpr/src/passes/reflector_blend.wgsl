@@ -14,7 +14,8 @@
 struct Params {
     // rgb: ks.
     ks: vec4f,
-    // x: the reflector's surface id.
+    // x: the reflector's surface id, y: frame pixels per term pixel
+    // (lustre_ibr::resolution).
     surface: vec4u,
 }
 
@@ -35,5 +36,33 @@ fn fs_main(@builtin(position) pixel: vec4f) -> @location(0) vec4f {
     if textureLoad(ids, p, 0).x != params.surface.x {
         discard;
     }
-    return vec4f(textureLoad(term, p, 0).xyz * params.ks.xyz, 0.0);
+    let s = max(params.surface.y, 1u);
+    if s == 1u {
+        return vec4f(textureLoad(term, p, 0).xyz * params.ks.xyz, 0.0);
+    }
+    // Bilinear over the coarse term's valid pixels (alpha 1), renormalised
+    // (lustre_ibr::resolution::upsample).
+    let c = (pixel.xy) / f32(s) - 0.5;
+    let base = floor(c);
+    let f = c - base;
+    let size = vec2i(textureDimensions(term));
+    var sum = vec3f(0.0);
+    var weight = 0.0;
+    for (var k = 0; k < 4; k++) {
+        let d = vec2i(k & 1, k >> 1u);
+        let q = vec2i(base) + d;
+        if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) {
+            continue;
+        }
+        let w = select(1.0 - f.x, f.x, d.x == 1) * select(1.0 - f.y, f.y, d.y == 1);
+        let t = textureLoad(term, q, 0);
+        if (t.w > 0.5 && w > 0.0) {
+            sum += t.xyz * w;
+            weight += w;
+        }
+    }
+    if (weight > 0.0) {
+        sum /= weight;
+    }
+    return vec4f(sum * params.ks.xyz, 0.0);
 }
