@@ -23,11 +23,13 @@
 //! | 8.2.2 modulation by R per pixel | [`glossy::modulate`] |
 //! | 9 table 1, memory per reflector | [`reflector_maps::ReflectorMaps::memory`] |
 //! | 6 preprocessing kept between runs | [`cache`] |
+//! | 2 reflected images at a resolution chosen from the glossiness | [`resolution`] |
+//! | 9 the kernel sized by depth ("the more accurate method") | [`glossy::convolve_by_depth`] |
 //!
 //! Everything here runs on the CPU and is the reference of the GPU passes
-//! of `lustre-mpr` (`passes::radiance_map`, `passes::glossy_reflection`).
-//! Not here yet: the capture of D on the GPU, the passes in the frame, and
-//! convolution in depth layers (section 9).
+//! of `lustre-mpr` (`passes::radiance_map`, `passes::glossy_reflection`,
+//! `passes::reflector_blend`); the capture on the GPU and the terms in the
+//! frame are `lustre_mpr::ibr`.
 
 pub mod cache;
 mod error;

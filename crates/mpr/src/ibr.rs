@@ -59,6 +59,17 @@
 //! ([`crate::passes::splat::SplatBuffers::new_excluding_imaged`] with
 //! [`IbrReflectors::surfaces`]).
 //!
+//! **Resolution (section 2).** With [`ReflectedResolution::FromGlossiness`]
+//! M is drawn on a grid [`lustre_ibr::resolution::reflected_scale`] times
+//! coarser than the frame, so its kernel spans about 8 of its pixels; the
+//! kernel's radius is taken at the depth ratio of the reflector's last M
+//! (per view size; on the first frame from a probe M on the coarsest grid
+//! the lobe allows). The glossy pass reads the frame's surface ids at each
+//! coarse pixel's centre and the blend reads the coarse term bilinearly
+//! over its valid pixels. On `house` at 720 × 486 the floors' kernels span
+//! tens of frame pixels: the convolution at the frame's resolution took
+//! most of the frame on lavapipe (BENCHMARKS.md).
+//!
 //! **Geometry-based M.** [`ReflectedSource::Geometry`] captures no maps:
 //! per frame and reflector the frame graph draws the scene again from the
 //! mirrored view (clipped at the reflector's plane, emitters hidden), and

@@ -9,7 +9,9 @@
 //! light and the camera) and every render option except those that cannot
 //! change what the maps hold: the image size, output path, exposure,
 //! antialiasing, adapter choice, frame counts and camera path, and the cache
-//! path itself. A photon file enters by its path, length and modification
+//! path itself, and with one capture pass (`--ibr-bounces 1`) the per-frame
+//! options (maps per hemisphere, selection, kernel, modulation, resolution),
+//! which only later passes draw into the maps. A photon file enters by its path, length and modification
 //! time. An option added later enters the key unless it is listed here, so
 //! a new option can cost a recapture but never reuses stale maps. The maps
 //! also depend on the renderer's code: a cache written by another version of
@@ -23,7 +25,9 @@ use std::path::PathBuf;
 use fnv::FnvHasher;
 use lustre_geometry::Scene;
 
-use crate::render::RenderArgs;
+use crate::render::{
+    IbrKernelArg, IbrModulationArg, IbrResolutionArg, IbrSelectionArg, RenderArgs,
+};
 
 /// A [`std::fmt::Write`] that feeds the hasher instead of building a string (the house's `Debug` form is tens of megabytes).
 struct HashWriter(FnvHasher);
@@ -49,6 +53,15 @@ pub fn key(args: &RenderArgs, scene: &Scene) -> u64 {
     neutral.camera_path = None;
     neutral.path_frames = None;
     neutral.ibr_cache = None;
+    if args.ibr_bounces == 1 {
+        // One capture pass draws no reflector's term into the maps: how the
+        // maps are selected, convolved and modulated per frame is not in them.
+        neutral.ibr_maps = 0;
+        neutral.ibr_selection = IbrSelectionArg::Angle;
+        neutral.ibr_kernel = IbrKernelArg::Invariant;
+        neutral.ibr_modulation = IbrModulationArg::Albedo;
+        neutral.ibr_resolution = IbrResolutionArg::Glossiness;
+    }
     let photons_file = args.photons_file.as_ref().map(|path| {
         std::fs::metadata(path)
             .ok()
@@ -95,6 +108,13 @@ mod tests {
         ] {
             assert_eq!(base, key(&args(same), &scene), "{same:?} changed the key");
         }
+        // The second pass draws the reflectors as a frame does; the first does not.
+        assert_ne!(base, key(&args(&["--ibr-maps", "4"]), &scene));
+        let one = key(&args(&["--ibr-bounces", "1"]), &scene);
+        assert_eq!(
+            one,
+            key(&args(&["--ibr-bounces", "1", "--ibr-maps", "4"]), &scene)
+        );
         for other in [
             &["--photons", "1000"][..],
             &["--seed", "7"],
