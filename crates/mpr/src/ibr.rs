@@ -276,7 +276,7 @@ struct FrameTextures {
     reflected: ReflectedTargets,
     term: wgpu::Texture,
     /// [`ReflectedSource::Geometry`]'s mirrored frame.
-    geometry: Option<GeometryTargets>,
+    geometry: Option<OffscreenTargets>,
 }
 
 /// One reflector's M as [`IbrReflectors::add`] drew it.
@@ -298,14 +298,17 @@ struct TextureCache {
     by_size: HashMap<(u32, u32), Arc<FrameTextures>>,
 }
 
-/// The targets the mirrored frame of [`ReflectedSource::Geometry`] is drawn into; M reads their HDR and depth.
+/// Off-screen targets a frame is drawn into from another view than the
+/// camera's, with a tone-mapped output nobody reads: a sample camera's
+/// capture, and the mirrored frame of [`ReflectedSource::Geometry`], whose
+/// HDR and depth M reads.
 #[derive(Debug)]
-struct GeometryTargets {
+struct OffscreenTargets {
     targets: RenderTargets,
     output: wgpu::TextureView,
 }
 
-impl GeometryTargets {
+impl OffscreenTargets {
     fn new(
         ctx: &GpuContext,
         graph: &FrameGraph,
@@ -313,10 +316,10 @@ impl GeometryTargets {
         hdr_format: wgpu::TextureFormat,
     ) -> Result<Self> {
         let targets = RenderTargets::with_hdr_format(ctx, w, h, hdr_format)?;
-        let output = ctx.checked("geometry-based reflected image output", || {
+        let output = ctx.checked("off-screen frame output", || {
             crate::passes::radiance_map::texture_2d(
                 ctx,
-                "geometry-reflected-output",
+                "off-screen-output",
                 w,
                 h,
                 graph.tonemap.output_format(),
@@ -444,21 +447,11 @@ impl IbrReflectors {
             return Ok(this);
         }
         let (w, h) = settings.sampling.map_resolution;
-        let targets = RenderTargets::with_hdr_format(ctx, w, h, frame.targets.hdr_format())?;
-        let output = ctx.checked("radiance-map capture output", || {
-            crate::passes::radiance_map::texture_2d(
-                ctx,
-                "radiance-map-capture",
-                w,
-                h,
-                graph.tonemap.output_format(),
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-        })?;
-        let output_view = output.create_view(&Default::default());
+        let capture = OffscreenTargets::new(ctx, graph, (w, h), frame.targets.hdr_format())?;
+        let targets = &capture.targets;
         let inputs = FrameInputs {
-            targets: &targets,
-            output: &output_view,
+            targets,
+            output: &capture.output,
             splats: frame.splats.map(|s| crate::frame::SplatInputs {
                 resolution: SplatResolution::Full,
                 ..s
@@ -710,7 +703,7 @@ impl IbrReflectors {
         }
         let geometry = match self.settings.reflected {
             ReflectedSource::RadianceMaps => None,
-            ReflectedSource::Geometry => Some(GeometryTargets::new(
+            ReflectedSource::Geometry => Some(OffscreenTargets::new(
                 ctx,
                 graph,
                 size,

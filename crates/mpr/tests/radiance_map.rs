@@ -17,11 +17,11 @@ use lustre_ibr::{
     PinholeView, PointSizing, QuadtreeSettings, Reflector, ReflectorMaps, SamplingSettings,
     SelectionRule, select,
 };
-use lustre_mpr::RenderTargets;
 use lustre_mpr::passes::glossy_reflection::{Convolution, GlossyReflectionPass, SurfaceMask};
 use lustre_mpr::passes::radiance_map::{RadianceMapBuffers, RadianceMapPass, ReflectedTargets};
 use lustre_mpr::passes::reflector_blend::ReflectorBlendPass;
 use lustre_mpr::readback::{read_depth, read_rgba_f32};
+use lustre_mpr::{GpuContext, RenderTargets};
 
 #[test]
 fn gpu_reprojection_matches_the_cpu_twin() {
@@ -206,30 +206,7 @@ fn gpu_reprojection_matches_the_cpu_twin() {
     let surface = 7u32;
     let mask: Vec<bool> = (0..w * h).map(|k| k / w >= h / 2).collect();
     let ids: Vec<u32> = mask.iter().map(|&m| if m { surface } else { 0 }).collect();
-    let id_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test-ids"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: lustre_mpr::target::SURFACE_ID_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    ctx.queue.write_texture(
-        id_texture.as_image_copy(),
-        bytemuck::cast_slice(&ids),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(4 * w),
-            rows_per_image: Some(h),
-        },
-        id_texture.size(),
-    );
+    let id_texture = ids_texture(&ctx, &ids, w, h);
     // The same on M's grid twice as coarse as the frame's ids
     // (lustre_ibr::resolution): ids of 2w × 2h pixels with a ragged edge,
     // read at each M pixel's centre frame pixel.
@@ -237,30 +214,7 @@ fn gpu_reprojection_matches_the_cpu_twin() {
         .map(|k| (k / (2 * w)) + (k % (2 * w)) % 3 >= h)
         .collect();
     let fine_ids: Vec<u32> = fine.iter().map(|&m| if m { surface } else { 0 }).collect();
-    let fine_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("test-fine-ids"),
-        size: wgpu::Extent3d {
-            width: 2 * w,
-            height: 2 * h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: lustre_mpr::target::SURFACE_ID_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    ctx.queue.write_texture(
-        fine_texture.as_image_copy(),
-        bytemuck::cast_slice(&fine_ids),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(8 * w),
-            rows_per_image: Some(2 * h),
-        },
-        fine_texture.size(),
-    );
+    let fine_texture = ids_texture(&ctx, &fine_ids, 2 * w, 2 * h);
     let coarse = coarse_mask(&fine, 2 * w, 2 * h, 2);
     assert_ne!(coarse, mask, "the ragged edge shows on the coarse grid");
     let scale = view.focal.y * kernel.half_angle.tan();
@@ -328,16 +282,7 @@ fn gpu_reprojection_matches_the_cpu_twin() {
     // bilinear mean over the valid coarse pixels at the reflector's pixels,
     // nothing elsewhere.
     let frame = RenderTargets::new(&ctx, 2 * w, 2 * h).unwrap();
-    ctx.queue.write_texture(
-        frame.surface_id.texture.as_image_copy(),
-        bytemuck::cast_slice(&fine_ids),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(8 * w),
-            rows_per_image: Some(2 * h),
-        },
-        frame.surface_id.texture.size(),
-    );
+    write_ids(&ctx, &frame.surface_id.texture, &fine_ids, 2 * w, 2 * h);
     let ks = Rgb::new(0.5, 0.25, 1.0);
     let blend = ReflectorBlendPass::new(&ctx, frame.hdr_format()).unwrap();
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -369,4 +314,38 @@ fn gpu_reprojection_matches_the_cpu_twin() {
         }
     }
     assert!(added > 0, "the blend added nothing");
+}
+
+/// A surface-id texture of `width × height` holding `ids` (row-major).
+fn ids_texture(ctx: &GpuContext, ids: &[u32], width: u32, height: u32) -> wgpu::Texture {
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("test-ids"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: lustre_mpr::target::SURFACE_ID_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    write_ids(ctx, &texture, ids, width, height);
+    texture
+}
+
+/// Writes `ids` (row-major, `width × height`) into `texture`.
+fn write_ids(ctx: &GpuContext, texture: &wgpu::Texture, ids: &[u32], width: u32, height: u32) {
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(ids),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * width),
+            rows_per_image: Some(height),
+        },
+        texture.size(),
+    );
 }
