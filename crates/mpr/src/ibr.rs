@@ -273,6 +273,7 @@ impl IbrReflector {
 /// The per-frame textures of one size of M.
 #[derive(Debug)]
 struct FrameTextures {
+    /// M: the reprojection's own targets, or with [`ReflectedSource::Geometry`] the mirrored frame's HDR and depth.
     reflected: ReflectedTargets,
     term: wgpu::Texture,
     /// [`ReflectedSource::Geometry`]'s mirrored frame.
@@ -286,7 +287,6 @@ struct Drawn {
     view: PinholeView,
     /// M's depths (radiance left empty: it stays on the GPU).
     m: ReflectedImage,
-    reflected: ReflectedTargets,
     reflected_ms: f64,
     depth_readback_ms: f64,
 }
@@ -344,8 +344,6 @@ impl OffscreenTargets {
 /// Wall-clock milliseconds of [`IbrReflectors::add`]'s stages, summed over the reflectors and the frames since the last [`IbrReflectors::take_times`]; each stage waits for the GPU before it is timed, as the paper's graph splits a frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct IbrTimes {
-    /// Frames added.
-    pub frames: u32,
     /// M: the selected maps reprojected, or with [`ReflectedSource::Geometry`] the mirrored frame drawn.
     pub reflected_ms: f64,
     /// M's depth read back for the kernel's radius.
@@ -499,8 +497,12 @@ impl IbrReflectors {
         Ok(this)
     }
 
-    /// Every reflector of `scene` with its kernel, table and `k_s`, and no maps yet; `hdr_format` is the frame's HDR target's.
-    fn without_maps(
+    /// Every reflector of `scene` with its kernel, table and `k_s`, and no
+    /// maps: what [`ReflectedSource::Geometry`] draws from (no capture, no
+    /// BVH), and what [`IbrReflectors::capture`] and
+    /// [`IbrReflectors::from_maps`] fill; `hdr_format` is the frame's HDR
+    /// target's.
+    pub fn without_maps(
         ctx: &GpuContext,
         scene: &Scene,
         settings: &IbrSettings,
@@ -647,10 +649,7 @@ impl IbrReflectors {
             Ok(())
         })?;
         ctx.wait()?;
-        self.time(|t| {
-            t.frames += 1;
-            t.total_ms += ms_since(start);
-        });
+        self.time(|t| t.total_ms += ms_since(start));
         Ok(())
     }
 
@@ -701,17 +700,15 @@ impl IbrReflectors {
         if let Some(textures) = cache.by_size.get(&size) {
             return Ok(Arc::clone(textures));
         }
-        let geometry = match self.settings.reflected {
-            ReflectedSource::RadianceMaps => None,
-            ReflectedSource::Geometry => Some(OffscreenTargets::new(
-                ctx,
-                graph,
-                size,
-                targets.hdr_format(),
-            )?),
+        let (reflected, geometry) = match self.settings.reflected {
+            ReflectedSource::RadianceMaps => (ReflectedTargets::new(ctx, size.0, size.1)?, None),
+            ReflectedSource::Geometry => {
+                let geometry = OffscreenTargets::new(ctx, graph, size, targets.hdr_format())?;
+                (geometry.reflected(), Some(geometry))
+            }
         };
         let textures = Arc::new(FrameTextures {
-            reflected: ReflectedTargets::new(ctx, size.0, size.1)?,
+            reflected,
             term: GlossyReflectionPass::output(ctx, size.0, size.1)?,
             geometry,
         });
@@ -734,7 +731,7 @@ impl IbrReflectors {
         let (w, h) = (view.width, view.height);
         let textures = self.textures(ctx, graph, frame.targets, (w, h))?;
         let start = Instant::now();
-        let reflected = match &textures.geometry {
+        match &textures.geometry {
             Some(geometry) => {
                 // The scene lies along +normal; keep n·p − offset ≥ a hair, as View::reflected does.
                 let hair = 1e-4 * plane.signed_distance(eye.eye);
@@ -748,7 +745,6 @@ impl IbrReflectors {
                     ..*frame
                 };
                 graph.render_view(ctx, &inputs, mirrored)?;
-                geometry.reflected()
             }
             None => {
                 let selected = select(
@@ -768,14 +764,13 @@ impl IbrReflectors {
                     &textures.reflected,
                 )?;
                 ctx.queue.submit([encoder.finish()]);
-                textures.reflected.clone()
             }
-        };
+        }
         ctx.wait()?;
         let reflected_ms = ms_since(start);
         // The kernel's radius from M's depths (reverse Z: near / z).
         let start = Instant::now();
-        let depth = read_depth(ctx, &reflected.depth)?;
+        let depth = read_depth(ctx, &textures.reflected.depth)?;
         let depth_readback_ms = ms_since(start);
         let mut m = ReflectedImage::new(w, h);
         for (out, z) in m.depth.iter_mut().zip(&depth) {
@@ -787,7 +782,6 @@ impl IbrReflectors {
             textures,
             view,
             m,
-            reflected,
             reflected_ms,
             depth_readback_ms,
         })
@@ -808,8 +802,8 @@ impl IbrReflectors {
         if plane.signed_distance(eye.eye) <= 1e-6 {
             return Ok(());
         }
-        let full = eye.reflected(&plane);
-        let widest = full.focal.y * reflector.kernel.half_angle.tan();
+        // The mirrored view keeps the eye's pixels and focal length.
+        let widest = eye.focal.y * reflector.kernel.half_angle.tan();
         let surface = reflector.maps.reflector.surface;
         // Hints are per view size: the capture's sample cameras (map-sized) and the camera's frames apart.
         let hint_key = (surface, eye.width, eye.height);
@@ -841,7 +835,6 @@ impl IbrReflectors {
             textures,
             view,
             m,
-            reflected,
             reflected_ms,
             depth_readback_ms,
         } = drawn;
@@ -872,7 +865,7 @@ impl IbrReflectors {
             self.glossy.encode(
                 ctx,
                 &mut encoder,
-                &reflected,
+                &textures.reflected,
                 &view,
                 &plane,
                 convolution,

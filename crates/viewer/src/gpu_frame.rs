@@ -12,7 +12,7 @@ use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point
 use lustre_geometry::{Bvh, Camera, Light, Scene};
 use lustre_image::Image;
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
-use lustre_mpr::ibr::IbrReflectors;
+use lustre_mpr::ibr::{IbrReflectors, ReflectedSource};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::pass_timing::PassTimes;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextures};
@@ -311,6 +311,17 @@ impl GpuFrame {
         }
         let start = std::time::Instant::now();
         let settings = ibr_settings(args);
+        if settings.reflected == ReflectedSource::Geometry {
+            // M is drawn from the scene every frame: nothing to capture or cache.
+            self.ibr = Some(IbrReflectors::without_maps(
+                &self.ctx,
+                scene,
+                &settings,
+                inputs.targets.hdr_format(),
+            )?);
+            self.ibr_capture_ms = start.elapsed().as_secs_f64() * 1e3;
+            return Ok(self);
+        }
         let cache = args
             .ibr_cache
             .as_deref()

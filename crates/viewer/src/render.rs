@@ -246,15 +246,7 @@ fn check_ibr(args: &RenderArgs) -> anyhow::Result<()> {
                 cache.display()
             );
         }
-        if let Some(dir) = cache.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if !dir.is_dir() {
-                bail!(
-                    "--ibr-cache {}: directory {} does not exist",
-                    cache.display(),
-                    dir.display()
-                );
-            }
-        }
+        check_directory(cache, "--ibr-cache")?;
     }
     ibr_settings(args)
         .sampling
@@ -1151,6 +1143,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Bastos et al. 1999: the reflectors drawn from radiance maps.
     let radiance_maps = gpu.ibr.as_ref().map(|ibr| {
             let settings = ibr.settings();
+            let memory = ibr.memory();
             json!({
                 "reflectors": ibr.reflectors().iter().map(|r| r.maps.reflector.surface).collect::<Vec<_>>(),
                 "elements": settings.sampling.planar_resolution,
@@ -1162,9 +1155,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 "modulation": format!("{:?}", settings.modulation),
                 "kernel": format!("{:?}", settings.kernel),
                 "bounces": settings.bounces,
-                "bytes": ibr.memory().iter().map(|m| m.bytes).sum::<usize>(),
+                "bytes": memory.iter().map(|m| m.bytes).sum::<usize>(),
                 // Table 1's columns per reflector.
-                "table": ibr.memory().iter().map(|m| json!({
+                "table": memory.iter().map(|m| json!({
                     "surface": m.surface,
                     "material": scene.surfaces().get(m.surface as usize)
                         .and_then(|s| scene.materials().get(s.material as usize))
@@ -1316,16 +1309,20 @@ pub fn check_output(out: &Path, flag: &str) -> anyhow::Result<()> {
             out.display()
         );
     }
-    // The output's directory must exist before any work (nothing half-written, no render thrown away).
-    let out_dir = match out.parent() {
+    check_directory(out, flag)
+}
+
+/// Checks that the directory a file is to be written to exists, before any work (nothing half-written, no render thrown away); `flag` names the option in the message.
+fn check_directory(file: &Path, flag: &str) -> anyhow::Result<()> {
+    let dir = match file.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
-    if !out_dir.is_dir() {
+    if !dir.is_dir() {
         bail!(
             "{flag} {}: the directory {} does not exist",
-            out.display(),
-            out_dir.display()
+            file.display(),
+            dir.display()
         );
     }
     Ok(())
