@@ -291,7 +291,8 @@ pub const CASES: &[Case] = &[
         comment: MEASURED,
     },
     // Checked against the path-traced reference before blessing: at 128²
-    // and 200,000 photons relMSE 0.0014 (the reference case glosbox-beams).
+    // and 200,000 photons relMSE 0.0014 (the reference case glosbox-composed,
+    // whose default frame is this technique's).
     Case {
         name: "glosbox-beams",
         scene: "glosbox",

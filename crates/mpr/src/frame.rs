@@ -14,6 +14,7 @@
 //! rebuilt only for moved objects or lights ([`FrameGraph::update_shadow_volumes`]).
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use lustre_geometry::Camera;
 use lustre_geometry::light::hammersley_centred;
@@ -242,6 +243,10 @@ pub struct FrameGraph {
     views: Mutex<ViewBuffer>,
     /// Timestamps between the passes ([`FrameGraph::with_pass_timing`]).
     timer: Option<PassTimer>,
+    /// Whether the emitters' own radiance is drawn ([`FrameGraph::set_graph_terms`]).
+    emission_drawn: AtomicBool,
+    /// Whether the beams' light is drawn ([`FrameGraph::set_graph_terms`]).
+    beams_drawn: AtomicBool,
 }
 
 impl FrameGraph {
@@ -261,7 +266,19 @@ impl FrameGraph {
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
             timer: None,
+            emission_drawn: AtomicBool::new(true),
+            beams_drawn: AtomicBool::new(true),
         })
+    }
+
+    /// Switches the light terms the graph holds itself (the emitters'
+    /// radiance with the specular recursion's limit faces, and the beams;
+    /// both on when built) for the frames that
+    /// follow; the terms a frame's inputs carry (direct light, diffuse
+    /// textures, splats) are switched by leaving the input out.
+    pub fn set_graph_terms(&self, emission: bool, beams: bool) {
+        self.emission_drawn.store(emission, Ordering::Relaxed);
+        self.beams_drawn.store(beams, Ordering::Relaxed);
     }
 
     /// Times every pass of each frame on the GPU where the device writes timestamps inside encoders (else unchanged); [`FrameGraph::pass_times`] reads the last frame's.
@@ -848,7 +865,11 @@ impl FrameGraph {
         shadowed: Option<&'a ShadowedDirect<'a>>,
     ) -> Vec<&'a dyn LightPass> {
         let mut list: Vec<&dyn LightPass> = Vec::new();
-        if let Some(emission) = &self.emission {
+        if let Some(emission) = self
+            .emission
+            .as_ref()
+            .filter(|_| self.emission_drawn.load(Ordering::Relaxed))
+        {
             list.push(emission);
         }
         if let Some(gouraud) = &self.gouraud {
@@ -866,7 +887,11 @@ impl FrameGraph {
         if let Some((_, pass)) = passes.splat {
             list.push(pass);
         }
-        if let Some(beams) = &self.beams {
+        if let Some(beams) = self
+            .beams
+            .as_ref()
+            .filter(|_| self.beams_drawn.load(Ordering::Relaxed))
+        {
             list.push(beams);
         }
         list
@@ -914,6 +939,9 @@ impl FrameGraph {
             self.depth
                 .encode(encoder, frame.scene, frame.targets, views, slot, index == 0);
         });
+        // The limit faces' stand-in radiance and the glossy images' fog
+        // radiance are constant terms, switched with the emitters'.
+        let constant_terms = limit && self.emission_drawn.load(Ordering::Relaxed);
         if let Some(specular) = &self.specular {
             for &(face, child) in &tree.children[index] {
                 self.timed(encoder, "specular masks", |encoder| {
@@ -931,10 +959,11 @@ impl FrameGraph {
                         slots[child],
                         face,
                         tree.samples[child],
+                        constant_terms,
                     );
                 });
             }
-            if limit {
+            if constant_terms {
                 self.timed(encoder, "specular masks", |encoder| {
                     specular.encode_limit(
                         encoder,

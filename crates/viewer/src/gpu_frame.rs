@@ -28,7 +28,7 @@ use lustre_photon::{Kernel, SplatEstimator};
 
 use crate::render::{
     FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg, Technique,
-    ibr_settings,
+    TermArg, ibr_settings,
 };
 
 /// The format of the tone-mapped output every frame is drawn into.
@@ -56,23 +56,40 @@ pub struct Lighting<'a> {
     pub kernel: Kernel,
 }
 
-/// Which lighting terms a frame draws (the window's switches; a render draws all).
+/// Which lighting terms a frame draws (the window's switches, `--terms`; a render draws all).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Components {
+    /// The emitters' own radiance (and the specular recursion's limit faces).
+    pub emission: bool,
     /// Direct light from the point lights with shadow maps or volumes.
     pub direct: bool,
     /// The Lambertian lobes from the diffuse textures (Stürzlinger & Bastos section 2.2.1).
     pub diffuse: bool,
     /// The splats of the photon hits (section 2.2).
     pub splats: bool,
+    /// The reflectors' `k_s (M * K) R` from radiance maps (Bastos et al. 1999).
+    pub radiance_maps: bool,
+    /// The beams (Duvenhage et al. 2010).
+    pub beams: bool,
 }
 
 impl Default for Components {
     fn default() -> Self {
+        Self::only(&TermArg::ALL)
+    }
+}
+
+impl Components {
+    /// The components of `terms`: the glossy term is the splats with the radiance maps, the caustics the beams.
+    pub fn only(terms: &[TermArg]) -> Self {
+        let has = |t| terms.contains(&t);
         Self {
-            direct: true,
-            diffuse: true,
-            splats: true,
+            emission: has(TermArg::Emission),
+            direct: has(TermArg::Direct),
+            diffuse: has(TermArg::Diffuse),
+            splats: has(TermArg::Glossy),
+            radiance_maps: has(TermArg::Glossy),
+            beams: has(TermArg::Caustics),
         }
     }
 }
@@ -151,11 +168,13 @@ impl GpuFrame {
             fog_radiance: mean_radiance(scene),
             ..lighting.glossy_images
         };
-        let imaged = if args.technique == Technique::Ibr {
-            IbrReflectors::surfaces(scene)
-        } else {
-            imaged_surfaces(scene, &glossy_images)
-        };
+        // Surfaces whose glossy lobes are drawn as images or from radiance maps, not splatted.
+        let mut imaged = imaged_surfaces(scene, &glossy_images);
+        if args.draws_radiance_maps() {
+            for (i, reflector) in IbrReflectors::surfaces(scene).into_iter().enumerate() {
+                imaged[i] |= reflector;
+            }
+        }
         // Streamed photons are splatted batch by batch after the frame.
         let splats = match lighting.splats {
             Some(estimator) => Some(
@@ -289,7 +308,7 @@ impl GpuFrame {
         .with_radiance_maps(args, scene, camera)
     }
 
-    /// With `--technique ibr`, the radiance maps of every glossy planar
+    /// With radiance maps (`--technique ibr`, `composed`), the maps of every glossy planar
     /// reflector captured from this frame's lighting (Bastos et al. 1999,
     /// section 8.1.3), with a progress bar on a terminal.
     fn with_radiance_maps(
@@ -298,11 +317,14 @@ impl GpuFrame {
         scene: &Scene,
         camera: &Camera,
     ) -> anyhow::Result<Self> {
-        if args.technique != Technique::Ibr {
+        if !args.draws_radiance_maps() {
             return Ok(self);
         }
         let inputs = self.inputs(camera);
         if lustre_mpr::ibr::reflector_surfaces(scene).is_empty() {
+            if args.technique != Technique::Ibr {
+                return Ok(self);
+            }
             eprintln!(
                 "--technique ibr: scene `{}` has no planar glossy surface; every surface is drawn as splat-direct draws it",
                 scene.name
@@ -403,6 +425,8 @@ impl GpuFrame {
     /// Draws `camera` with `aa` jittered samples into the HDR target and the output, and waits for the GPU (Diefenbach & Badler section 7's accumulation).
     pub fn draw(&self, camera: &Camera, aa: u32) -> anyhow::Result<()> {
         let ctx = &self.ctx;
+        self.graph
+            .set_graph_terms(self.components.emission, self.components.beams);
         self.graph.render_accumulated(
             ctx,
             &self.inputs(camera),
@@ -432,7 +456,7 @@ impl GpuFrame {
                 self.graph.update_shadows(ctx, &self.scene_buffers, lights)
             },
         )?;
-        if let Some(ibr) = &self.ibr {
+        if let Some(ibr) = self.ibr.as_ref().filter(|_| self.components.radiance_maps) {
             ibr.add(ctx, &self.graph, &self.inputs(camera))?;
         }
         ctx.device

@@ -8,8 +8,8 @@
 //! version, the scene as loaded (its `Debug` form: every triangle, material,
 //! light and the camera) and every render option except those that cannot
 //! change what the maps hold: the image size, output path, exposure,
-//! antialiasing, adapter choice, frame counts and camera path, and the cache
-//! path itself, and with one capture pass (`--ibr-bounces 1`) the per-frame
+//! antialiasing, adapter choice, frame counts and camera path, the terms
+//! drawn and their images, and the cache path itself, and with one capture pass (`--ibr-bounces 1`) the per-frame
 //! options (maps per hemisphere, selection, kernel, modulation, resolution),
 //! which only later passes draw into the maps. A photon file enters by its path, length and modification
 //! time. An option added later enters the key unless it is listed here, so
@@ -53,6 +53,9 @@ pub fn key(args: &RenderArgs, scene: &Scene) -> u64 {
     neutral.camera_path = None;
     neutral.path_frames = None;
     neutral.ibr_cache = None;
+    // The maps are captured with every term; `--terms` only leaves terms out of the frames drawn.
+    neutral.terms = None;
+    neutral.term_images = false;
     if args.ibr_bounces == 1 {
         // One capture pass draws no reflector's term into the maps: how the
         // maps are selected, convolved and modulated per frame is not in them.

@@ -28,6 +28,14 @@
 //!   captured from the frame's own lighting (`lustre_mpr::ibr`), its splats
 //!   dropped.
 //!
+//! - `composed`: every technique in one frame,
+//!   `L = direct + k_d D + k_s (M * K) R + caustics`, each term from its
+//!   crate and each switchable (`--terms`, `--term-images`): direct light under shadow volumes, the
+//!   Lambertian lobes from the diffuse textures, planar glossy reflectors
+//!   from glossy images, radiance maps or splats (`--reflectors`), mirrors
+//!   and glass as specular images, caustics as beams, virtual lights or
+//!   splats (`--caustics`), and the splats of the other photons.
+//!
 //! Every technique's frame is antialiased by `--aa N` jittered accumulation
 //! (Diefenbach & Badler 1997, section 7).
 //!
@@ -73,7 +81,7 @@ use lustre_photon::{
 };
 use serde_json::json;
 
-use crate::gpu_frame::{GpuFrame, Lighting, resolve_resolution};
+use crate::gpu_frame::{Components, GpuFrame, Lighting, resolve_resolution};
 use crate::render_density::{
     DEFAULT_PHOTONMAP_K, DensityLengths, DensitySettings, DetpAcceleration, Estimator,
     GlossyEstimate, PreTestArg, check_lengths, vertex_lit_scene, vertex_radiance,
@@ -108,6 +116,16 @@ pub enum Technique {
     /// specular and glossy polygon beams (Duvenhage et al. 2010), in place of
     /// those photons' splats.
     Beams,
+    /// Every technique in one frame, `L = direct + k_d D + k_s (M * K) R +
+    /// caustics`, each term from its crate: direct light under shadow
+    /// volumes (`--shadows`), the Lambertian lobes from diffuse textures
+    /// (`--diffuse`), planar glossy reflectors from glossy images or
+    /// radiance maps (`--reflectors`), mirrors and glass as stencilled
+    /// specular images,
+    /// the light point lights send through mirrors and glass as beams
+    /// (`--caustics`), and the splats of the other photons on every other
+    /// surface.
+    Composed,
 }
 
 impl Technique {
@@ -115,13 +133,13 @@ impl Technique {
     pub fn direct_light(self) -> bool {
         matches!(
             self,
-            Self::SplatDirect | Self::Mpr | Self::Beams | Self::Ibr
+            Self::SplatDirect | Self::Mpr | Self::Beams | Self::Ibr | Self::Composed
         )
     }
 
     /// Whether the technique draws the multi-pass pipeline's frame (Diefenbach & Badler 1997): specular images, shadow volumes, virtual lights.
     pub fn multipass(self) -> bool {
-        matches!(self, Self::Mpr | Self::Beams)
+        matches!(self, Self::Mpr | Self::Beams | Self::Composed)
     }
 
     /// Whether the technique lights mesh vertices by a density estimator (García et al.).
@@ -132,10 +150,74 @@ impl Technique {
     /// The density estimator of a per-vertex technique, `None` for the splatting ones.
     fn estimator(self, radius: f32, k: usize) -> Option<Estimator> {
         match self {
-            Self::Splat | Self::SplatDirect | Self::Mpr | Self::Beams | Self::Ibr => None,
+            Self::Splat
+            | Self::SplatDirect
+            | Self::Mpr
+            | Self::Beams
+            | Self::Ibr
+            | Self::Composed => None,
             Self::Detp => Some(Estimator::Detp { radius }),
             Self::Impact => Some(Estimator::ImpactCount),
             Self::Photonmap => Some(Estimator::PhotonMaps { k }),
+        }
+    }
+}
+
+/// How `--technique composed` draws the glossy lobes of planar glossy reflectors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ReflectorsArg {
+    /// Radiance maps: `k_s (M * K) R` (Bastos et al. 1999), as `--technique ibr`.
+    Maps,
+    /// Glossy images: sheared mirror images averaged (Diefenbach & Badler 1997, section 3), as `--technique mpr`.
+    Images,
+    /// Splats of the photons (Stürzlinger & Bastos 1997, section 2.2), as `--technique splat-direct`.
+    Splats,
+}
+
+/// How `--technique composed` draws the light point lights send through mirrors and glass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CausticsArg {
+    /// Specular and glossy polygon beams (Duvenhage et al. 2010), as `--technique beams`.
+    Beams,
+    /// Virtual lights under light volumes (Diefenbach & Badler 1997, section 4.2), as `--technique mpr`.
+    VirtualLights,
+    /// Splats of the photons (Stürzlinger & Bastos 1997, section 2.2).
+    Splats,
+}
+
+/// The additive terms of a frame, as `--terms` and `--term-images` name them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TermArg {
+    /// The emitters' own radiance (and the specular recursion's limit faces).
+    Emission,
+    /// Direct light from point lights under shadow maps or volumes.
+    Direct,
+    /// The Lambertian lobes from the diffuse textures (`k_d D`).
+    Diffuse,
+    /// The splats of the photon hits and the radiance maps' `k_s (M * K) R`.
+    Glossy,
+    /// The beams.
+    Caustics,
+}
+
+impl TermArg {
+    /// Every term, in the order term images are written.
+    pub const ALL: [TermArg; 5] = [
+        TermArg::Emission,
+        TermArg::Direct,
+        TermArg::Diffuse,
+        TermArg::Glossy,
+        TermArg::Caustics,
+    ];
+
+    /// The term's name in file names and the sidecar.
+    pub fn name(self) -> &'static str {
+        match self {
+            TermArg::Emission => "emission",
+            TermArg::Direct => "direct",
+            TermArg::Diffuse => "diffuse",
+            TermArg::Glossy => "glossy",
+            TermArg::Caustics => "caustics",
         }
     }
 }
@@ -220,15 +302,15 @@ pub fn ibr_settings(args: &RenderArgs) -> IbrSettings {
     }
 }
 
-/// Checks `--technique ibr`'s settings before any work.
+/// Checks the radiance maps' settings (`--technique ibr`, `composed`) before any work.
 fn check_ibr(args: &RenderArgs) -> anyhow::Result<()> {
     if args.ibr_maps == 0 {
         bail!("--ibr-maps 0: at least one radiance map per hemisphere is reprojected");
     }
     if args.diffuse != DiffuseArg::Texture {
         bail!(
-            "--technique ibr needs --diffuse texture: the reflectors' Lambertian lobes come \
-             from the diffuse textures (their splats are dropped)"
+            "radiance maps (--technique ibr, composed) need --diffuse texture: the reflectors' \
+             Lambertian lobes come from the diffuse textures (their splats are dropped)"
         );
     }
     if args.ibr_bounces == 0 {
@@ -633,6 +715,24 @@ pub struct RenderArgs {
     /// captured and written there. Delete it after changing the renderer.
     #[arg(long, value_name = "FILE")]
     pub ibr_cache: Option<PathBuf>,
+    /// `--technique composed`: the glossy lobes of planar glossy reflectors
+    /// from glossy images, radiance maps or splats [default: images; on
+    /// glosbox at 128² images err 0.54 times as much as maps, in 0.46 of the
+    /// time].
+    #[arg(long, value_enum)]
+    pub reflectors: Option<ReflectorsArg>,
+    /// `--technique composed`: the light point lights send through mirrors
+    /// and glass, as beams, virtual lights or splats [default: beams].
+    #[arg(long, value_enum)]
+    pub caustics: Option<CausticsArg>,
+    /// The terms the frame draws, comma-separated (emission, direct,
+    /// diffuse, glossy, caustics) [default: all].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub terms: Option<Vec<TermArg>>,
+    /// Also write each term the frame draws alone, as linear EXRs beside
+    /// `--out` (`NAME-direct.exr`, ...), which sum to the frame.
+    #[arg(long)]
+    pub term_images: bool,
     /// `--technique mpr` and `beams`: glossy images (Diefenbach & Badler 1997, section 3,
     /// "glossy marble"): N mirror images per planar glossy face, sheared
     /// about its normal by the lobe's roughness and averaged; the face's
@@ -754,6 +854,41 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// How `--technique composed` draws planar glossy reflectors (`--reflectors`, glossy images by default); `None` for the other techniques.
+    pub fn reflectors(&self) -> Option<ReflectorsArg> {
+        (self.technique == Technique::Composed)
+            .then(|| self.reflectors.unwrap_or(ReflectorsArg::Images))
+    }
+
+    /// How `--technique composed` draws caustics (`--caustics`, beams by default); `None` for the other techniques.
+    pub fn caustics(&self) -> Option<CausticsArg> {
+        (self.technique == Technique::Composed).then(|| self.caustics.unwrap_or(CausticsArg::Beams))
+    }
+
+    /// Whether the frame draws beams (Duvenhage et al. 2010): `beams`, or `composed` with `--caustics beams`.
+    pub fn draws_beams(&self) -> bool {
+        self.technique == Technique::Beams || self.caustics() == Some(CausticsArg::Beams)
+    }
+
+    /// Whether planar glossy reflectors are drawn from radiance maps (Bastos et al. 1999): `ibr`, or `composed` with `--reflectors maps`.
+    pub fn draws_radiance_maps(&self) -> bool {
+        self.technique == Technique::Ibr || self.reflectors() == Some(ReflectorsArg::Maps)
+    }
+
+    /// Whether planar glossy faces may be drawn as glossy images (Diefenbach & Badler 1997, section 3): `mpr`, `beams`, or `composed` with `--reflectors images`.
+    pub fn may_draw_glossy_images(&self) -> bool {
+        matches!(self.technique, Technique::Mpr | Technique::Beams)
+            || self.reflectors() == Some(ReflectorsArg::Images)
+    }
+
+    /// The terms `--terms` leaves in the frame (all by default).
+    pub fn drawn_terms(&self) -> Vec<TermArg> {
+        TermArg::ALL
+            .into_iter()
+            .filter(|t| self.terms.as_ref().is_none_or(|terms| terms.contains(t)))
+            .collect()
+    }
+
     /// How light through stained-glass windows is drawn, from `--pane-light` and `--window-texture`.
     pub fn pane_light(&self) -> PaneLight {
         match self.pane_light {
@@ -927,7 +1062,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             if args.technique.per_vertex() {
                 bail!(
                     "--camera-path: the per-vertex techniques compute their glossy radiance towards one eye \
-                     (García et al. section 2.10), so they render single frames; use splat, splat-direct, mpr or beams"
+                     (García et al. section 2.10), so they render single frames; use splat, splat-direct, mpr, beams, ibr or composed"
                 );
             }
             let path = CameraPath::load(file)
@@ -942,7 +1077,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => None,
     };
     let (shadow_depth, glossy_images) = render_settings(args)?;
-    if args.technique == Technique::Ibr {
+    if args.draws_radiance_maps() {
         check_ibr(args)?;
     }
     if args.technique == Technique::Photonmap && args.k == 0 {
@@ -1000,13 +1135,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(Photons::File(streamed)) => Some(streamed),
         _ => None,
     };
-    let gpu = GpuFrame::new(
+    let mut gpu = GpuFrame::new(
         args,
         lit.lighting(&scene, shadow_depth, glossy_images),
         ctx,
         (width, height),
         &camera,
     )?;
+    gpu.components = Components::only(&args.drawn_terms());
     timings.insert("gpu_setup".into(), json!(ms(start) - gpu.ibr_capture_ms));
     if gpu.ibr.is_some() {
         timings.insert("radiance_maps".into(), json!(gpu.ibr_capture_ms));
@@ -1099,6 +1235,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         write_outputs(args, &image)?;
         timings.insert("write".into(), json!(ms(start)));
     }
+    let term_images = if args.term_images {
+        let start = Instant::now();
+        let written = write_term_images(args, &mut gpu, &camera)?;
+        timings.insert("term_images".into(), json!(ms(start)));
+        written
+    } else {
+        Vec::new()
+    };
     let (graph, ctx, targets) = (&gpu.graph, &gpu.ctx, &gpu.targets);
     let (splats, direct, imaged, glossy_images) =
         (&gpu.splats, &gpu.direct, &gpu.imaged, &gpu.glossy_images);
@@ -1182,6 +1326,20 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 })),
             })
         });
+    // The composed frame's method per term, and the terms drawn.
+    let composed = (args.technique == Technique::Composed).then(|| {
+        json!({
+            "reflectors": args.reflectors().and_then(|r| r.to_possible_value()).map(|v| v.get_name().to_owned()),
+            "caustics": args.caustics().and_then(|c| c.to_possible_value()).map(|v| v.get_name().to_owned()),
+        })
+    });
+    let drawn_terms: Vec<_> = args.drawn_terms().iter().map(|t| t.name()).collect();
+    let term_image_files = (!term_images.is_empty()).then(|| {
+        term_images
+            .iter()
+            .map(|(t, p)| (t.name().to_owned(), json!(p.display().to_string())))
+            .collect::<serde_json::Map<_, _>>()
+    });
     let sidecar = sidecar_path(&args.out);
     let mut info = json!({
         "scene": scene.name,
@@ -1253,6 +1411,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "version": env!("CARGO_PKG_VERSION"),
     });
     info["radiance_maps"] = radiance_maps.unwrap_or_default();
+    info["composed"] = json!(composed);
+    info["terms"] = json!(drawn_terms);
+    info["term_images"] = json!(term_image_files);
     info["splat_resolution"] = json!(splat_resolution.map(|r| format!("{r:?}")));
     // The projected kernel radius `auto` reads (pixels, the 5 % quantile).
     info["splat_radius_q05_px"] = json!(splats.as_ref().and_then(|b| radius_quantile(
@@ -1328,11 +1489,52 @@ fn check_directory(file: &Path, flag: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Checks the options that belong to `--technique composed` and to the splatting techniques' terms.
+fn check_composed(args: &RenderArgs) -> anyhow::Result<()> {
+    if args.technique != Technique::Composed {
+        if args.reflectors.is_some() {
+            bail!("--reflectors: only --technique composed chooses how reflectors are drawn");
+        }
+        if args.caustics.is_some() {
+            bail!("--caustics: only --technique composed chooses how caustics are drawn");
+        }
+    }
+    if args.reflectors() == Some(ReflectorsArg::Images)
+        && (args.diffuse != DiffuseArg::Texture || args.spec_depth == 0)
+    {
+        bail!(
+            "--reflectors images needs --diffuse texture and --spec-depth 1 or more: glossy \
+             images are specular images of faces whose Lambertian lobes come from the textures"
+        );
+    }
+    if args.reflectors() == Some(ReflectorsArg::Images) && args.glossy_images == Some(0) {
+        bail!("--glossy-images 0 with --reflectors images: use --reflectors splats or maps");
+    }
+    if args.technique.per_vertex() && (args.terms.is_some() || args.term_images) {
+        bail!(
+            "--terms and --term-images: the per-vertex techniques draw one Gouraud-shaded term; \
+             use a splatting technique"
+        );
+    }
+    if args.terms.as_ref().is_some_and(|t| t.is_empty()) {
+        bail!("--terms: name at least one term");
+    }
+    if args.term_images && (args.camera_path.is_some() || args.photons_file.is_some()) {
+        bail!(
+            "--term-images: one frame from photons in memory; leave out --camera-path and --photons-file"
+        );
+    }
+    Ok(())
+}
+
 /// The virtual light generations and glossy image settings of `args`, checked against the technique and each other.
 pub fn render_settings(args: &RenderArgs) -> anyhow::Result<(u32, GlossySettings)> {
+    check_composed(args)?;
     let shadow_depth = args.shadow_depth.unwrap_or(match args.shadows {
         // The beams draw the light that mirrors and glass send on.
-        _ if args.technique == Technique::Beams => 0,
+        _ if args.draws_beams() => 0,
+        // Left to the splats.
+        _ if args.caustics() == Some(CausticsArg::Splats) => 0,
         ShadowArg::Volumes => DEFAULT_SHADOW_DEPTH,
         ShadowArg::Maps => 0,
     });
@@ -1343,21 +1545,32 @@ pub fn render_settings(args: &RenderArgs) -> anyhow::Result<(u32, GlossySettings
         );
     }
     if let Some(alpha) = args.beam_roughness {
-        if args.technique != Technique::Beams {
-            bail!("--beam-roughness: only --technique beams draws beams");
+        if !args.draws_beams() {
+            bail!(
+                "--beam-roughness: only --technique beams and composed (with --caustics beams) draw beams"
+            );
         }
         if !(alpha >= 0.0 && alpha.is_finite()) {
             bail!("--beam-roughness {alpha}: must be finite and not negative");
         }
     }
-    if args.technique == Technique::Beams && shadow_depth > 0 {
+    if args.draws_beams() && shadow_depth > 0 {
         bail!(
-            "--shadow-depth {shadow_depth}: with --technique beams the beams draw the light that \
+            "--shadow-depth {shadow_depth}: the beams draw the light that \
              mirrors and glass send on; virtual lights would add it twice"
         );
     }
     if args.shadow_depth.is_some() && !args.technique.multipass() {
-        bail!("--shadow-depth: virtual lights belong to --technique mpr and beams");
+        bail!("--shadow-depth: virtual lights belong to --technique mpr, beams and composed");
+    }
+    if args.caustics() == Some(CausticsArg::Splats) && shadow_depth > 0 {
+        bail!(
+            "--shadow-depth {shadow_depth} with --caustics splats: the splats draw the light that \
+             mirrors and glass send on; use --caustics virtual-lights"
+        );
+    }
+    if args.caustics() == Some(CausticsArg::VirtualLights) && args.shadows == ShadowArg::Maps {
+        bail!("--caustics virtual-lights needs --shadows volumes (light volumes, section 4.2)");
     }
     if shadow_depth > 0 && args.shadows == ShadowArg::Maps {
         bail!("--shadow-depth {shadow_depth}: virtual lights need --shadows volumes");
@@ -1366,11 +1579,9 @@ pub fn render_settings(args: &RenderArgs) -> anyhow::Result<(u32, GlossySettings
         bail!("--shadow-depth {shadow_depth}: at most {MAX_SHADOW_DEPTH}");
     }
     let glossy_images = GlossySettings {
-        samples: match (args.technique, args.glossy_images) {
-            (Technique::Mpr | Technique::Beams, Some(n)) => n,
-            (Technique::Mpr | Technique::Beams, None)
-                if args.diffuse == DiffuseArg::Texture && args.spec_depth > 0 =>
-            {
+        samples: match (args.may_draw_glossy_images(), args.glossy_images) {
+            (true, Some(n)) => n,
+            (true, None) if args.diffuse == DiffuseArg::Texture && args.spec_depth > 0 => {
                 DEFAULT_GLOSSY_IMAGES
             }
             _ => 0,
@@ -1385,8 +1596,10 @@ pub fn render_settings(args: &RenderArgs) -> anyhow::Result<(u32, GlossySettings
         },
         frosted_alpha: args.frosted_glass,
     };
-    if args.glossy_images.is_some_and(|n| n > 0) && !args.technique.multipass() {
-        bail!("--glossy-images: only --technique mpr and beams draw glossy images");
+    if args.glossy_images.is_some_and(|n| n > 0) && !args.may_draw_glossy_images() {
+        bail!(
+            "--glossy-images: only --technique mpr, beams and composed (with --reflectors images) draw glossy images"
+        );
     }
     if glossy_images.samples > 0 && args.diffuse != DiffuseArg::Texture {
         bail!(
@@ -1532,7 +1745,7 @@ pub fn light(
 ) -> anyhow::Result<Lit> {
     // Beams start at point lights: each area light's cosine point light of
     // equal power at its centre (Stürzlinger & Bastos 1997, section 3).
-    let (beams, beam_scatterers) = if args.technique == Technique::Beams {
+    let (beams, beam_scatterers) = if args.draws_beams() {
         let start = Instant::now();
         let point_scene = if scene.lights().iter().any(|l| !l.is_delta()) {
             scene.with_area_lights_as_points()?
@@ -1705,9 +1918,11 @@ fn splat_setup(
 ) -> anyhow::Result<Splatting> {
     let selection = match args.technique {
         Technique::Splat => BounceSelection::All,
-        Technique::SplatDirect | Technique::Mpr | Technique::Beams | Technique::Ibr => {
-            BounceSelection::Indirect
-        }
+        Technique::SplatDirect
+        | Technique::Mpr
+        | Technique::Beams
+        | Technique::Ibr
+        | Technique::Composed => BounceSelection::Indirect,
         Technique::Detp | Technique::Impact | Technique::Photonmap => {
             bail!("--technique {:?} does not splat", args.technique)
         }
@@ -1818,6 +2033,32 @@ pub fn sidecar_path(out: &Path) -> PathBuf {
 /// Writes the image as the extension of `--out` says, atomically.
 fn write_outputs(args: &RenderArgs, image: &Image) -> anyhow::Result<()> {
     write_image(&args.out, args.exposure, image)
+}
+
+/// The linear EXR that `--term-images` writes `term` to beside `out`: `NAME-TERM.exr`.
+pub fn term_image_path(out: &Path, term: TermArg) -> PathBuf {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
+    out.with_file_name(format!("{stem}-{}.exr", term.name()))
+}
+
+/// Draws `camera` once per term of `--terms` with that term alone and writes each as [`term_image_path`]; returns the terms written with their files.
+fn write_term_images(
+    args: &RenderArgs,
+    gpu: &mut GpuFrame,
+    camera: &Camera,
+) -> anyhow::Result<Vec<(TermArg, PathBuf)>> {
+    let drawn = gpu.components;
+    let mut written = Vec::new();
+    for term in args.drawn_terms() {
+        gpu.components = Components::only(&[term]);
+        gpu.draw(camera, args.aa)?;
+        let image = gpu.read_hdr()?;
+        let path = term_image_path(&args.out, term);
+        write_image(&path, args.exposure, &image)?;
+        written.push((term, path));
+    }
+    gpu.components = drawn;
+    Ok(written)
 }
 
 /// Writes an image atomically as the extension of `path` says: linear EXR, or sRGB PNG after `exposure` stops.

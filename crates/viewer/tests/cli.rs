@@ -276,7 +276,7 @@ fn render_refuses_bad_options_before_writing_anything() {
         ),
         (
             vec!["render", "glosbox", "--beam-roughness", "0.1", "--out", out],
-            "--beam-roughness: only --technique beams draws beams",
+            "--beam-roughness: only --technique beams and composed",
         ),
         (
             vec![
@@ -417,7 +417,7 @@ fn render_refuses_bad_options_before_writing_anything() {
                 "--out",
                 out,
             ],
-            "ibr needs --diffuse texture",
+            "need --diffuse texture",
         ),
         (
             vec![
@@ -472,6 +472,125 @@ fn render_refuses_bad_options_before_writing_anything() {
                 out,
             ],
             "does not exist",
+        ),
+        (
+            vec!["render", "glosbox", "--reflectors", "images", "--out", out],
+            "--reflectors: only --technique composed",
+        ),
+        (
+            vec!["render", "glosbox", "--caustics", "splats", "--out", out],
+            "--caustics: only --technique composed",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--reflectors",
+                "splats",
+                "--glossy-images",
+                "4",
+                "--out",
+                out,
+            ],
+            "--glossy-images: only --technique mpr, beams and composed (with --reflectors images)",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--shadow-depth",
+                "1",
+                "--out",
+                out,
+            ],
+            "virtual lights would add it twice",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--caustics",
+                "splats",
+                "--shadow-depth",
+                "1",
+                "--out",
+                out,
+            ],
+            "use --caustics virtual-lights",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--caustics",
+                "virtual-lights",
+                "--shadows",
+                "maps",
+                "--out",
+                out,
+            ],
+            "--caustics virtual-lights needs --shadows volumes",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--reflectors",
+                "maps",
+                "--diffuse",
+                "splat",
+                "--out",
+                out,
+            ],
+            "need --diffuse texture",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--diffuse",
+                "splat",
+                "--out",
+                out,
+            ],
+            "--reflectors images needs --diffuse texture",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "composed",
+                "--glossy-images",
+                "0",
+                "--out",
+                out,
+            ],
+            "--glossy-images 0 with --reflectors images",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "detp",
+                "--term-images",
+                "--out",
+                out,
+            ],
+            "--terms and --term-images: the per-vertex techniques",
         ),
     ];
     for (args, expected) in cases {

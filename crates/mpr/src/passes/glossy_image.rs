@@ -360,6 +360,8 @@ struct Accumulation {
 #[derive(Debug)]
 pub struct GlossyImagePass {
     fog: wgpu::RenderPipeline,
+    /// The fog without its radiance (`fs_fog_dark`).
+    fog_dark: wgpu::RenderPipeline,
     transfer_first: wgpu::RenderPipeline,
     transfer_add: wgpu::RenderPipeline,
     resolve: wgpu::RenderPipeline,
@@ -494,6 +496,13 @@ impl GlossyImagePass {
             let equal = wgpu::CompareFunction::Equal;
             let always = wgpu::CompareFunction::Always;
             let fog = pipeline("glossy-fog", "vs_main", "fs_fog", equal, Some(fog_blend));
+            let fog_dark = pipeline(
+                "glossy-fog-dark",
+                "vs_main",
+                "fs_fog_dark",
+                equal,
+                Some(fog_blend),
+            );
             // The sample's image times 1/N (the blend constant), replacing (sample 0) or added.
             let weighted = |dst_factor| wgpu::BlendState {
                 color: wgpu::BlendComponent {
@@ -531,6 +540,7 @@ impl GlossyImagePass {
             });
             Self {
                 fog,
+                fog_dark,
                 transfer_first,
                 transfer_add,
                 resolve,
@@ -597,7 +607,9 @@ impl GlossyImagePass {
     }
 
     /// After sample `sample` was drawn in the mask of `child` (level `k + 1`)
-    /// inside the view `outer` (level `k`): the image fogged, then copied
+    /// inside the view `outer` (level `k`): the image fogged (towards the
+    /// fog radiance with `fog_radiance`, else towards black: the fog
+    /// radiance is a constant term, drawn with the emitters), then copied
     /// (sample 0) or added into the accumulation target of level `k`.
     #[allow(clippy::too_many_arguments)]
     pub fn encode_accumulate(
@@ -610,12 +622,17 @@ impl GlossyImagePass {
         outer: ViewSlot,
         child: ViewSlot,
         sample: GlossySample,
+        fog_radiance: bool,
     ) {
         let face = sample.face as u32;
         let accumulation = self.accumulation_view(ctx, targets, outer.stencil_reference as usize);
         if self.fogged.get(sample.face).copied().unwrap_or(false) {
             let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "glossy-fog");
-            pass.set_pipeline(&self.fog);
+            pass.set_pipeline(if fog_radiance {
+                &self.fog
+            } else {
+                &self.fog_dark
+            });
             views.bind(&mut pass, 0, child);
             // fs_fog reads no image; any texture but the HDR target it draws into.
             pass.set_bind_group(1, &self.bind_group(ctx, &accumulation), &[]);

@@ -67,6 +67,15 @@ fn fs_fog(in: VertexOutput) -> @location(0) vec4f {
     return vec4f(face.fog.xyz * (1.0 - f), f);
 }
 
+// The same fading with L_fog left out (a frame drawn without its constant
+// terms, the emitters and the recursion's limit radiance): f * L_image.
+@fragment
+fn fs_fog_dark(in: VertexOutput) -> @location(0) vec4f {
+    let face = faces[in.face];
+    let z = abs(dot(face.plane, vec4f(in.world, 1.0)));
+    return vec4f(0.0, 0.0, 0.0, clamp(1.0 - z * face.fog.w, 0.0, 1.0));
+}
+
 @fragment
 fn fs_resolve(in: VertexOutput) -> @location(0) vec4f {
     let sum = textureLoad(image, vec2i(floor(in.clip.xy)), 0).xyz;

@@ -870,12 +870,23 @@ impl SpecularPass {
         child: ViewSlot,
         face: usize,
         sample: Option<GlossySample>,
+        fog_radiance: bool,
     ) {
         let (Some(sample), Some(glossy)) = (sample, &self.glossy) else {
             self.encode_restore(encoder, scene, targets, views, outer, face);
             return;
         };
-        glossy.encode_accumulate(ctx, encoder, scene, targets, views, outer, child, sample);
+        glossy.encode_accumulate(
+            ctx,
+            encoder,
+            scene,
+            targets,
+            views,
+            outer,
+            child,
+            sample,
+            fog_radiance,
+        );
         self.encode_restore_as(encoder, scene, targets, views, outer, face, true);
         if sample.index + 1 == sample.count {
             let indices = face_indices(scene, &self.faces[face]);

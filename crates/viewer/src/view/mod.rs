@@ -66,7 +66,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     if render.technique.per_vertex() {
         bail!(
             "--technique {:?}: the per-vertex techniques compute their glossy radiance towards one eye \
-             (García et al. section 2.10); the window needs splat, splat-direct, mpr or beams",
+             (García et al. section 2.10); the window needs splat, splat-direct, mpr, beams or composed",
             render.technique
         );
     }

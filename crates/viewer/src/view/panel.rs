@@ -3,10 +3,11 @@
 use std::path::PathBuf;
 
 use crate::gpu_frame::Components;
-use crate::render::{RenderArgs, ShadowArg, SplatResolutionArg, Technique};
+use crate::render::{ReflectorsArg, RenderArgs, ShadowArg, SplatResolutionArg, Technique};
 
 /// The techniques the window offers (those that light any camera from one solution).
-pub const TECHNIQUES: [(Technique, &str); 4] = [
+pub const TECHNIQUES: [(Technique, &str); 5] = [
+    (Technique::Composed, "composed"),
     (Technique::SplatDirect, "splat-direct"),
     (Technique::Splat, "splat"),
     (Technique::Mpr, "mpr"),
@@ -106,6 +107,8 @@ pub struct Panel {
     pub render_scale: f32,
     /// The lighting terms drawn.
     pub components: Components,
+    /// `--reflectors` as given (`composed` draws radiance maps only when it says `maps`).
+    pub reflectors: Option<ReflectorsArg>,
     /// Recent frame times (ms), oldest first.
     pub frame_times: Vec<f32>,
     /// GPU time of each pass of the last frame (ms), where the adapter has timestamps.
@@ -128,6 +131,7 @@ impl Panel {
             exposure: args.exposure,
             render_scale: 1.0,
             components: Components::default(),
+            reflectors: args.reflectors,
             frame_times: Vec::new(),
             pass_times: None,
             window_capture: None,
@@ -262,6 +266,19 @@ impl Panel {
         ui.add(egui::Slider::new(&mut self.light_samples, 1..=64).text("point lights"));
         ui.checkbox(&mut self.components.diffuse, "indirect diffuse (textures)");
         ui.checkbox(&mut self.components.splats, "glossy and indirect (splats)");
+        if self.technique == Technique::Ibr
+            || (self.technique == Technique::Composed
+                && self.reflectors == Some(ReflectorsArg::Maps))
+        {
+            ui.checkbox(
+                &mut self.components.radiance_maps,
+                "glossy reflectors (radiance maps)",
+            );
+        }
+        if matches!(self.technique, Technique::Beams | Technique::Composed) {
+            ui.checkbox(&mut self.components.beams, "caustics (beams)");
+        }
+        ui.checkbox(&mut self.components.emission, "emitters");
         egui::ComboBox::from_label("splat resolution")
             .selected_text(name_of(&RESOLUTIONS, self.splat_resolution))
             .show_ui(ui, |ui| {
