@@ -272,10 +272,11 @@ impl FrameGraph {
     }
 
     /// Switches the light terms the graph holds itself (the emitters'
-    /// radiance with the specular recursion's limit faces, and the beams;
-    /// both on when built) for the frames that
-    /// follow; the terms a frame's inputs carry (direct light, diffuse
-    /// textures, splats) are switched by leaving the input out.
+    /// radiance with the specular recursion's constant terms, the limit
+    /// faces' radiance and the glossy images' fog radiance; and the beams;
+    /// both on when built) for the frames that follow; the terms a frame's
+    /// inputs carry (direct light, diffuse textures, splats) are switched by
+    /// leaving the input out.
     pub fn set_graph_terms(&self, emission: bool, beams: bool) {
         self.emission_drawn.store(emission, Ordering::Relaxed);
         self.beams_drawn.store(beams, Ordering::Relaxed);
