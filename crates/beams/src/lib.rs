@@ -15,7 +15,7 @@
 //! | paper | item |
 //! |---|---|
 //! | 3.1, 4.3: rays from the light through the scatterer's vertices, reflected, refracted and shadow rays grouped into beams, in parallel | [`build_beams`], [`BeamSet::build`], [`reflect`], [`refract`] |
-//! | 3.1: beam flux conserved within the beam; 4.1: `Φ_s = I_light Ω_light` | [`Beam::flux`], [`solid_angle`] |
+//! | 3.1: beam flux conserved within the beam; 4.1: `Φ_s = I_light Ω_light` | [`Beam::flux`], [`solid_angle`], [`scatterer_flux`] |
 //! | 3.1, figure 5: flux plane perpendicular to the average wavefront normal, flux triangle `A_F B_F C_F` | [`Beam::flux_triangle`], [`FluxTriangle`] |
 //! | 3.1: the fragment-in-beam test; 4.3: generator plane | [`Beam::contains`], [`Beam::in_front`] |
 //! | 4.1, equation 1: `E = Φ_s / A_⊥ cos θ` | [`Beam::irradiance`] (specular beams) |
@@ -30,8 +30,13 @@
 //!
 //! Choices where the paper is silent:
 //!
-//! - Only point lights start beams (isotropic, cosine and spot lights, the
-//!   intensity taken towards the scatterer's centroid); area lights are
+//! - Only point lights start beams (isotropic, cosine and spot lights);
+//!   `Φ_s = I_light Ω_light` is exact for an isotropic light, and for a
+//!   cosine light the cosine is integrated over the scatterer
+//!   ([`scatterer_flux`]: a large mirror beside an area light's centre
+//!   spans grazing directions, and the intensity towards its centroid
+//!   times its solid angle sent up to twice the light's power through it);
+//!   a spot light's intensity is taken towards the centroid. Area lights are
 //!   ignored and counted ([`BeamInput::area_lights_ignored`]): convert them
 //!   first with `Scene::with_area_lights_as_points`.
 //! - Reflectors scatter from the front only (section 3.1, local
@@ -102,7 +107,8 @@ mod scatterer;
 pub use beam::{Beam, BeamKind, BeamSlab, FluxTriangle, GlossyVolume, Scatter, SplitPoint};
 pub use beam_set::{BeamSet, direct_irradiance};
 pub use construction::{
-    BuildOptions, BuildStats, build_beams, glossy_cutoff, reflect, refract, solid_angle,
+    BuildOptions, BuildStats, build_beams, glossy_cutoff, projected_solid_angle, reflect, refract,
+    scatterer_flux, solid_angle,
 };
 pub use error::{BeamError, Result};
 pub use hierarchy::{BeamHierarchy, HierarchyNode};
