@@ -188,7 +188,8 @@ pub enum CausticsArg {
 /// The additive terms of a frame, as `--terms` and `--term-images` name them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum TermArg {
-    /// The emitters' own radiance (and the specular recursion's limit faces).
+    /// The emitters' own radiance, with the specular recursion's constant
+    /// stand-ins (the limit faces' radiance, the glossy images' fog radiance).
     Emission,
     /// Direct light from point lights under shadow maps or volumes.
     Direct,
@@ -717,7 +718,7 @@ pub struct RenderArgs {
     pub ibr_cache: Option<PathBuf>,
     /// `--technique composed`: the glossy lobes of planar glossy reflectors
     /// from glossy images, radiance maps or splats [default: images; on
-    /// glosbox at 128² images err 0.54 times as much as maps, in 0.46 of the
+    /// glosbox at 128² images err 0.54 times as much as maps, in 0.47 of the
     /// time].
     #[arg(long, value_enum)]
     pub reflectors: Option<ReflectorsArg>,
