@@ -57,23 +57,27 @@ fn vs_main(
     return out;
 }
 
+// f = clamp(1 - z / f_max, 0, 1) of the point `in` shows, z its distance
+// from the face: reflected points lie in front of it, points seen through a
+// slab behind it.
+fn fog_factor(in: VertexOutput) -> f32 {
+    let face = faces[in.face];
+    let z = abs(dot(face.plane, vec4f(in.world, 1.0)));
+    return clamp(1.0 - z * face.fog.w, 0.0, 1.0);
+}
+
 // Blend: dst * a + rgb, i.e. f * L_image + (1 - f) * L_fog.
 @fragment
 fn fs_fog(in: VertexOutput) -> @location(0) vec4f {
-    let face = faces[in.face];
-    // Reflected points lie in front of the face, points seen through a slab behind it.
-    let z = abs(dot(face.plane, vec4f(in.world, 1.0)));
-    let f = clamp(1.0 - z * face.fog.w, 0.0, 1.0);
-    return vec4f(face.fog.xyz * (1.0 - f), f);
+    let f = fog_factor(in);
+    return vec4f(faces[in.face].fog.xyz * (1.0 - f), f);
 }
 
 // The same fading with L_fog left out (a frame drawn without its constant
 // terms, the emitters and the recursion's limit radiance): f * L_image.
 @fragment
 fn fs_fog_dark(in: VertexOutput) -> @location(0) vec4f {
-    let face = faces[in.face];
-    let z = abs(dot(face.plane, vec4f(in.world, 1.0)));
-    return vec4f(0.0, 0.0, 0.0, clamp(1.0 - z * face.fog.w, 0.0, 1.0));
+    return vec4f(0.0, 0.0, 0.0, fog_factor(in));
 }
 
 @fragment
