@@ -46,7 +46,10 @@ pub struct BuildStats {
     pub degenerate: usize,
     /// Pairs whose light lies in the scatterer's plane or sees no solid angle.
     pub edge_on: usize,
-    /// Pairs with a reflector lit from behind: no scattered beam (the shadow beam stays).
+    /// Pairs with a reflector lit from behind: no scattered beam (the shadow
+    /// beam stays); and pairs with a closed slab's face lit from inside the
+    /// glass ([`Scatterer::slab_face`]): no beam at all, its partner face's
+    /// beams carry that light and cast its shadow.
     pub back_facing: usize,
     /// Refracted beams left out because at least one vertex ray is totally internally reflected.
     pub total_internal_reflection: usize,
@@ -223,6 +226,10 @@ fn pair_beams(
     }
     // Orient the face and the vertex normals towards the light.
     let side = height.signum();
+    if s.slab_face && side < 0.0 {
+        stats.back_facing = 1;
+        return Ok(PairBeams { beams, stats });
+    }
     let n_light = face * side;
     let normals = s.normals.map(|n| (n * side).normalize());
     let centroid = (a + b + c) / 3.0;

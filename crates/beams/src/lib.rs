@@ -45,6 +45,13 @@
 //!   refracted one (`1 - F`); if any vertex ray is totally internally
 //!   reflected the triangle has no refracted beam (clipping the beam at the
 //!   critical angle is left out) and is counted.
+//! - A closed glass slab (a dielectric mesh whose planar face has a
+//!   parallel, opposite face behind it, `lustre_geometry::slab`) is one
+//!   thin slab, not two interfaces: single-scatter beams without second-order
+//!   shadows would send the light through it twice, once refracted at the
+//!   face it enters and once at the face it leaves, which is lit "from
+//!   either side". Its faces scatter as a thin slab from outside only
+//!   ([`Scatterer::slab_face`]); the beam leaves the lateral offset out.
 //! - `cos θ` uses the vertex directions interpolated at the fragment's
 //!   barycentrics in the flux triangle (clamped to the triangle outside it).
 //! - Glossy beams are cut off [`glossy_cutoff`] σ (as an angle) outside

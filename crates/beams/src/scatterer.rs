@@ -256,6 +256,13 @@ pub struct Scatterer {
     pub normals: [Vec3; 3],
     /// What it does with light.
     pub material: ScatterMaterial,
+    /// One face of a closed glass slab ([`lustre_geometry::slab`]; its
+    /// material a [`ScatterMaterial::ThinSlab`]): it scatters only light
+    /// arriving on the front of its winding, from outside the glass. Light
+    /// that reaches its back has come in through the slab's other face, whose
+    /// beams already carry it straight through (Diefenbach & Badler 1997,
+    /// section 2's in-out refraction).
+    pub slab_face: bool,
 }
 
 impl Scatterer {
@@ -268,6 +275,7 @@ impl Scatterer {
             vertices,
             normals: [n; 3],
             material,
+            slab_face: false,
         }
     }
 
@@ -292,7 +300,11 @@ pub struct BeamInput {
     pub lights: Vec<PointSource>,
     /// Area lights left out: beams need a point apex; call [`Scene::with_area_lights_as_points`] first to trace them from cosine point lights of equal power.
     pub area_lights_ignored: usize,
-    /// Every triangle whose material scatters ([`ScatterMaterial::from_model`]).
+    /// Every triangle whose material scatters ([`ScatterMaterial::from_model`]);
+    /// the faces of a closed glass slab ([`lustre_geometry::slab::slab_faces`])
+    /// as [`Scatterer::slab_face`]s of a [`ScatterMaterial::ThinSlab`] with
+    /// the dielectric's index and its transmittance squared (two refractions),
+    /// so that light through the slab makes one beam, not one per face.
     pub scatterers: Vec<Scatterer>,
 }
 
@@ -331,11 +343,24 @@ impl BeamInput {
             .iter()
             .map(|m| ScatterMaterial::from_model(&m.model))
             .collect::<Result<Vec<_>>>()?;
+        let slabs = lustre_geometry::slab::slab_faces(scene);
         let scatterers = scene
             .world_triangles()
             .into_iter()
             .filter_map(|t| {
-                let material = materials[t.material as usize]?;
+                let slab_face = slabs[t.surface as usize].is_some();
+                let material = match materials[t.material as usize]? {
+                    ScatterMaterial::Interface {
+                        ior,
+                        transmittance,
+                        roughness,
+                    } if slab_face => ScatterMaterial::ThinSlab {
+                        ior,
+                        transmittance: transmittance * transmittance,
+                        roughness,
+                    },
+                    m => m,
+                };
                 let n = (t.positions[1] - t.positions[0]).cross(t.positions[2] - t.positions[0]);
                 // Shading normals on the front side of the winding.
                 let normals = t.normals.map(|s| if s.dot(n) < 0.0 { -s } else { s });
@@ -343,6 +368,7 @@ impl BeamInput {
                     vertices: t.positions,
                     normals,
                     material,
+                    slab_face,
                 })
             })
             .collect();

@@ -77,6 +77,7 @@ fn subdivided(s: &Scatterer, m: usize) -> Vec<Scatterer> {
             vertices: c.map(|(p, _)| p),
             normals: c.map(|(_, n)| n),
             material: s.material,
+            slab_face: s.slab_face,
         }
     };
     let mut out = Vec::with_capacity(m * m);
@@ -270,6 +271,7 @@ fn pool_caustic_matches_a_photon_density_estimate() {
             vertices: s.vertices.map(|v| Vec3::new(v.x, WATER_LEVEL, v.z)),
             normals: [Vec3::Y; 3],
             material: s.material,
+            slab_face: s.slab_face,
         })
         .collect();
     let flat = BeamSet::build(&input.lights, &flat, scene.bounds(), &options).unwrap();

@@ -42,6 +42,7 @@ mod ray;
 pub mod sampling;
 mod scene;
 pub mod shadow_volume;
+pub mod slab;
 mod wide_bvh;
 
 pub use aabb::Aabb;

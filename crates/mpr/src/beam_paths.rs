@@ -1,4 +1,4 @@
-//! Which photon hits the beams stand for (Duvenhage et al. 2010, section 3.1: beams model the light-to-specular-to-diffuse paths, L(S|G)DE): a photon's second hit when its first was on a scatterer (a mirror, a rough conductor, a dielectric interface or a thin slab). A frame that draws the beam pass leaves those hits out of its splats and diffuse textures so that the light is added once; later hits of the same photon (the caustic's own diffuse inter-reflection) stay.
+//! Which photon hits the beams stand for (Duvenhage et al. 2010, section 3.1: beams model the light-to-specular-to-diffuse paths, L(S|G)DE): a photon's second hit when its first was on a scatterer (a mirror, a rough conductor, a dielectric interface or a thin slab), and its first hit past a closed glass slab when every hit before was on that slab's faces (the beams' thin slab, [`lustre_beams::Scatterer::slab_face`], sums the refractions and internal reflections). A frame that draws the beam pass leaves those hits out of its splats and diffuse textures so that the light is added once; later hits of the same photon (the caustic's own diffuse inter-reflection) stay.
 
 use lustre_beams::ScatterMaterial;
 use lustre_geometry::Scene;
@@ -6,8 +6,23 @@ use lustre_photon::HitRecord;
 
 use crate::{MprError, Result};
 
-/// Per surface of `scene`, whether its material scatters beams ([`ScatterMaterial::from_model`]).
-pub fn scatterer_surfaces(scene: &Scene) -> Result<Vec<bool>> {
+/// What a surface is to the beams.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BeamSurface {
+    /// Its material scatters no beam: light arriving there is received.
+    Receiver,
+    /// It scatters one beam per light ([`ScatterMaterial::from_model`]).
+    Scatterer,
+    /// A face of a closed glass slab ([`lustre_geometry::slab::slab_faces`]):
+    /// the beams treat the faces of one mesh as one scatter.
+    SlabFace {
+        /// The slab's mesh.
+        mesh: u32,
+    },
+}
+
+/// Per surface of `scene`, what it is to the beams.
+pub fn scatterer_surfaces(scene: &Scene) -> Result<Vec<BeamSurface>> {
     let materials = scene
         .materials()
         .iter()
@@ -20,24 +35,52 @@ pub fn scatterer_surfaces(scene: &Scene) -> Result<Vec<bool>> {
                 })
         })
         .collect::<Result<Vec<_>>>()?;
+    let slabs = lustre_geometry::slab::slab_faces(scene);
     Ok(scene
         .surfaces()
         .iter()
-        .map(|s| materials[s.material as usize])
+        .zip(slabs)
+        .map(|(s, slab)| match (slab, materials[s.material as usize]) {
+            (Some(_), _) => BeamSurface::SlabFace { mesh: s.mesh },
+            (None, true) => BeamSurface::Scatterer,
+            (None, false) => BeamSurface::Receiver,
+        })
         .collect())
 }
 
-/// Per record, whether the beams draw its light: bounce 2 right after a bounce-1 record of the same photon on a scatterer surface (`scatterer[surface]`). Records must hold whole photon paths in order, as the tracer writes them.
-pub fn drawn_by_beams(records: &[HitRecord], scatterer: &[bool]) -> Vec<bool> {
-    let mut previous: Option<&HitRecord> = None;
+/// The hits of one photon so far, as the beams see them.
+#[derive(Clone, Copy)]
+enum Before {
+    /// None: the next record is the photon's first hit.
+    Nothing,
+    /// One hit, on a scatterer.
+    Scattered,
+    /// Hits on the faces of one closed slab only.
+    Slab(u32),
+    /// Anything else: no beam draws what follows.
+    Other,
+}
+
+/// Per record, whether the beams draw its light: the hit right after a photon's first hit on a scatterer, or after hits on one closed slab's faces only (`surfaces` per surface, [`scatterer_surfaces`]). Records must hold whole photon paths in order, as the tracer writes them.
+pub fn drawn_by_beams(records: &[HitRecord], surfaces: &[BeamSurface]) -> Vec<bool> {
+    let mut before = Before::Nothing;
     records
         .iter()
         .map(|r| {
-            let drawn = r.bounce == 2
-                && previous.is_some_and(|p| {
-                    p.bounce == 1 && scatterer.get(p.surface as usize).copied().unwrap_or(false)
-                });
-            previous = Some(r);
+            if r.bounce == 1 {
+                before = Before::Nothing;
+            }
+            let drawn = matches!(before, Before::Scattered | Before::Slab(_));
+            let here = surfaces
+                .get(r.surface as usize)
+                .copied()
+                .unwrap_or(BeamSurface::Receiver);
+            before = match (before, here) {
+                (Before::Nothing, BeamSurface::Scatterer) => Before::Scattered,
+                (Before::Nothing, BeamSurface::SlabFace { mesh }) => Before::Slab(mesh),
+                (Before::Slab(a), BeamSurface::SlabFace { mesh }) if a == mesh => Before::Slab(a),
+                _ => Before::Other,
+            };
             drawn
         })
         .collect()
@@ -64,7 +107,11 @@ mod tests {
     #[test]
     fn only_the_hit_after_a_first_scatter_is_drawn() {
         // Surface 1 scatters; 0 and 2 receive.
-        let scatterer = [false, true, false];
+        let scatterer = [
+            BeamSurface::Receiver,
+            BeamSurface::Scatterer,
+            BeamSurface::Receiver,
+        ];
         let records = [
             hit(1, 1), // light -> mirror
             hit(0, 2), // -> floor: the beam's
@@ -91,8 +138,66 @@ mod tests {
                 scene.materials()[surface.material as usize].model,
                 lustre_geometry::MaterialModel::Mirror { .. }
             );
-            assert_eq!(is, mirror);
+            assert_eq!(is == BeamSurface::Scatterer, mirror);
+            assert_ne!(is == BeamSurface::Receiver, mirror);
         }
-        assert!(s.iter().any(|&x| x) && s.iter().any(|&x| !x));
+        assert!(s.contains(&BeamSurface::Scatterer) && s.contains(&BeamSurface::Receiver));
+    }
+
+    #[test]
+    fn a_chain_through_one_closed_slab_is_one_scatter() {
+        // Surfaces 1 and 2 are the faces of slab mesh 7, 3 of slab mesh 8;
+        // 4 a mirror; 0 receives.
+        let surfaces = [
+            BeamSurface::Receiver,
+            BeamSurface::SlabFace { mesh: 7 },
+            BeamSurface::SlabFace { mesh: 7 },
+            BeamSurface::SlabFace { mesh: 8 },
+            BeamSurface::Scatterer,
+        ];
+        let records = [
+            hit(1, 1), // light -> near face
+            hit(2, 2), // -> far face (inside the glass)
+            hit(0, 3), // -> floor: the thin slab's transmitted beam
+            hit(0, 4), // -> floor again: stays
+            hit(1, 1), // near face
+            hit(2, 2), // far face, reflected inside
+            hit(1, 3), // near face again, out
+            hit(0, 4), // -> floor: the thin slab's reflected beam
+            hit(1, 1), // near face
+            hit(3, 2), // -> another slab: no beam draws two slabs
+            hit(0, 3), // stays
+            hit(4, 1), // mirror
+            hit(1, 2), // -> slab: the mirror's beam lights nothing there
+            hit(2, 3), // past a mirror and a slab: stays
+            hit(0, 4), // stays
+        ];
+        assert_eq!(
+            drawn_by_beams(&records, &surfaces),
+            [
+                false, true, true, false, false, true, true, true, false, true, false, false, true,
+                false, false
+            ]
+        );
+    }
+
+    #[test]
+    fn the_bathroom_door_is_one_slab_and_the_mirror_a_scatterer() {
+        let scene = lustre_geometry::builtin::bathroom();
+        let s = scatterer_surfaces(&scene).unwrap();
+        let slab_meshes: std::collections::BTreeSet<u32> = s
+            .iter()
+            .filter_map(|x| match x {
+                BeamSurface::SlabFace { mesh } => Some(*mesh),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(slab_meshes.len(), 1, "{slab_meshes:?}");
+        let door = *slab_meshes.first().unwrap();
+        assert_eq!(scene.meshes()[door as usize].name, "shower-door");
+        assert_eq!(
+            s.iter().filter(|&&x| x == BeamSurface::Scatterer).count(),
+            1
+        );
     }
 }

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use lustre_geometry::Scene;
-use lustre_mpr::beam_paths::drawn_by_beams;
+use lustre_mpr::beam_paths::{BeamSurface, drawn_by_beams};
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::projective_texture::PaneLight;
 use lustre_mpr::virtual_light::{PassedFaces, drawn_by_virtual_lights};
@@ -43,9 +43,9 @@ fn without(map: PhotonMap, drawn: &[bool]) -> lustre_photon::Result<PhotonMap> {
     PhotonMap::from_parts(map.lights().to_vec(), kept)
 }
 
-/// `map` without the records of light that a scatterer sent onto the next surface, which the beams draw (Duvenhage et al. 2010, section 3.1; [`drawn_by_beams`]); `scatterer` per surface, `map` whole photon paths.
-pub fn without_beam_photons(map: PhotonMap, scatterer: &[bool]) -> anyhow::Result<PhotonMap> {
-    let drawn = drawn_by_beams(map.records(), scatterer);
+/// `map` without the records of light that a scatterer (or a closed glass slab) sent onto the next surface, which the beams draw (Duvenhage et al. 2010, section 3.1; [`drawn_by_beams`]); `surfaces` per surface, `map` whole photon paths.
+pub fn without_beam_photons(map: PhotonMap, surfaces: &[BeamSurface]) -> anyhow::Result<PhotonMap> {
+    let drawn = drawn_by_beams(map.records(), surfaces);
     without(map, &drawn).context("cannot leave the beams' photons out")
 }
 

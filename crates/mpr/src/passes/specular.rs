@@ -160,6 +160,7 @@ pub struct SpecularFace {
 /// transmittance.
 pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
     let surfaces = scene.surfaces();
+    let slabs = lustre_geometry::slab::slab_faces(scene);
     let planar = |s: &lustre_geometry::Surface| match s.kind {
         SurfaceKind::Planar(plane) => Some(plane),
         SurfaceKind::Curved => None,
@@ -191,15 +192,7 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                     corners: corners(surface),
                 }],
                 MaterialModel::Dielectric { ior, transmittance } => {
-                    // The nearest parallel, opposite face of the same mesh and material behind this one.
-                    let thickness = surfaces
-                        .iter()
-                        .filter(|o| o.mesh == surface.mesh && o.material == surface.material)
-                        .filter_map(planar)
-                        .filter(|o| o.normal.dot(plane.normal) < -0.9999)
-                        .map(|o| plane.offset + o.offset)
-                        .filter(|&t| t > 0.0)
-                        .min_by(f32::total_cmp);
+                    let thickness = slabs[id].map(|slab| slab.thickness);
                     let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
                     let tint = Vec3::new(transmittance.x, transmittance.y, transmittance.z);
                     match thickness {
