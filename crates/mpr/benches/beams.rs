@@ -127,6 +127,7 @@ fn beams(c: &mut Criterion) {
                 )
                 .unwrap();
             let frame = FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: &camera,
                 tonemap: &Tonemap::default(),

@@ -199,6 +199,7 @@ fn mpr(c: &mut Criterion) {
             graph.update_shadows(&ctx, &buffers, &lights).unwrap();
         }
         let frame = FrameInputs {
+            graph_terms: lustre_mpr::GraphTerms::ALL,
             scene: &buffers,
             camera: &camera,
             tonemap: &Tonemap::default(),
@@ -305,6 +306,7 @@ fn stained_glass(c: &mut Criterion, ctx: &GpuContext) {
             )
             .unwrap();
         let frame = FrameInputs {
+            graph_terms: lustre_mpr::GraphTerms::ALL,
             scene: &buffers,
             camera: &camera,
             tonemap: &Tonemap::default(),

@@ -14,7 +14,6 @@
 //! rebuilt only for moved objects or lights ([`FrameGraph::update_shadow_volumes`]).
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use lustre_geometry::Camera;
 use lustre_geometry::light::hammersley_centred;
@@ -199,6 +198,34 @@ pub struct FrameInputs<'a> {
     pub direct: Option<&'a DirectLights>,
     /// Diffuse surfaces' precomputed photon radiance (section 2.2.1), if any.
     pub diffuse: Option<&'a DiffuseTextures>,
+    /// Which of the terms the graph holds itself are drawn.
+    pub graph_terms: GraphTerms,
+}
+
+/// The light terms a [`FrameGraph`] holds itself, switched per frame; the
+/// terms a frame's inputs carry (direct light, diffuse textures, splats)
+/// are switched by leaving the input out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GraphTerms {
+    /// The emitters' radiance with the specular recursion's constant terms
+    /// (the limit faces' radiance and the glossy images' fog radiance).
+    pub emission: bool,
+    /// The beams' light.
+    pub beams: bool,
+}
+
+impl GraphTerms {
+    /// Every term the graph was built with.
+    pub const ALL: Self = Self {
+        emission: true,
+        beams: true,
+    };
+}
+
+impl Default for GraphTerms {
+    fn default() -> Self {
+        Self::ALL
+    }
 }
 
 /// What the splat pass of a frame reads.
@@ -243,10 +270,6 @@ pub struct FrameGraph {
     views: Mutex<ViewBuffer>,
     /// Timestamps between the passes ([`FrameGraph::with_pass_timing`]).
     timer: Option<PassTimer>,
-    /// Whether the emitters' own radiance is drawn ([`FrameGraph::set_graph_terms`]).
-    emission_drawn: AtomicBool,
-    /// Whether the beams' light is drawn ([`FrameGraph::set_graph_terms`]).
-    beams_drawn: AtomicBool,
 }
 
 impl FrameGraph {
@@ -266,20 +289,7 @@ impl FrameGraph {
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
             timer: None,
-            emission_drawn: AtomicBool::new(true),
-            beams_drawn: AtomicBool::new(true),
         })
-    }
-
-    /// Switches the light terms the graph holds itself (the emitters'
-    /// radiance with the specular recursion's constant terms, the limit
-    /// faces' radiance and the glossy images' fog radiance; and the beams;
-    /// both on when built) for the frames that follow; the terms a frame's
-    /// inputs carry (direct light, diffuse textures, splats) are switched by
-    /// leaving the input out.
-    pub fn set_graph_terms(&self, emission: bool, beams: bool) {
-        self.emission_drawn.store(emission, Ordering::Relaxed);
-        self.beams_drawn.store(beams, Ordering::Relaxed);
     }
 
     /// Times every pass of each frame on the GPU where the device writes timestamps inside encoders (else unchanged); [`FrameGraph::pass_times`] reads the last frame's.
@@ -543,7 +553,7 @@ impl FrameGraph {
         }
         self.prepare_shadow_volumes(ctx, &passes)?;
         let shadowed = self.shadowed(&passes);
-        let light = self.light_passes(&passes, shadowed.as_ref());
+        let light = self.light_passes(frame.graph_terms, &passes, shadowed.as_ref());
         ctx.checked_result("frame", || {
             let mut encoder = ctx
                 .device
@@ -623,7 +633,8 @@ impl FrameGraph {
             ..passes
         };
         let shadowed = self.shadowed(&jittered_passes);
-        let jittered_light = self.light_passes(&jittered_passes, shadowed.as_ref());
+        let jittered_light =
+            self.light_passes(frame.graph_terms, &jittered_passes, shadowed.as_ref());
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
         for s in 0..samples {
             before_sample(s)?;
@@ -862,15 +873,12 @@ impl FrameGraph {
     /// The passes that add light under a view, in order (section 7.2).
     fn light_passes<'a>(
         &'a self,
+        terms: GraphTerms,
         passes: &ResolvedPasses<'a>,
         shadowed: Option<&'a ShadowedDirect<'a>>,
     ) -> Vec<&'a dyn LightPass> {
         let mut list: Vec<&dyn LightPass> = Vec::new();
-        if let Some(emission) = self
-            .emission
-            .as_ref()
-            .filter(|_| self.emission_drawn.load(Ordering::Relaxed))
-        {
+        if let Some(emission) = self.emission.as_ref().filter(|_| terms.emission) {
             list.push(emission);
         }
         if let Some(gouraud) = &self.gouraud {
@@ -888,11 +896,7 @@ impl FrameGraph {
         if let Some((_, pass)) = passes.splat {
             list.push(pass);
         }
-        if let Some(beams) = self
-            .beams
-            .as_ref()
-            .filter(|_| self.beams_drawn.load(Ordering::Relaxed))
-        {
+        if let Some(beams) = self.beams.as_ref().filter(|_| terms.beams) {
             list.push(beams);
         }
         list
@@ -942,7 +946,7 @@ impl FrameGraph {
         });
         // The limit faces' stand-in radiance and the glossy images' fog
         // radiance are constant terms, switched with the emitters'.
-        let constant_terms = limit && self.emission_drawn.load(Ordering::Relaxed);
+        let constant_terms = limit && frame.graph_terms.emission;
         if let Some(specular) = &self.specular {
             for &(face, child) in &tree.children[index] {
                 self.timed(encoder, "specular masks", |encoder| {

@@ -448,6 +448,7 @@ impl IbrReflectors {
         let capture = OffscreenTargets::new(ctx, graph, (w, h), frame.targets.hdr_format())?;
         let targets = &capture.targets;
         let inputs = FrameInputs {
+            graph_terms: crate::frame::GraphTerms::ALL,
             targets,
             output: &capture.output,
             splats: frame.splats.map(|s| crate::frame::SplatInputs {
@@ -740,6 +741,7 @@ impl IbrReflectors {
                     .with_clip_plane(keep, ctx.clip_method());
                 mirrored.shows_emitters = false;
                 let inputs = FrameInputs {
+                    graph_terms: crate::frame::GraphTerms::ALL,
                     targets: &geometry.targets,
                     output: &geometry.output,
                     ..*frame

@@ -58,7 +58,7 @@ pub mod virtual_light;
 
 pub use device::{AdapterPreference, AdapterSummary, GpuContext};
 pub use error::{MprError, Result};
-pub use frame::{FrameGraph, FrameInputs};
+pub use frame::{FrameGraph, FrameInputs, GraphTerms};
 pub use scene_buffers::{GpuVertex, SceneBuffers};
 pub use target::{NO_SURFACE, RenderTargets};
 pub use view::{ClipMethod, View, ViewBuffer, ViewSlot};

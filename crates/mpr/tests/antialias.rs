@@ -155,6 +155,7 @@ fn render(ctx: &GpuContext, scene: &Scene, camera: &Camera, samples: u32) -> Vec
         .render_accumulated(
             ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera,
                 tonemap: &Tonemap::default(),
@@ -318,6 +319,7 @@ fn one_sample_is_the_unjittered_frame_bit_for_bit() {
         .render(
             &ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: &camera,
                 tonemap: &Tonemap::default(),

@@ -233,6 +233,7 @@ fn frame_graph_renders_depth_and_black_into_any_view() {
         .render(
             &ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: &camera,
                 tonemap: &Tonemap::default(),

@@ -190,6 +190,7 @@ fn render_accumulated(
         .render_accumulated(
             ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: &camera,
                 tonemap: &Tonemap::default(),

@@ -257,6 +257,7 @@ fn frame_graph_adds_gouraud_radiance_to_the_emitters() {
         .render(
             &ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: &camera,
                 tonemap: &Tonemap::default(),

@@ -208,6 +208,7 @@ fn gpu_image(
         .render(
             ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera,
                 tonemap: &Tonemap::default(),
@@ -576,6 +577,7 @@ fn limit_faces_show_their_limit_radiance_once_under_accumulation_with_splats() {
         .render_accumulated(
             &ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: &camera,
                 tonemap: &Tonemap::default(),

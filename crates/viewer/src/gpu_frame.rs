@@ -23,7 +23,7 @@ use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::splat_lowres::SplatResolution;
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::virtual_light::VirtualLightSettings;
-use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers};
+use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, GraphTerms, RenderTargets, SceneBuffers};
 use lustre_photon::{Kernel, SplatEstimator};
 
 use crate::render::{
@@ -75,7 +75,7 @@ pub struct Components {
 
 impl Default for Components {
     fn default() -> Self {
-        Self::only(&TermArg::ALL)
+        Self::only(TermArg::all())
     }
 }
 
@@ -399,6 +399,10 @@ impl GpuFrame {
     /// The frame's inputs for `camera`, drawn into the sRGB output.
     pub fn inputs<'a>(&'a self, camera: &'a Camera) -> FrameInputs<'a> {
         FrameInputs {
+            graph_terms: GraphTerms {
+                emission: self.components.emission,
+                beams: self.components.beams,
+            },
             scene: &self.scene_buffers,
             camera,
             tonemap: &self.tonemap,
@@ -425,8 +429,6 @@ impl GpuFrame {
     /// Draws `camera` with `aa` jittered samples into the HDR target and the output, and waits for the GPU (Diefenbach & Badler section 7's accumulation).
     pub fn draw(&self, camera: &Camera, aa: u32) -> anyhow::Result<()> {
         let ctx = &self.ctx;
-        self.graph
-            .set_graph_terms(self.components.emission, self.components.beams);
         self.graph.render_accumulated(
             ctx,
             &self.inputs(camera),

@@ -202,24 +202,15 @@ pub enum TermArg {
 }
 
 impl TermArg {
-    /// Every term, in the order term images are written.
-    pub const ALL: [TermArg; 5] = [
-        TermArg::Emission,
-        TermArg::Direct,
-        TermArg::Diffuse,
-        TermArg::Glossy,
-        TermArg::Caustics,
-    ];
+    /// Every term, in the order term images are written (the declaration order).
+    pub fn all() -> &'static [TermArg] {
+        TermArg::value_variants()
+    }
 
-    /// The term's name in file names and the sidecar.
-    pub fn name(self) -> &'static str {
-        match self {
-            TermArg::Emission => "emission",
-            TermArg::Direct => "direct",
-            TermArg::Diffuse => "diffuse",
-            TermArg::Glossy => "glossy",
-            TermArg::Caustics => "caustics",
-        }
+    /// The term's name in file names and the sidecar: the name `--terms` takes.
+    pub fn name(self) -> String {
+        self.to_possible_value()
+            .map_or_else(|| format!("{self:?}"), |v| v.get_name().to_owned())
     }
 }
 
@@ -884,8 +875,9 @@ impl RenderArgs {
 
     /// The terms `--terms` leaves in the frame (all by default).
     pub fn drawn_terms(&self) -> Vec<TermArg> {
-        TermArg::ALL
-            .into_iter()
+        TermArg::all()
+            .iter()
+            .copied()
             .filter(|t| self.terms.as_ref().is_none_or(|terms| terms.contains(t)))
             .collect()
     }

@@ -91,6 +91,7 @@ impl Gpu {
         self.graph.render_accumulated(
             &self.ctx,
             &FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: &buffers,
                 camera: scene.camera(),
                 tonemap: &Tonemap::default(),

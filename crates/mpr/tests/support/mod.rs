@@ -89,6 +89,7 @@ pub fn render_frame(
         .render(
             ctx,
             &lustre_mpr::FrameInputs {
+                graph_terms: lustre_mpr::GraphTerms::ALL,
                 scene: buffers,
                 camera,
                 tonemap: &lustre_mpr::passes::tonemap::Tonemap::default(),
