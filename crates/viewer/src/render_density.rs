@@ -179,13 +179,18 @@ impl GlossyEstimate {
     }
 }
 
-/// Outgoing radiance per triangle corner for the Gouraud pass: `ρ/π E` (equation 2.2), or on glossy meshes under the glossy option the view-dependent estimate towards the camera (section 2.10; DETP's disc, Impact Count's triangles or Photon Maps' nearest impacts).
+/// Outgoing radiance per triangle corner for the Gouraud pass: `ρ/π E` (equation 2.2), or on glossy meshes under the glossy option the view-dependent estimate towards the scene's camera (section 2.10; DETP's disc, Impact Count's triangles or Photon Maps' nearest impacts).
 pub fn corners(sim: &QuasiStatic) -> anyhow::Result<Vec<[f32; 3]>> {
+    corners_towards(sim, sim.scene().camera().position)
+}
+
+/// [`corners`] with the glossy meshes' radiance towards `eye` (the window's moving camera; section 2.10 recomputes it when the eye moves).
+pub fn corners_towards(sim: &QuasiStatic, eye: glam::Vec3) -> anyhow::Result<Vec<[f32; 3]>> {
     let scene = sim.scene();
     let mut corners = corner_radiance(scene, &sim.irradiance())
         .with_context(|| format!("vertex radiance of `{}`", scene.name))?;
     let glossy = sim
-        .glossy_radiance(scene.camera().position)
+        .glossy_radiance(eye)
         .with_context(|| format!("glossy radiance of `{}`", scene.name))?;
     for (m, radiance) in glossy.iter().flatten().enumerate() {
         if radiance.is_empty() {

@@ -26,7 +26,7 @@ use crate::gpu_frame::GpuFrame;
 use crate::render::{Lit, Prepared, RenderArgs, prepare_scene, render_settings, write_image};
 use camera_control::{Controller, Orbit};
 use input::Action;
-use lighting::{LightingEvent, LightingRun};
+use lighting::{LightingEvent, LightingRun, LiveView};
 use panel::{Drawn, Panel, PanelRequest};
 
 /// Options of `lustre view`: every option of `lustre render` (the same frame), and the window's own.
@@ -52,6 +52,11 @@ pub struct ViewArgs {
     /// Render at the window's image area (the default) or at `--size` exactly, the window sized to fit it.
     #[arg(long)]
     pub fixed_size: bool,
+    /// Per-vertex techniques: hold the mobile objects at this time along
+    /// their paths (seconds from each path's start) instead of moving them
+    /// with the clock.
+    #[arg(long)]
+    pub object_time: Option<f32>,
 }
 
 /// Width of the panel in logical pixels.
@@ -63,12 +68,15 @@ const PLAY_FPS: f32 = 25.0;
 /// Checks the options, loads the scene (a bad file fails here, before any window) and runs the window until it is closed.
 pub fn run(args: ViewArgs) -> anyhow::Result<()> {
     let render = &args.render;
-    if render.technique.per_vertex() {
-        bail!(
-            "--technique {:?}: the per-vertex techniques compute their glossy radiance towards one eye \
-             (García et al. section 2.10); the window needs splat, splat-direct, mpr, beams or composed",
-            render.technique
-        );
+    if let Some(t) = args.object_time {
+        if !render.technique.per_vertex() {
+            bail!(
+                "--object-time: only the per-vertex techniques (detp, impact-count, photon-maps) move objects in the window"
+            );
+        }
+        if !t.is_finite() {
+            bail!("--object-time {t}: seconds must be finite");
+        }
     }
     if render.photons_file.is_some() {
         bail!(
@@ -168,6 +176,12 @@ struct App {
     status: String,
     /// The lighting phases' times (ms) of the solution on screen.
     lighting_ms: serde_json::Map<String, serde_json::Value>,
+    /// A per-vertex technique's live run: the eye it computes towards and its pending pose.
+    live: Option<LiveView>,
+    /// The frame on screen was built from a live run's pose (later poses only move it).
+    posed_frame: bool,
+    /// The live run's frame on screen, its seconds along the objects' paths and the eye of its glossy radiance.
+    shown_pose: Option<(u64, f32, glam::Vec3)>,
     error: Option<anyhow::Error>,
 }
 
@@ -207,6 +221,9 @@ impl App {
             pending_screenshot,
             status: String::new(),
             lighting_ms: serde_json::Map::new(),
+            live: None,
+            posed_frame: false,
+            shown_pose: None,
             error: None,
         }
     }
@@ -230,16 +247,33 @@ impl App {
         };
         self.next_run += 1;
         let proxy = self.proxy.clone();
-        self.lighting = Some(lighting::spawn(
-            self.next_run,
-            args,
-            Arc::clone(&self.prepared),
-            shadow_depth,
-            move |event| {
-                // The window may be closing; nothing is lost then.
-                let _ = proxy.send_event(event);
-            },
-        ));
+        // The window may be closing; nothing is lost then.
+        let send = move |event| {
+            let _ = proxy.send_event(event);
+        };
+        self.lighting = Some(if self.prepared.density.is_some() {
+            let live = LiveView::new(self.camera(self.render_size()).position);
+            self.live = Some(live.clone());
+            self.posed_frame = false;
+            self.shown_pose = None;
+            lighting::spawn_quasi_static(
+                self.next_run,
+                args,
+                Arc::clone(&self.prepared),
+                live,
+                self.args.object_time,
+                send,
+            )
+        } else {
+            self.live = None;
+            lighting::spawn(
+                self.next_run,
+                args,
+                Arc::clone(&self.prepared),
+                shadow_depth,
+                send,
+            )
+        });
         self.status = "lighting…".into();
     }
 
@@ -343,6 +377,44 @@ impl App {
     /// Handles a stage of lighting: a new GPU frame from it.
     fn on_lighting(&mut self, event: LightingEvent) {
         match event {
+            LightingEvent::Pose {
+                run,
+                scene,
+                corners,
+                frame,
+                seconds,
+                eye,
+                update_ms,
+            } => {
+                if self.lighting.as_ref().is_none_or(|l| l.id != run) {
+                    return;
+                }
+                match self.show_pose(&scene, corners) {
+                    Ok(()) => {
+                        let technique = self.prepared.density.map_or("", |d| d.name());
+                        self.shown_photons = Some((self.args.render.photons, true));
+                        self.shown_pose = Some((frame, seconds, eye));
+                        self.status = if scene.mobile_objects().is_empty() {
+                            format!("{technique}: towards this eye in {update_ms:.0} ms")
+                        } else {
+                            format!(
+                                "{technique}: quasi-static frame {frame}, update {update_ms:.0} ms"
+                            )
+                        };
+                        self.camera_drawn = None;
+                        self.refined = false;
+                    }
+                    Err(e) => {
+                        eprintln!("lustre: {e:#}");
+                        self.status = format!("{e:#}");
+                        self.lighting = None;
+                    }
+                }
+                if let Some(live) = &self.live {
+                    live.pending
+                        .store(false, std::sync::atomic::Ordering::Release);
+                }
+            }
             LightingEvent::Failed { run, message } => {
                 if self.lighting.as_ref().is_some_and(|l| l.id == run) {
                     eprintln!("lustre: lighting failed: {message}");
@@ -390,8 +462,40 @@ impl App {
         self.request_redraw();
     }
 
+    /// A live run's pose: the frame built from it the first time, moved after.
+    fn show_pose(
+        &mut self,
+        scene: &lustre_geometry::Scene,
+        corners: Vec<[f32; 3]>,
+    ) -> anyhow::Result<()> {
+        if self.posed_frame
+            && let Some(gpu) = self.shown.as_mut().and_then(|s| s.gpu.as_mut())
+        {
+            return gpu.set_pose(scene, &corners);
+        }
+        let lit = Lit {
+            vertex: Some(crate::render_density::VertexRadiance {
+                corners,
+                primary_rays: 0,
+                segments: 0,
+                ray_set_ms: 0.0,
+                estimate_ms: 0.0,
+            }),
+            ..Lit::unlit(&self.render_args())
+        };
+        self.build_frame_of(scene, &lit)?;
+        self.posed_frame = self.shown.as_ref().is_some_and(|s| s.gpu.is_some());
+        Ok(())
+    }
+
     /// A GPU frame from `lit` at the image area's size.
     fn build_frame(&mut self, lit: &Lit) -> anyhow::Result<()> {
+        let prepared = Arc::clone(&self.prepared);
+        self.build_frame_of(&prepared.scene, lit)
+    }
+
+    /// A GPU frame of `scene` (the prepared scene, or a live run's pose) lit by `lit`.
+    fn build_frame_of(&mut self, scene: &lustre_geometry::Scene, lit: &Lit) -> anyhow::Result<()> {
         let args = self.render_args();
         // Derived from the options the lighting was started with (the technique decides them).
         let (shadow_depth, glossy_images) = render_settings(&args)?;
@@ -403,7 +507,7 @@ impl App {
         // Its tone map and lighting terms are set from the panel before every draw (`redraw`).
         shown.gpu = Some(GpuFrame::new(
             &args,
-            lit.lighting(&self.prepared.scene, shadow_depth, glossy_images),
+            lit.lighting(scene, shadow_depth, glossy_images),
             shown.ctx.clone(),
             size,
             &camera,
@@ -440,6 +544,9 @@ impl App {
         }
         let size = self.render_size();
         let camera = self.camera(size);
+        if let Some(live) = &self.live {
+            live.set_eye(camera.position);
+        }
         if let Some((start, keyframes)) = &mut self.recording {
             let t = start.elapsed().as_secs_f32();
             let last = keyframes.last().map_or(-1.0, |k| k.time);
@@ -505,9 +612,15 @@ impl App {
                 self.controller = Controller::Orbit(Orbit::from_camera(&camera));
             }
         }
+        // A live run's glossy radiance is towards the eye it was computed for: wait for this one.
+        let towards_this_eye = self.live.is_none()
+            || self
+                .shown_pose
+                .is_some_and(|(_, _, eye)| eye == camera.position);
         if self.playback.is_none()
             && self.refined
             && lit_completely
+            && towards_this_eye
             && let Some(path) = self.pending_screenshot.take()
         {
             self.screenshot(&path, &camera)?;
@@ -519,9 +632,10 @@ impl App {
             event_loop.exit();
             return Ok(());
         }
+        // A live run wakes the window with each pose it sends.
         let busy = self.playback.is_some()
             || !self.refined
-            || self.lighting.is_some()
+            || (self.lighting.is_some() && self.live.is_none())
             || self.recording.is_some()
             || matches!(self.controller, Controller::Fly(_))
                 && input::fly_keys(&self.held).moving();
@@ -741,6 +855,11 @@ impl App {
             },
             "adapter": gpu.ctx.adapter().to_string(),
             "lighting_ms": self.lighting_ms,
+            "quasi_static": self.shown_pose.map(|(frame, seconds, eye)| json!({
+                "frame": frame,
+                "object_seconds": seconds,
+                "glossy_eye": eye.to_array(),
+            })),
             "images": [path.display().to_string(), other.display().to_string()],
             "window_capture": window_capture_path(path).display().to_string(),
             "version": env!("CARGO_PKG_VERSION"),

@@ -240,13 +240,20 @@ impl Panel {
         }
         ui.separator();
         ui.strong("Lighting");
-        egui::ComboBox::from_label("technique")
-            .selected_text(name_of(&TECHNIQUES, self.technique))
-            .show_ui(ui, |ui| {
-                for (t, name) in TECHNIQUES {
-                    ui.selectable_value(&mut self.technique, t, name);
-                }
-            });
+        if self.technique.per_vertex() {
+            // The scene was meshed for it at start: no other technique here.
+            let name = clap::ValueEnum::to_possible_value(&self.technique)
+                .map_or_else(String::new, |v| v.get_name().to_owned());
+            ui.label(format!("technique: {name} (per-vertex, live)"));
+        } else {
+            egui::ComboBox::from_label("technique")
+                .selected_text(name_of(&TECHNIQUES, self.technique))
+                .show_ui(ui, |ui| {
+                    for (t, name) in TECHNIQUES {
+                        ui.selectable_value(&mut self.technique, t, name);
+                    }
+                });
+        }
         egui::ComboBox::from_label("photons")
             .selected_text(self.photons.to_string())
             .show_ui(ui, |ui| {
@@ -254,18 +261,22 @@ impl Panel {
                     ui.selectable_value(&mut self.photons, n, n.to_string());
                 }
             });
+        // A per-vertex technique's estimate holds all the light but the emitters'.
+        let splatting = !self.technique.per_vertex();
         let shadows = if self.technique.multipass() && self.shadows == ShadowArg::Volumes {
             "shadow volumes"
         } else {
             "shadow maps"
         };
-        ui.checkbox(
-            &mut self.components.direct,
-            format!("direct light ({shadows})"),
-        );
-        ui.add(egui::Slider::new(&mut self.light_samples, 1..=64).text("point lights"));
-        ui.checkbox(&mut self.components.diffuse, "indirect diffuse (textures)");
-        ui.checkbox(&mut self.components.splats, "glossy and indirect (splats)");
+        if splatting {
+            ui.checkbox(
+                &mut self.components.direct,
+                format!("direct light ({shadows})"),
+            );
+            ui.add(egui::Slider::new(&mut self.light_samples, 1..=64).text("point lights"));
+            ui.checkbox(&mut self.components.diffuse, "indirect diffuse (textures)");
+            ui.checkbox(&mut self.components.splats, "glossy and indirect (splats)");
+        }
         if self.technique == Technique::Ibr
             || (self.technique == Technique::Composed
                 && self.reflectors == Some(ReflectorsArg::Maps))
@@ -279,13 +290,15 @@ impl Panel {
             ui.checkbox(&mut self.components.beams, "caustics (beams)");
         }
         ui.checkbox(&mut self.components.emission, "emitters");
-        egui::ComboBox::from_label("splat resolution")
-            .selected_text(name_of(&RESOLUTIONS, self.splat_resolution))
-            .show_ui(ui, |ui| {
-                for (r, name) in RESOLUTIONS {
-                    ui.selectable_value(&mut self.splat_resolution, r, name);
-                }
-            });
+        if splatting {
+            egui::ComboBox::from_label("splat resolution")
+                .selected_text(name_of(&RESOLUTIONS, self.splat_resolution))
+                .show_ui(ui, |ui| {
+                    for (r, name) in RESOLUTIONS {
+                        ui.selectable_value(&mut self.splat_resolution, r, name);
+                    }
+                });
+        }
         ui.separator();
         ui.strong("Frame");
         ui.add(egui::Slider::new(&mut self.aa, 1..=16).text("samples at rest"));
