@@ -10,7 +10,12 @@ use lustre_density::QuasiStatic;
 use lustre_geometry::{ObjectId, ObjectPath, Scene};
 use serde_json::{Map, Value};
 
-use crate::render::{Lit, Prepared, RenderArgs, light};
+use lustre_geometry::Camera;
+use lustre_mpr::GpuContext;
+use lustre_mpr::passes::glossy_image::GlossySettings;
+
+use crate::gpu_frame::GpuFrame;
+use crate::render::{Prepared, RenderArgs, light};
 use crate::render_density::{corners_towards, explain_too_many_rays};
 
 /// Fewest photons worth a stage of their own.
@@ -51,8 +56,10 @@ pub enum LightingEvent {
     Stage {
         /// The run it belongs to (older runs' stages are dropped).
         run: u64,
-        /// Its lighting.
-        lit: Box<Lit>,
+        /// Its GPU frame, built on the lighting thread with everything it
+        /// uploads and captures (splats, diffuse textures, radiance maps),
+        /// so that the window keeps drawing the last one meanwhile.
+        gpu: Box<GpuFrame>,
         /// Photons it traced.
         photons: u64,
         /// Its index and the number of stages.
@@ -82,12 +89,23 @@ impl Drop for LightingRun {
     }
 }
 
-/// Starts the lighting of `prepared` for `args` at every stage of [`stage_photons`], sending each result through `send`.
+/// Where a stage's GPU frame is built: the window's device, the render's size and the camera when the run started (the splats' `auto` resolution).
+pub struct FrameTarget {
+    /// The window's device.
+    pub ctx: GpuContext,
+    /// The render's size.
+    pub size: (u32, u32),
+    /// The camera.
+    pub camera: Camera,
+}
+
+/// Starts the lighting of `prepared` for `args` at every stage of [`stage_photons`], building each stage's frame for `target` and sending it through `send`.
 pub fn spawn(
     id: u64,
     args: RenderArgs,
     prepared: Arc<Prepared>,
-    shadow_depth: u32,
+    (shadow_depth, glossy_images): (u32, GlossySettings),
+    target: FrameTarget,
     send: impl Fn(LightingEvent) + Send + 'static,
 ) -> LightingRun {
     let cancel = Arc::new(AtomicBool::new(false));
@@ -104,17 +122,33 @@ pub fn spawn(
             };
             let mut timings = Map::new();
             let scene: &Scene = &prepared.scene;
-            match light(
+            let frame = light(
                 &stage_args,
                 scene,
                 shadow_depth,
                 prepared.density,
                 prepared.lengths,
                 &mut timings,
-            ) {
-                Ok(lit) => send(LightingEvent::Stage {
+            )
+            .and_then(|lit| {
+                let start = Instant::now();
+                let gpu = GpuFrame::new(
+                    &stage_args,
+                    lit.lighting(scene, shadow_depth, glossy_images),
+                    target.ctx.clone(),
+                    target.size,
+                    &target.camera,
+                )?;
+                timings.insert(
+                    "gpu_frame".into(),
+                    Value::from(start.elapsed().as_secs_f64() * 1e3),
+                );
+                Ok(gpu)
+            });
+            match frame {
+                Ok(gpu) => send(LightingEvent::Stage {
                     run: id,
-                    lit: Box::new(lit),
+                    gpu: Box::new(gpu),
                     photons,
                     stage: (i, stages.len()),
                     timings,

@@ -236,8 +236,8 @@ impl App {
     /// Starts lighting the scene with the panel's settings (dropping any run in progress); settings `render` would refuse stop here, with the reason in the panel.
     fn start_lighting(&mut self) {
         let args = self.render_args();
-        let shadow_depth = match render_settings(&args) {
-            Ok((depth, _)) => depth,
+        let settings = match render_settings(&args) {
+            Ok(settings) => settings,
             Err(e) => {
                 eprintln!("lustre: {e:#}");
                 self.status = format!("{e:#}");
@@ -266,11 +266,21 @@ impl App {
             )
         } else {
             self.live = None;
+            let Some(shown) = &self.shown else {
+                return;
+            };
+            let size = self.render_size();
+            let target = lighting::FrameTarget {
+                ctx: shown.ctx.clone(),
+                size,
+                camera: self.camera(size),
+            };
             lighting::spawn(
                 self.next_run,
                 args,
                 Arc::clone(&self.prepared),
-                shadow_depth,
+                settings,
+                target,
                 send,
             )
         });
@@ -424,7 +434,7 @@ impl App {
             }
             LightingEvent::Stage {
                 run,
-                lit,
+                gpu,
                 photons,
                 stage,
                 timings,
@@ -433,8 +443,9 @@ impl App {
                     return;
                 }
                 let last = stage.0 + 1 == stage.1;
-                match self.build_frame(&lit) {
-                    Ok(()) => {
+                match self.shown.as_mut() {
+                    Some(shown) => {
+                        shown.gpu = Some(*gpu);
                         self.shown_photons = Some((photons, last));
                         self.lighting_ms = timings;
                         self.status = if last {
@@ -449,10 +460,8 @@ impl App {
                         self.refined = false;
                         self.camera_drawn = None;
                     }
-                    Err(e) => {
-                        eprintln!("lustre: {e:#}");
-                        self.status = format!("{e:#}");
-                    }
+                    // The window closed meanwhile.
+                    None => return,
                 }
                 if last {
                     self.lighting = None;

@@ -6,12 +6,13 @@ use crate::gpu_frame::Components;
 use crate::render::{ReflectorsArg, RenderArgs, ShadowArg, SplatResolutionArg, Technique};
 
 /// The techniques the window offers (those that light any camera from one solution).
-pub const TECHNIQUES: [(Technique, &str); 5] = [
+pub const TECHNIQUES: [(Technique, &str); 6] = [
     (Technique::Composed, "composed"),
     (Technique::SplatDirect, "splat-direct"),
     (Technique::Splat, "splat"),
     (Technique::Mpr, "mpr"),
     (Technique::Beams, "beams"),
+    (Technique::Ibr, "ibr"),
 ];
 
 /// Photon counts offered.
