@@ -245,6 +245,8 @@ impl App {
                 return;
             }
         };
+        // The run in progress stops whatever follows.
+        self.lighting = None;
         self.next_run += 1;
         let proxy = self.proxy.clone();
         // The window may be closing; nothing is lost then.
