@@ -222,12 +222,6 @@ impl GraphTerms {
     };
 }
 
-impl Default for GraphTerms {
-    fn default() -> Self {
-        Self::ALL
-    }
-}
-
 /// What the splat pass of a frame reads.
 #[derive(Debug, Clone, Copy)]
 pub struct SplatInputs<'a> {

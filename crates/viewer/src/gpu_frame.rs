@@ -399,14 +399,11 @@ impl GpuFrame {
     /// The mobile objects moved (a quasi-static frame, García et al. 2003,
     /// section 2): `scene`'s pose uploaded and the per-vertex radiance
     /// `corners` drawn from now on. The triangles must be those the frame was
-    /// built with, moved; a frame without the Gouraud pass refuses.
+    /// built with, moved; a frame without the Gouraud pass refuses
+    /// ([`FrameGraph::set_gouraud_radiance`]).
     pub fn set_pose(&mut self, scene: &Scene, corners: &[[f32; 3]]) -> anyhow::Result<()> {
-        if self.graph.gouraud.is_none() {
-            anyhow::bail!("a moved pose needs a per-vertex frame (the Gouraud pass)");
-        }
-        let buffers = SceneBuffers::upload(&self.ctx, scene)?;
         self.graph.set_gouraud_radiance(&self.ctx, corners)?;
-        self.scene_buffers = buffers;
+        self.scene_buffers = SceneBuffers::upload(&self.ctx, scene)?;
         Ok(())
     }
 

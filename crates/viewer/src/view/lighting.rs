@@ -7,12 +7,10 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use glam::{Affine3A, Vec3};
 use lustre_density::QuasiStatic;
-use lustre_geometry::{ObjectId, ObjectPath, Scene};
-use serde_json::{Map, Value};
-
-use lustre_geometry::Camera;
+use lustre_geometry::{Camera, ObjectId, ObjectPath, Scene};
 use lustre_mpr::GpuContext;
 use lustre_mpr::passes::glossy_image::GlossySettings;
+use serde_json::{Map, Value};
 
 use crate::gpu_frame::GpuFrame;
 use crate::render::{Prepared, RenderArgs, light};
@@ -33,14 +31,17 @@ pub fn stage_photons(total: u64) -> Vec<u64> {
     stages
 }
 
+/// The mobile objects' transforms in one pose (García et al. 2003, section 2.2.2).
+pub type ObjectPose = Vec<(ObjectId, Affine3A)>;
+
 /// What the lighting thread sends the window.
 pub enum LightingEvent {
     /// A quasi-static frame of a per-vertex technique ([`spawn_quasi_static`]): the mobile objects' pose and the per-vertex radiance towards the window's eye.
     Pose {
         /// The run it belongs to.
         run: u64,
-        /// The scene in this pose.
-        scene: Box<Scene>,
+        /// The mobile objects' transforms in this pose (none without mobile objects).
+        pose: ObjectPose,
         /// Per-corner radiance for the Gouraud pass.
         corners: Vec<[f32; 3]>,
         /// Frames of the run so far, this one included.
@@ -276,6 +277,7 @@ impl QuasiStaticRun<'_> {
         let mut last_eye = None;
         let mut frame = 0u64;
         let mut seconds = self.object_time.unwrap_or(0.0);
+        let mut pose = ObjectPose::new();
         while !stop.load(Ordering::Relaxed) {
             let eye = self.view.eye();
             let waiting = self.view.pending.load(Ordering::Acquire)
@@ -289,7 +291,7 @@ impl QuasiStaticRun<'_> {
                 if moving {
                     seconds = clock.elapsed().as_secs_f32();
                 }
-                let pose: Vec<(ObjectId, Affine3A)> = paths
+                pose = paths
                     .iter()
                     .map(|m| (m.object, m.path.at(path_time(&m.path, seconds))))
                     .collect();
@@ -303,7 +305,7 @@ impl QuasiStaticRun<'_> {
             self.view.pending.store(true, Ordering::Release);
             send(LightingEvent::Pose {
                 run: self.id,
-                scene: Box::new(sim.scene().clone()),
+                pose: pose.clone(),
                 corners,
                 frame,
                 seconds,
@@ -335,20 +337,20 @@ mod tests {
     fn next_pose(
         events: &std::sync::mpsc::Receiver<LightingEvent>,
         view: &LiveView,
-    ) -> (Box<Scene>, Vec<[f32; 3]>, u64, f32) {
+    ) -> (ObjectPose, Vec<[f32; 3]>, u64, f32) {
         match events
             .recv_timeout(Duration::from_secs(300))
             .expect("a pose within 5 minutes")
         {
             LightingEvent::Pose {
-                scene,
+                pose,
                 corners,
                 frame,
                 seconds,
                 ..
             } => {
                 view.pending.store(false, Ordering::Release);
-                (scene, corners, frame, seconds)
+                (pose, corners, frame, seconds)
             }
             LightingEvent::Failed { message, .. } => panic!("{message}"),
             LightingEvent::Stage { .. } => panic!("a live run sends poses, not stages"),
@@ -373,7 +375,14 @@ mod tests {
         ])
         .render;
         let prepared = Arc::new(crate::render::prepare_scene(&args).unwrap());
-        let small_box = prepared.scene.mobile_objects()[0].object as usize;
+        let small_box = prepared.scene.mobile_objects()[0].object;
+        let triangles = prepared.scene.triangle_count();
+        // The small box's transform in a pose.
+        let transform = |pose: &[(ObjectId, Affine3A)]| {
+            assert_eq!(pose.len(), 1, "cornell moves one object");
+            assert_eq!(pose[0].0, small_box);
+            pose[0].1
+        };
         let start = |held: Option<f32>, view: &LiveView| {
             let (send, events) = std::sync::mpsc::channel();
             let run = spawn_quasi_static(
@@ -394,14 +403,12 @@ mod tests {
         let (run, events) = start(None, &view);
         let poses: Vec<_> = (0..3).map(|_| next_pose(&events, &view)).collect();
         drop(run);
-        for (i, (scene, corners, frame, _)) in poses.iter().enumerate() {
+        for (i, (_, corners, frame, _)) in poses.iter().enumerate() {
             assert_eq!(*frame, i as u64 + 1);
-            assert_eq!(corners.len(), 3 * scene.triangle_count());
+            assert_eq!(corners.len(), 3 * triangles);
         }
         assert!(poses[0].3 < poses[1].3 && poses[1].3 < poses[2].3);
-        let transform =
-            |p: &(Box<Scene>, Vec<[f32; 3]>, u64, f32)| p.0.objects()[small_box].transform;
-        assert_ne!(transform(&poses[0]), transform(&poses[2]));
+        assert_ne!(transform(&poses[0].0), transform(&poses[2].0));
         assert_ne!(poses[0].1, poses[2].1, "the radiance follows the box");
 
         // Held at 4 s: one pose, and another only when the eye moves.
@@ -410,10 +417,7 @@ mod tests {
         let held = next_pose(&events, &view);
         assert_eq!((held.2, held.3), (1, 4.0));
         let path = &prepared.scene.mobile_objects()[0].path;
-        assert_eq!(
-            held.0.objects()[small_box].transform,
-            path.at(path.start() + 4.0)
-        );
+        assert_eq!(transform(&held.0), path.at(path.start() + 4.0));
         assert!(
             events.recv_timeout(Duration::from_millis(300)).is_err(),
             "a held pose with the eye at rest is sent once"
@@ -422,10 +426,7 @@ mod tests {
         let moved_eye = next_pose(&events, &view);
         drop(run);
         assert_eq!((moved_eye.2, moved_eye.3), (2, 4.0));
-        assert_eq!(
-            moved_eye.0.objects()[small_box].transform,
-            held.0.objects()[small_box].transform
-        );
+        assert_eq!(transform(&moved_eye.0), transform(&held.0));
     }
 
     #[test]

@@ -178,8 +178,8 @@ struct App {
     lighting_ms: serde_json::Map<String, serde_json::Value>,
     /// A per-vertex technique's live run: the eye it computes towards and its pending pose.
     live: Option<LiveView>,
-    /// The frame on screen was built from a live run's pose (later poses only move it).
-    posed_frame: bool,
+    /// A live run's scene, moved to each pose it sends.
+    posed_scene: Option<lustre_geometry::Scene>,
     /// The live run's frame on screen, its seconds along the objects' paths and the eye of its glossy radiance.
     shown_pose: Option<(u64, f32, glam::Vec3)>,
     error: Option<anyhow::Error>,
@@ -222,7 +222,7 @@ impl App {
             status: String::new(),
             lighting_ms: serde_json::Map::new(),
             live: None,
-            posed_frame: false,
+            posed_scene: None,
             shown_pose: None,
             error: None,
         }
@@ -247,6 +247,7 @@ impl App {
         };
         // The run in progress stops whatever follows.
         self.lighting = None;
+        self.shown_pose = None;
         self.next_run += 1;
         let proxy = self.proxy.clone();
         // The window may be closing; nothing is lost then.
@@ -256,8 +257,7 @@ impl App {
         self.lighting = Some(if self.prepared.density.is_some() {
             let live = LiveView::new(self.camera(self.render_size()).position);
             self.live = Some(live.clone());
-            self.posed_frame = false;
-            self.shown_pose = None;
+            self.posed_scene = Some(self.prepared.scene.clone());
             lighting::spawn_quasi_static(
                 self.next_run,
                 args,
@@ -268,6 +268,7 @@ impl App {
             )
         } else {
             self.live = None;
+            self.posed_scene = None;
             let Some(shown) = &self.shown else {
                 return;
             };
@@ -391,22 +392,22 @@ impl App {
         match event {
             LightingEvent::Pose {
                 run,
-                scene,
+                pose,
                 corners,
                 frame,
                 seconds,
                 eye,
                 update_ms,
             } => {
-                if self.lighting.as_ref().is_none_or(|l| l.id != run) {
+                if !self.is_current(run) {
                     return;
                 }
-                match self.show_pose(&scene, corners) {
+                match self.show_pose(&pose, corners) {
                     Ok(()) => {
                         let technique = self.prepared.density.map_or("", |d| d.name());
                         self.shown_photons = Some((self.args.render.photons, true));
                         self.shown_pose = Some((frame, seconds, eye));
-                        self.status = if scene.mobile_objects().is_empty() {
+                        self.status = if pose.is_empty() {
                             format!("{technique}: towards this eye in {update_ms:.0} ms")
                         } else {
                             format!(
@@ -428,7 +429,7 @@ impl App {
                 }
             }
             LightingEvent::Failed { run, message } => {
-                if self.lighting.as_ref().is_some_and(|l| l.id == run) {
+                if self.is_current(run) {
                     eprintln!("lustre: lighting failed: {message}");
                     self.status = format!("lighting failed: {message}");
                     self.lighting = None;
@@ -441,7 +442,7 @@ impl App {
                 stage,
                 timings,
             } => {
-                if self.lighting.as_ref().is_none_or(|l| l.id != run) {
+                if !self.is_current(run) {
                     return;
                 }
                 let last = stage.0 + 1 == stage.1;
@@ -473,13 +474,37 @@ impl App {
         self.request_redraw();
     }
 
-    /// A live run's pose: the frame built from it the first time, moved after.
+    /// Whether `run` is the lighting run in progress (older runs' events are dropped).
+    fn is_current(&self, run: u64) -> bool {
+        self.lighting.as_ref().is_some_and(|l| l.id == run)
+    }
+
+    /// A live run's pose: the live scene moved to it, and the frame built from it the first time, moved after.
     fn show_pose(
+        &mut self,
+        pose: &[(lustre_geometry::ObjectId, glam::Affine3A)],
+        corners: Vec<[f32; 3]>,
+    ) -> anyhow::Result<()> {
+        let mut scene = self
+            .posed_scene
+            .take()
+            .context("a pose without a live run")?;
+        let shown = pose
+            .iter()
+            .try_for_each(|&(object, transform)| scene.set_object_transform(object, transform))
+            .map_err(anyhow::Error::from)
+            .and_then(|()| self.show_posed_scene(&scene, corners));
+        self.posed_scene = Some(scene);
+        shown
+    }
+
+    /// The frame of `scene` in a live run's pose: built the first time, moved after.
+    fn show_posed_scene(
         &mut self,
         scene: &lustre_geometry::Scene,
         corners: Vec<[f32; 3]>,
     ) -> anyhow::Result<()> {
-        if self.posed_frame
+        if self.shown_pose.is_some()
             && let Some(gpu) = self.shown.as_mut().and_then(|s| s.gpu.as_mut())
         {
             return gpu.set_pose(scene, &corners);
@@ -494,9 +519,7 @@ impl App {
             }),
             ..Lit::unlit(&self.render_args())
         };
-        self.build_frame_of(scene, &lit)?;
-        self.posed_frame = self.shown.as_ref().is_some_and(|s| s.gpu.is_some());
-        Ok(())
+        self.build_frame_of(scene, &lit)
     }
 
     /// A GPU frame from `lit` at the image area's size.
