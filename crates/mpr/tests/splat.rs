@@ -248,6 +248,12 @@ fn check_scene(
         loss.abs() < mip_tolerance,
         "{test}: mip-mapped total off by {loss}"
     );
+    // And it is filtered: the footprints that straddle visible edges lose
+    // light (the pixel-centre pipeline would give the CPU's total exactly).
+    assert!(
+        loss > 0.005,
+        "{test}: mip-mapped total {loss} the same as the pixel centres'"
+    );
 
     if ctx.has_stencil() {
         let (stencil, _) = gpu_splats(
@@ -265,6 +271,23 @@ fn check_scene(
             "{test}: stencil vs surface id on {compared} pixels: worst {worst:.2e}, sum {sum_error:.2e}"
         );
         assert!(worst < 1e-4, "{test}: stencil vs id worst {worst}");
+        // The same with the mip-mapped kernel (each restriction's own
+        // mip-mapped fragment stage).
+        let (stencil_mip, _) = gpu_splats(
+            &ctx,
+            &scene,
+            &est,
+            Restriction::Stencil,
+            KernelFiltering::MipMapped,
+        );
+        let (compared, worst, sum_error) = compare(&stencil_mip, &mipmapped, &mask);
+        eprintln!(
+            "{test}: mip-mapped, stencil vs surface id on {compared} pixels: worst {worst:.2e}, sum {sum_error:.2e}"
+        );
+        assert!(
+            worst < 1e-4,
+            "{test}: mip-mapped stencil vs id worst {worst}"
+        );
     } else {
         eprintln!(
             "{test}: the device has no depth-stencil format; stencil restriction not compared"

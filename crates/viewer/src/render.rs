@@ -589,8 +589,8 @@ pub struct RenderArgs {
     /// splats (restricted by surface ids) fill a target 2, 4 or 8 times
     /// smaller per axis, which is then added at full resolution by a joint
     /// bilateral upsampling that never blends across surface ids (the splat
-    /// pass is fill-bound: glosbox's default 640x480 frame took 5.2 s at an
-    /// eighth against 62 s at full on the software driver, at the same
+    /// pass is fill-bound: glosbox's default 640x480 frame took 4.5 s at an
+    /// eighth against 32 s at full on the software driver, at the same
     /// error). `auto` picks from the splats' projected kernel size; surfaces
     /// thinner than the factor in pixels may get no splat light. Views
     /// through mirrors always splat at full resolution.

@@ -10,6 +10,7 @@
 //! ([`crate::passes::splat_lowres`]).
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
@@ -460,22 +461,33 @@ impl SplatBuffers {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct SplatUniforms {
-    /// `x`: 1 for [`KernelFiltering::MipMapped`], 0 for [`KernelFiltering::PixelCentre`]; `y`: 1 for [`Kernel::Gaussian`], 0 for Silverman's.
+    /// `x`: unused (the filtering is the pipeline's, see [`SplatPass::prepare`]); `y`: 1 for [`Kernel::Gaussian`], 0 for Silverman's.
     pub options: [u32; 4],
     /// `xy`: the NDC shift of the low-resolution splats (`vs_splat_low`), written by [`SplatPass::encode_at`]; `zw` unused.
     pub low_res_offset: [f32; 4],
 }
 
-/// The GPU splat pass: pipelines of both restriction methods, the kernel texture and the uniforms.
+/// The splat pipelines of one [`KernelFiltering`]: each restriction's fragment
+/// stage is compiled per filtering, not switched by a uniform (`splat.wgsl`
+/// says why: llvmpipe runs both sides of a uniform branch).
 #[derive(Debug)]
-pub struct SplatPass {
-    layout: wgpu::BindGroupLayout,
+struct FilteringPipelines {
     splat_id: wgpu::RenderPipeline,
     /// The surface-id restriction into a low-resolution target, without depth or stencil ([`SplatPass::encode_at`]).
     splat_low: wgpu::RenderPipeline,
+    splat_stencil: Option<wgpu::RenderPipeline>,
+}
+
+/// The GPU splat pass: pipelines of both restriction methods and both kernel filterings, the kernel texture and the uniforms.
+#[derive(Debug)]
+pub struct SplatPass {
+    layout: wgpu::BindGroupLayout,
+    centre: FilteringPipelines,
+    mip_mapped: FilteringPipelines,
+    /// The filtering of the last [`SplatPass::prepare`]: true for [`KernelFiltering::MipMapped`].
+    mip_mapped_prepared: AtomicBool,
     /// The guide and upsampling of low-resolution splats.
     lowres: SplatLowRes,
-    splat_stencil: Option<wgpu::RenderPipeline>,
     mask: Option<wgpu::RenderPipeline>,
     uniforms: wgpu::Buffer,
     kernel_view: wgpu::TextureView,
@@ -632,30 +644,27 @@ impl SplatPass {
             let splat_pipeline = |entry: &str, depth_stencil: Option<wgpu::DepthStencilState>| {
                 splat_pipeline_with("vs_splat", entry, depth_stencil)
             };
-            // Surface-id restriction under the view's stencil test (only the view's pixels).
-            let splat_id = splat_pipeline(
-                "fs_splat_id",
+            // Both restrictions under the view's stencil test (only the view's
+            // pixels); the surface-id one also at low resolution, against the
+            // low-resolution surface-id guide.
+            let under_view_stencil = || {
                 Some(wgpu::DepthStencilState {
                     format: depth_format,
                     depth_write_enabled: Some(false),
                     depth_compare: Some(wgpu::CompareFunction::Always),
                     stencil: view_stencil(),
                     bias: wgpu::DepthBiasState::default(),
-                }),
-            );
-            // The same restriction at low resolution, against the low-resolution surface-id guide.
-            let splat_low = splat_pipeline_with("vs_splat_low", "fs_splat_id", None);
-            let (splat_stencil, mask) = if has_stencil {
-                let splat_stencil = splat_pipeline(
-                    "fs_splat_stencil",
-                    Some(wgpu::DepthStencilState {
-                        format: depth_format,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Always),
-                        stencil: view_stencil(),
-                        bias: wgpu::DepthBiasState::default(),
-                    }),
-                );
+                })
+            };
+            let filtering_pipelines = |id_entry: &str, stencil_entry: &str| FilteringPipelines {
+                splat_id: splat_pipeline(id_entry, under_view_stencil()),
+                splat_low: splat_pipeline_with("vs_splat_low", id_entry, None),
+                splat_stencil: has_stencil
+                    .then(|| splat_pipeline(stencil_entry, under_view_stencil())),
+            };
+            let centre = filtering_pipelines("fs_splat_id", "fs_splat_stencil");
+            let mip_mapped = filtering_pipelines("fs_splat_id_mip", "fs_splat_stencil_mip");
+            let mask = if has_stencil {
                 let mask = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some("splat-mask"),
                     layout: Some(&mask_pipeline_layout),
@@ -691,9 +700,9 @@ impl SplatPass {
                     multiview_mask: None,
                     cache: None,
                 });
-                (Some(splat_stencil), Some(mask))
+                Some(mask)
             } else {
-                (None, None)
+                None
             };
             let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat-uniforms"),
@@ -715,10 +724,10 @@ impl SplatPass {
             });
             Self {
                 layout,
-                splat_id,
-                splat_low,
+                centre,
+                mip_mapped,
+                mip_mapped_prepared: AtomicBool::new(false),
                 lowres,
-                splat_stencil,
                 mask,
                 uniforms,
                 kernel_view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
@@ -733,15 +742,12 @@ impl SplatPass {
         self.mask.is_some()
     }
 
-    /// Writes the kernel filtering for the next [`SplatPass::encode`] (the camera comes from the view).
+    /// Sets the kernel filtering for the next [`SplatPass::encode`] (the camera comes from the view).
     pub fn prepare(&self, queue: &wgpu::Queue, filtering: KernelFiltering) {
+        self.mip_mapped_prepared
+            .store(filtering == KernelFiltering::MipMapped, Ordering::Relaxed);
         let uniforms = SplatUniforms {
-            options: [
-                u32::from(filtering == KernelFiltering::MipMapped),
-                u32::from(self.kernel == Kernel::Gaussian),
-                0,
-                0,
-            ],
+            options: [0, u32::from(self.kernel == Kernel::Gaussian), 0, 0],
             low_res_offset: [0.0; 4],
         };
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
@@ -764,18 +770,20 @@ impl SplatPass {
         slot: ViewSlot,
     ) -> Result<()> {
         let bind_group = self.bind_group(device, splats, &targets.surface_id.view);
+        let pipelines = self.prepared_pipelines();
         match restriction {
             Restriction::SurfaceId => {
                 let mut pass = begin(encoder, targets, None);
                 if splats.count > 0 {
-                    pass.set_pipeline(&self.splat_id);
+                    pass.set_pipeline(&pipelines.splat_id);
                     views.bind(&mut pass, 0, slot);
                     pass.set_bind_group(1, &bind_group, &[]);
                     draw_instances(&mut pass, splats, 0..splats.count);
                 }
             }
             Restriction::Stencil => {
-                let (Some(mask), Some(splat_stencil)) = (&self.mask, &self.splat_stencil) else {
+                let (Some(mask), Some(splat_stencil)) = (&self.mask, &pipelines.splat_stencil)
+                else {
                     return Err(MprError::InvalidSetting {
                         what: "splat restriction",
                         message: "the device has no depth format with stencil \
@@ -825,6 +833,15 @@ impl SplatPass {
         }
         Ok(())
     }
+    /// The pipelines of the filtering [`SplatPass::prepare`] set last.
+    fn prepared_pipelines(&self) -> &FilteringPipelines {
+        if self.mip_mapped_prepared.load(Ordering::Relaxed) {
+            &self.mip_mapped
+        } else {
+            &self.centre
+        }
+    }
+
     /// The splat bind group over `splats`, restricting by the surface ids in `surface_ids`.
     fn bind_group(
         &self,
@@ -959,7 +976,7 @@ impl SplatPass {
                     0.0,
                     1.0,
                 );
-                pass.set_pipeline(&self.splat_low);
+                pass.set_pipeline(&self.prepared_pipelines().splat_low);
                 views.bind(&mut pass, 0, slot);
                 pass.set_bind_group(1, &bind_group, &[]);
                 draw_instances(&mut pass, splats, 0..splats.count);

@@ -4,8 +4,8 @@
 // the photon (evaluated once per splat), times the kernel texture over h^2
 // (equation 2 with the 1/h^2 normalisation, see lustre-photon's estimator),
 // added into the HDR target. Each splat is restricted to the visible part of
-// its own surface either by the surface-id target (fs_splat_id) or by the
-// per-surface stencil mask of section 2.2 (fs_mask, then fs_splat_stencil).
+// its own surface either by the surface-id target (fs_splat_id*) or by the
+// per-surface stencil mask of section 2.2 (fs_mask, then fs_splat_stencil*).
 // Prepended: lustre-brdf's BRDF twins and common/material.wgsl.
 //
 // Notation
@@ -31,7 +31,7 @@
 // The texture covers k in [-1, 1]^2.
 
 struct SplatUniforms {
-    // x: 1 to filter the kernel texture with mip-maps and anisotropy (section 3.2), 0 to evaluate K at the pixel centre.
+    // x: unused (the filtering is the pipeline's fragment stage).
     // y: the kernel at the pixel centre: 0 Silverman, 1 truncated Gaussian (lustre-photon's Kernel).
     options: vec4u,
     // xy: vs_splat_low's NDC shift (-1/W, 1/H for a W x H frame), which puts each
@@ -164,7 +164,16 @@ fn splat_inside(k: vec2f) -> bool {
 // K averaged over the pixel's footprint: mip-mapped, anisotropic (section 3.2).
 // Must run in uniform control flow (implicit derivatives).
 fn splat_kernel_filtered(k: vec2f) -> f32 {
-    let value = textureSample(kernel_texture, kernel_sampler, 0.5 * (k + 1.0)).r;
+    let uv = 0.5 * (k + 1.0);
+    // Off the texture K is zero (the select below), so coordinates further
+    // than a texture's width off it are clamped there, and a lane's
+    // non-finite ones put at its centre: the perspective-correct offset of a
+    // quad's lanes beyond a splat seen nearly edge-on can be huge or not
+    // finite, and llvmpipe's anisotropic filter steps across all of the
+    // footprint that makes (a frame of minutes on some views before the
+    // clamp). Quads of ordinary splats keep their coordinates and derivatives.
+    let near_texture = select(vec2f(0.5), clamp(uv, vec2f(-1.0), vec2f(2.0)), abs(uv) < vec2f(1.0e30));
+    let value = textureSample(kernel_texture, kernel_sampler, near_texture).r;
     return select(0.0, value, splat_inside(k));
 }
 
@@ -210,35 +219,51 @@ fn splat_mass(surface: u32, world: vec3f) -> f32 {
     return max(m, MIN_MASS);
 }
 
-// Surface-id restriction: the splat adds only where its own surface is visible.
-// The filtering choice is uniform, so the mip-mapped branch may use derivatives;
-// the centre branch rejects other surfaces before it reads the texture.
+// The four fragment stages are the two restrictions times the two
+// filterings (SplatPass builds a pipeline for each): the filtering is chosen
+// per pipeline, not by a uniform, because llvmpipe runs both sides of a
+// branch on a uniform under a lane mask, so a pixel-centre splat paid for the
+// anisotropic textureSample it never used. Its filter loop steps across the
+// footprint the derivatives give; on some views that made the splat pass
+// hundreds of times slower (BENCHMARKS.md, the notes after the walkthrough).
+
+// Surface-id restriction, the kernel at the pixel centre: the splat adds only
+// where its own surface is visible.
 @fragment
 fn fs_splat_id(in: VertexOutput) -> @location(0) vec4f {
     let visible = textureLoad(surface_ids, vec2i(in.clip.xy), 0).r;
-    if uniforms.options.x != 0u {
-        let value = splat_kernel_filtered(in.kernel);
-        if visible != in.surface {
-            discard;
-        }
-        return vec4f(in.colour * value / splat_mass(in.surface, in.world), 0.0);
-    }
     if visible != in.surface || !splat_inside(in.kernel) {
         discard;
     }
     return vec4f(in.colour * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
-// Stencil restriction: the stencil test has already limited the splat to its surface's mask.
+// Surface-id restriction, the kernel mip-mapped: sampled in uniform control
+// flow (implicit derivatives), before the restriction discards.
+@fragment
+fn fs_splat_id_mip(in: VertexOutput) -> @location(0) vec4f {
+    let visible = textureLoad(surface_ids, vec2i(in.clip.xy), 0).r;
+    let value = splat_kernel_filtered(in.kernel);
+    if visible != in.surface {
+        discard;
+    }
+    return vec4f(in.colour * value / splat_mass(in.surface, in.world), 0.0);
+}
+
+// Stencil restriction, the kernel at the pixel centre: the stencil test has
+// already limited the splat to its surface's mask.
 @fragment
 fn fs_splat_stencil(in: VertexOutput) -> @location(0) vec4f {
-    if uniforms.options.x != 0u {
-        return vec4f(in.colour * splat_kernel_filtered(in.kernel) / splat_mass(in.surface, in.world), 0.0);
-    }
     if !splat_inside(in.kernel) {
         discard;
     }
     return vec4f(in.colour * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
+}
+
+// Stencil restriction, the kernel mip-mapped.
+@fragment
+fn fs_splat_stencil_mip(in: VertexOutput) -> @location(0) vec4f {
+    return vec4f(in.colour * splat_kernel_filtered(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
 // The per-surface stencil mask: the surface's triangles drawn with an equal-depth
