@@ -341,11 +341,13 @@ impl<'a> PhotonTracer<'a> {
         } else {
             -1.0
         };
-        let origin = if source.is_delta() {
-            e.position
-        } else {
-            e.position + side * self.epsilon * e.normal
-        };
+        // Off the emitting surface, point lights too: the cosine point light
+        // that replaces an area light (Scene::with_area_lights_as_points) sits
+        // on its emitter, which stays as geometry, and a photon leaving it
+        // from the surface itself hit it at t = 0 and was trapped between the
+        // emitter and the ceiling (a fifth too little light with
+        // `--light-samples 1` before this offset).
+        let origin = e.position + side * self.epsilon * e.normal;
         let mut ray = Ray::new(origin, e.direction);
         for bounce in 1..=options.max_bounces {
             let Some(hit) = self.bvh.closest_hit(&ray) else {

@@ -132,6 +132,52 @@ fn first_bounce_power_equals_light_power_minus_escape() {
     }
 }
 
+/// The same with cornell's light replaced by its cosine point light at the
+/// centroid (section 3): the point sits on the emitter, which stays as
+/// geometry, and its photons must leave it, not hit it at t = 0 (they did,
+/// and were trapped between the emitter and the ceiling).
+#[test]
+fn point_light_photons_leave_their_emitter() {
+    let scene = builtin("cornell")
+        .unwrap()
+        .with_area_lights_as_points()
+        .unwrap();
+    let bvh = Bvh::build(&scene);
+    let n = 100_000u64;
+    let options = TraceOptions {
+        photons: n,
+        seed: 11,
+        ..TraceOptions::default()
+    };
+    let map = trace_photons(&scene, &bvh, &options, &NoProgress).unwrap();
+    let phi = scene.total_power();
+    let first = map.power_by_bounce()[0];
+    // The brute-force count from the light's centroid alone.
+    let f = cornell_escape_fraction(1, 512);
+    let sigma = (f * (1.0 - f) / n as f64).sqrt();
+    for c in 0..3 {
+        let expected = f64::from(phi[c]) * (1.0 - f);
+        let got = f64::from(first[c]);
+        let tolerance = f64::from(phi[c]) * (5.0 * sigma + 1e-3);
+        eprintln!(
+            "channel {c}: first-bounce power {got:.4} W, expected {expected:.4} W (escape fraction {f:.5}, tolerance {tolerance:.4})"
+        );
+        assert!((got - expected).abs() <= tolerance);
+    }
+    // And no photon's first hit is its emitter, which lies in the plane it
+    // leaves from (later bounces may reach the emitter's face from below).
+    let emitter = |s: u32| {
+        let material = scene.surfaces()[s as usize].material;
+        scene.materials()[material as usize].emission.max_element() > 0.0
+    };
+    let first_on_emitter = map
+        .records()
+        .iter()
+        .filter(|r| r.bounce == 1 && emitter(r.surface))
+        .count();
+    assert_eq!(first_on_emitter, 0, "first hits on the emitter");
+}
+
 #[test]
 fn white_furnace_power_per_bounce_is_geometric() {
     for albedo in [Rgb::splat(0.5), Rgb::new(0.8, 0.5, 0.2)] {
