@@ -479,26 +479,40 @@ impl DirectLights {
 /// The line of `direct.wgsl` that switches the shadow-map lookup on.
 const SHADOW_MAPS_ON: &str = "const SHADOW_MAPS: bool = true;";
 
-/// `direct.wgsl` without the shadow-map lookup (`V = 1`), for lights drawn
-/// under the stencil of shadow volumes (Diefenbach & Badler 1997, section 4.1).
-pub fn direct_unshadowed_wgsl() -> Result<String> {
-    let source = direct_wgsl();
-    if !source.contains(SHADOW_MAPS_ON) {
+/// The line of `direct.wgsl` that switches the window's projective texture on.
+const WINDOWS_ON: &str = "const WINDOWS: bool = true;";
+
+/// `direct.wgsl` with `line` (one of its switches) set to `false`: without
+/// [`SHADOW_MAPS_ON`] `V = 1`, for lights drawn under the stencil of shadow
+/// volumes (Diefenbach & Badler 1997, section 4.1); without [`WINDOWS_ON`]
+/// for lights that pass no window.
+fn switched_off(source: String, line: &str) -> Result<String> {
+    if !source.contains(line) {
         return Err(MprError::InvalidSetting {
             what: "direct pass",
-            message: format!("direct.wgsl lacks the line `{SHADOW_MAPS_ON}`"),
+            message: format!("direct.wgsl lacks the line `{line}`"),
         });
     }
-    Ok(source.replace(SHADOW_MAPS_ON, "const SHADOW_MAPS: bool = false;"))
+    Ok(source.replace(line, &line.replace("true", "false")))
+}
+
+/// The pipelines of one window switch: shadow-mapped, and under the
+/// shadow volumes' stencil.
+#[derive(Debug)]
+struct DirectPipelines {
+    shadow_mapped: wgpu::RenderPipeline,
+    /// The same redraw without the shadow-map lookup, drawn where the stencil
+    /// equals `SHAD_ZERO` (Diefenbach & Badler 1997, sections 4.1 and 7.2).
+    under_stencil: wgpu::RenderPipeline,
 }
 
 /// The GPU direct light pass: its pipelines, light layout and shadow pass.
 #[derive(Debug)]
 pub struct DirectPass {
-    pipeline: wgpu::RenderPipeline,
-    /// The same redraw without the shadow-map lookup, drawn where the stencil
-    /// equals `SHAD_ZERO` (Diefenbach & Badler 1997, sections 4.1 and 7.2).
-    lit_under_stencil: wgpu::RenderPipeline,
+    /// For lights that pass a window (section 4.5).
+    windowed: DirectPipelines,
+    /// For the others: compiled without the window's projective texture.
+    unwindowed: DirectPipelines,
     light_layout: wgpu::BindGroupLayout,
     shadow_sampler: wgpu::Sampler,
     /// A one-texel white array texture bound where no light has a window.
@@ -519,11 +533,16 @@ impl DirectPass {
             });
         }
         let shadow = ShadowPass::new(ctx)?;
-        let unshadowed = direct_unshadowed_wgsl()?;
+        let windowed_source = direct_wgsl();
+        let unwindowed_source = switched_off(direct_wgsl(), WINDOWS_ON)?;
+        let sources = [
+            switched_off(windowed_source.clone(), SHADOW_MAPS_ON)?,
+            windowed_source,
+            switched_off(unwindowed_source.clone(), SHADOW_MAPS_ON)?,
+            unwindowed_source,
+        ];
         ctx.checked("direct pass creation", || {
             let device = &ctx.device;
-            let module = scene_module(ctx, "direct", &direct_wgsl());
-            let unshadowed_module = scene_module(ctx, "direct-under-stencil", &unshadowed);
             let light_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("direct-light"),
@@ -586,32 +605,32 @@ impl DirectPass {
                         },
                     ],
                 });
-            let pipeline = scene_pipeline(
-                ctx,
-                &ScenePipeline {
-                    label: "direct",
-                    module: &module,
-                    layouts: &[&light_layout],
-                    extra_vertex_buffers: &[],
-                    target: additive_target(hdr_format),
-                    depth_compare: wgpu::CompareFunction::Equal,
-                    depth_write: false,
-                },
-            );
-            // The same stencil state (Equal, no writes); its reference is
-            // SHAD_ZERO instead of the view's, set after the view is bound.
-            let lit_under_stencil = scene_pipeline(
-                ctx,
-                &ScenePipeline {
-                    label: "direct-under-stencil",
-                    module: &unshadowed_module,
-                    layouts: &[&light_layout],
-                    extra_vertex_buffers: &[],
-                    target: additive_target(hdr_format),
-                    depth_compare: wgpu::CompareFunction::Equal,
-                    depth_write: false,
-                },
-            );
+            let pipelines = |under_stencil: &str, shadow_mapped: &str| {
+                let pipeline = |label: &'static str, source: &str| {
+                    let module = scene_module(ctx, label, source);
+                    scene_pipeline(
+                        ctx,
+                        &ScenePipeline {
+                            label,
+                            module: &module,
+                            layouts: &[&light_layout],
+                            extra_vertex_buffers: &[],
+                            target: additive_target(hdr_format),
+                            depth_compare: wgpu::CompareFunction::Equal,
+                            depth_write: false,
+                        },
+                    )
+                };
+                // Under the stencil: the same stencil state (Equal, no
+                // writes); its reference is SHAD_ZERO instead of the view's,
+                // set after the view is bound.
+                DirectPipelines {
+                    under_stencil: pipeline("direct-under-stencil", under_stencil),
+                    shadow_mapped: pipeline("direct", shadow_mapped),
+                }
+            };
+            let windowed = pipelines(&sources[0], &sources[1]);
+            let unwindowed = pipelines(&sources[2], &sources[3]);
             let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("shadow-nearest"),
                 ..Default::default()
@@ -630,8 +649,8 @@ impl DirectPass {
                 &[vec![[1.0; 4]]],
             );
             Self {
-                pipeline,
-                lit_under_stencil,
+                windowed,
+                unwindowed,
                 light_layout,
                 shadow_sampler,
                 no_windows,
@@ -676,12 +695,13 @@ impl DirectPass {
         if scene.vertex_count == 0 || lights.is_empty() {
             return;
         }
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.pipelines(&lights.slots[0]).shadow_mapped);
         if !views.bind_in(&mut pass, 0, slot, targets) {
             return;
         }
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         for slot in &lights.slots {
+            pass.set_pipeline(&self.pipelines(slot).shadow_mapped);
             pass.set_bind_group(1, &slot.bind_group, &[]);
             pass.draw(0..scene.vertex_count, 0..1);
         }
@@ -689,6 +709,15 @@ impl DirectPass {
 }
 
 impl DirectPass {
+    /// The pipelines for `light`: without the window's texture unless it passes one.
+    fn pipelines(&self, light: &LightSlot) -> &DirectPipelines {
+        if light.light.get().window.u[3] >= 0.0 {
+            &self.windowed
+        } else {
+            &self.unwindowed
+        }
+    }
+
     /// Records the direct light of light `light_index` alone, without its
     /// shadow map, where the stencil equals [`SHAD_ZERO`] (Diefenbach &
     /// Badler 1997, sections 4.1 and 7.2: a light is added only where the
@@ -714,7 +743,7 @@ impl DirectPass {
         if scene.vertex_count == 0 {
             return Ok(());
         }
-        pass.set_pipeline(&self.lit_under_stencil);
+        pass.set_pipeline(&self.pipelines(light).under_stencil);
         views.bind(pass, 0, slot);
         pass.set_stencil_reference(SHAD_ZERO);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
@@ -758,7 +787,7 @@ impl DirectPass {
         if ranges.is_empty() {
             return Ok(());
         }
-        pass.set_pipeline(&self.lit_under_stencil);
+        pass.set_pipeline(&self.pipelines(light).under_stencil);
         views.bind(pass, 0, slot);
         pass.set_stencil_reference(SHAD_ZERO);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));

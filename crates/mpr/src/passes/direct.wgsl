@@ -31,6 +31,12 @@ const LIGHT_SPOT: u32 = 2u;
 // stencil test alone decides visibility, V = 1 wherever it passes.
 const SHADOW_MAPS: bool = true;
 
+// Whether the light may pass a window (section 4.5). Lights without one use
+// the variant compiled with `false` (direct.rs replaces this exact line):
+// llvmpipe runs both sides of a branch on a uniform under a lane mask, so
+// every fragment paid for the window's projective texture otherwise.
+const WINDOWS: bool = true;
+
 // One point light and its shadow-map lookup parameters (GpuLight in direct.rs).
 struct DirectLight {
     position: vec3f,
@@ -192,8 +198,10 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
         return vec4f(0.0);
     }
     var intensity = light_intensity(-wi_world);
-    if light.window.u.w >= 0.0 {
-        intensity *= window_transmission(in.world);
+    if WINDOWS {
+        if light.window.u.w >= 0.0 {
+            intensity *= window_transmission(in.world);
+        }
     }
     if all(intensity == vec3f(0.0)) {
         return vec4f(0.0);
