@@ -6,8 +6,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{Mat3, Vec2, Vec3};
 use lustre_geometry::sampling::sample_cosine_hemisphere;
-use lustre_geometry::{Bvh, Rgb, builtin};
-use lustre_photon::{EmissionSampling, NoProgress, PhotonTracer, TraceOptions, trace_photons};
+use lustre_geometry::{Bvh, Rgb, Scene, builtin};
+use lustre_photon::{
+    EmissionSampling, NoProgress, PhotonMap, PhotonTracer, TraceOptions, trace_photons,
+};
 
 /// Slab test of a ray against the unit cube [-1, 1]³ after the inverse of `x -> m x + t`: distance of entry, if any.
 fn hit_oriented_cube(origin: Vec3, dir: Vec3, m: Mat3, t: Vec3) -> Option<f32> {
@@ -105,20 +107,20 @@ fn cornell_escape_fraction(n_pos: usize, n_dir: usize) -> f64 {
     escaped as f64 / total as f64
 }
 
-#[test]
-fn first_bounce_power_equals_light_power_minus_escape() {
-    let scene = builtin("cornell").unwrap();
-    let bvh = Bvh::build(&scene);
+/// Traces 100,000 photons through `scene` (cornell or its point-lit twin)
+/// and holds the first bounce's power to the light's minus the fraction `f`
+/// that escapes through the open front on its first flight.
+fn check_first_bounce_power(scene: &Scene, f: f64) -> PhotonMap {
+    let bvh = Bvh::build(scene);
     let n = 100_000u64;
     let options = TraceOptions {
         photons: n,
         seed: 11,
         ..TraceOptions::default()
     };
-    let map = trace_photons(&scene, &bvh, &options, &NoProgress).unwrap();
+    let map = trace_photons(scene, &bvh, &options, &NoProgress).unwrap();
     let phi = scene.total_power();
     let first = map.power_by_bounce()[0];
-    let f = cornell_escape_fraction(16, 96);
     // Binomial standard deviation of the escaped fraction; 5 sigma plus the brute-force count's stratification error (generous 1e-3).
     let sigma = (f * (1.0 - f) / n as f64).sqrt();
     for c in 0..3 {
@@ -130,6 +132,13 @@ fn first_bounce_power_equals_light_power_minus_escape() {
         );
         assert!((got - expected).abs() <= tolerance);
     }
+    map
+}
+
+#[test]
+fn first_bounce_power_equals_light_power_minus_escape() {
+    let scene = builtin("cornell").unwrap();
+    check_first_bounce_power(&scene, cornell_escape_fraction(16, 96));
 }
 
 /// The same with cornell's light replaced by its cosine point light at the
@@ -142,28 +151,8 @@ fn point_light_photons_leave_their_emitter() {
         .unwrap()
         .with_area_lights_as_points()
         .unwrap();
-    let bvh = Bvh::build(&scene);
-    let n = 100_000u64;
-    let options = TraceOptions {
-        photons: n,
-        seed: 11,
-        ..TraceOptions::default()
-    };
-    let map = trace_photons(&scene, &bvh, &options, &NoProgress).unwrap();
-    let phi = scene.total_power();
-    let first = map.power_by_bounce()[0];
     // The brute-force count from the light's centroid alone.
-    let f = cornell_escape_fraction(1, 512);
-    let sigma = (f * (1.0 - f) / n as f64).sqrt();
-    for c in 0..3 {
-        let expected = f64::from(phi[c]) * (1.0 - f);
-        let got = f64::from(first[c]);
-        let tolerance = f64::from(phi[c]) * (5.0 * sigma + 1e-3);
-        eprintln!(
-            "channel {c}: first-bounce power {got:.4} W, expected {expected:.4} W (escape fraction {f:.5}, tolerance {tolerance:.4})"
-        );
-        assert!((got - expected).abs() <= tolerance);
-    }
+    let map = check_first_bounce_power(&scene, cornell_escape_fraction(1, 512));
     // And no photon's first hit is its emitter, which lies in the plane it
     // leaves from (later bounces may reach the emitter's face from below).
     let emitter = |s: u32| {

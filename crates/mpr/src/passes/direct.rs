@@ -533,14 +533,13 @@ impl DirectPass {
             });
         }
         let shadow = ShadowPass::new(ctx)?;
-        let windowed_source = direct_wgsl();
-        let unwindowed_source = switched_off(direct_wgsl(), WINDOWS_ON)?;
-        let sources = [
-            switched_off(windowed_source.clone(), SHADOW_MAPS_ON)?,
-            windowed_source,
-            switched_off(unwindowed_source.clone(), SHADOW_MAPS_ON)?,
-            unwindowed_source,
-        ];
+        // Each window switch's sources: (under the stencil, shadow-mapped).
+        let with_and_without_shadow_maps = |source: String| {
+            Ok::<_, MprError>((switched_off(source.clone(), SHADOW_MAPS_ON)?, source))
+        };
+        let windowed_sources = with_and_without_shadow_maps(direct_wgsl())?;
+        let unwindowed_sources =
+            with_and_without_shadow_maps(switched_off(direct_wgsl(), WINDOWS_ON)?)?;
         ctx.checked("direct pass creation", || {
             let device = &ctx.device;
             let light_layout =
@@ -605,7 +604,7 @@ impl DirectPass {
                         },
                     ],
                 });
-            let pipelines = |under_stencil: &str, shadow_mapped: &str| {
+            let pipelines = |(under_stencil, shadow_mapped): &(String, String)| {
                 let pipeline = |label: &'static str, source: &str| {
                     let module = scene_module(ctx, label, source);
                     scene_pipeline(
@@ -629,8 +628,8 @@ impl DirectPass {
                     shadow_mapped: pipeline("direct", shadow_mapped),
                 }
             };
-            let windowed = pipelines(&sources[0], &sources[1]);
-            let unwindowed = pipelines(&sources[2], &sources[3]);
+            let windowed = pipelines(&windowed_sources);
+            let unwindowed = pipelines(&unwindowed_sources);
             let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("shadow-nearest"),
                 ..Default::default()
@@ -695,7 +694,6 @@ impl DirectPass {
         if scene.vertex_count == 0 || lights.is_empty() {
             return;
         }
-        pass.set_pipeline(&self.pipelines(&lights.slots[0]).shadow_mapped);
         if !views.bind_in(&mut pass, 0, slot, targets) {
             return;
         }
