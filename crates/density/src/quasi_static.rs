@@ -1,6 +1,7 @@
 //! The quasi-static loop of section 2: a first frame traced and estimated in full (figures 2.1 and 2.3), then, each time the mobile objects move, the ray set recalculated (figure 2.2) and the irradiance updated incrementally on static vertices (equations 2.4–2.15; figure 2.4 for Impact Count) and in full on the mobile objects' vertices (section 2.5.2).
 
-use std::sync::{Mutex, PoisonError};
+use std::borrow::Cow;
+use std::sync::{Mutex, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, DVec3, Vec3};
@@ -14,11 +15,12 @@ use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reacha
 use crate::detp::{Disc, segment_meets_box};
 use crate::error::{DensityError, Result};
 use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
+use crate::path_cells::PathCells;
 use crate::points::{EstimationPoint, EstimationPoints};
 use crate::radiance::{ImpactMap, TriangleImpacts};
 use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
 use crate::triangle_grid::TriangleGrid;
-use crate::update::{RayUpdate, update_ray_set};
+use crate::update::{RayUpdate, update_ray_set_where};
 use crate::world::World;
 
 /// The density estimator a [`QuasiStatic`] keeps up to date (section 3.3).
@@ -206,6 +208,11 @@ pub struct QuasiStatic {
     disc_sets: Option<(DiscSet, DiscSet)>,
     /// The static glossy vertices' lobe radiance towards the last eye.
     lobe_cache: LobeCache,
+    /// The cells each path passes, so that a frame visits only the paths near the mobile objects (beyond the paper).
+    paths: PathCells,
+    /// The static scene's triangles binned for the reachable areas of artifact control (section 1.2.1), per disc
+    /// radius (the points' and the glossy vertices'), built on first use: the static scene never moves.
+    static_grids: [OnceLock<(f32, TriangleGrid)>; 2],
 }
 
 impl QuasiStatic {
@@ -268,6 +275,7 @@ impl QuasiStatic {
         let photosimulation = t0.elapsed();
         let points = EstimationPoints::new(&scene, &world);
         let slack = crate::accel::scene_slack(&scene);
+        let paths = PathCells::new(scene.bounds(), slack, &rays);
         let state = match options.estimator {
             Estimator::ImpactCount => State::ImpactCount {
                 power: Vec::new(),
@@ -296,6 +304,8 @@ impl QuasiStatic {
             impact_map: None,
             disc_sets: None,
             lobe_cache: LobeCache::default(),
+            paths,
+            static_grids: Default::default(),
         };
         let t1 = Instant::now();
         if let State::Detp { radius, .. } = sim.state {
@@ -370,8 +380,20 @@ impl QuasiStatic {
             self.scene.set_object_transform(object, transform)?;
         }
         let t0 = Instant::now();
+        let before = self.world.mobile_bounds();
         self.world.move_mobile(&self.scene);
-        let update = update_ray_set(&self.scene, &self.world, &mut self.rays, &self.options.rays)?;
+        // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2).
+        let moved = before.union(self.world.mobile_bounds());
+        let region = self.paths.region(moved.min, moved.max);
+        let paths = &self.paths;
+        let update = update_ray_set_where(
+            &self.scene,
+            &self.world,
+            &mut self.rays,
+            &self.options.rays,
+            &|i| paths.may_meet(i, &region),
+        )?;
+        self.paths.refresh(&self.rays, &update.primaries);
         let photosimulation = t0.elapsed();
         let t1 = Instant::now();
         self.points.move_mobile(&self.scene);
@@ -529,14 +551,19 @@ impl QuasiStatic {
             }
             moving.update_discs(&discs)?;
         }
-        // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds nothing); gathered in parallel, in order.
+        // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds
+        // nothing), from the paths whose cells meet the box; gathered in parallel, in order.
         let all: Vec<RaySegment> = match (&self.state, region) {
             (State::Detp { .. }, Some((lo, hi))) => {
                 let slack = self.slack;
+                let cells = self.paths.region(lo, hi);
+                let paths = &self.paths;
                 self.rays
                     .rays
                     .par_iter()
-                    .flat_map_iter(|r| {
+                    .enumerate()
+                    .filter(|(i, _)| paths.may_meet(*i, &cells))
+                    .flat_map_iter(|(_, r)| {
                         r.segments
                             .iter()
                             .filter(move |s| segment_meets_box(s, slack, lo, hi))
@@ -596,7 +623,7 @@ impl QuasiStatic {
             && !meshes.is_empty()
         {
             let bvh = self.world.static_scene_bvh(&self.scene);
-            let grid = TriangleGrid::new(bvh, 2.0 * radius);
+            let grid = self.static_grid(1, radius);
             let mut areas: Vec<Vec<f32>> = vec![Vec::new(); self.scene.meshes().len()];
             for &m in &meshes {
                 let own = mesh_triangles(&self.scene, m);
@@ -694,7 +721,7 @@ impl QuasiStatic {
             return Ok(vec![full; range.len()]);
         };
         let bvh = self.world.static_scene_bvh(&self.scene);
-        let grid = TriangleGrid::new(bvh, 2.0 * radius);
+        let grid = self.static_grid(0, radius);
         // Each point's inward direction (border vertices), from the first vertex that maps to it.
         let mut inward: Vec<Option<Vec3>> = vec![None; range.len()];
         for (m, mesh) in self.scene.meshes().iter().enumerate() {
@@ -727,6 +754,19 @@ impl QuasiStatic {
                 Ok(area as f64)
             })
             .collect()
+    }
+
+    /// The static scene's [`TriangleGrid`] for discs of `radius`, from cache `slot` (0: the points', 1: the glossy
+    /// vertices'), which keeps the first one built; a fresh grid when the slot holds another radius.
+    fn static_grid(&self, slot: usize, radius: f32) -> Cow<'_, TriangleGrid> {
+        let bvh = self.world.static_scene_bvh(&self.scene);
+        let (cached, grid) =
+            self.static_grids[slot].get_or_init(|| (radius, TriangleGrid::new(bvh, 2.0 * radius)));
+        if *cached == radius {
+            Cow::Borrowed(grid)
+        } else {
+            Cow::Owned(TriangleGrid::new(bvh, 2.0 * radius))
+        }
     }
 
     /// Discs at the estimation points `range`.

@@ -16,6 +16,8 @@ pub struct RayUpdate {
     pub new: Vec<RaySegment>,
     /// Number of primary rays with a recalculated path.
     pub recalculated: usize,
+    /// The indices of those primary rays (into `RaySet::rays`), ascending.
+    pub primaries: Vec<usize>,
 }
 
 /// Updates a ray set traced with [`crate::trace_ray_set_in`] after the world's mobile objects moved (figure 2.2). `world` must already hold the new pose ([`World::move_mobile`]) and `options` must be those of the first trace, so that the result equals a full trace of the new pose.
@@ -25,6 +27,19 @@ pub fn update_ray_set(
     rays: &mut RaySet,
     options: &RaySetOptions,
 ) -> Result<RayUpdate> {
+    update_ray_set_where(scene, world, rays, options, &|_| true)
+}
+
+/// [`update_ray_set`] visiting only the primary rays `visit` accepts (by index): the others must be paths none of
+/// whose segments hit the mobile objects before their move or meet them after it, such as those a
+/// [`crate::path_cells::PathCells`] region round both poses rules out (beyond the paper: figure 2.2 visits every ray).
+pub fn update_ray_set_where(
+    scene: &Scene,
+    world: &World,
+    rays: &mut RaySet,
+    options: &RaySetOptions,
+    visit: &(dyn Fn(usize) -> bool + Sync),
+) -> Result<RayUpdate> {
     let tracer = Tracer::new(
         scene,
         world,
@@ -32,10 +47,12 @@ pub fn update_ray_set(
         world.epsilon(),
         options,
     )?;
-    let changed: Vec<(Vec<RaySegment>, Vec<RaySegment>)> = rays
+    let changed: Vec<(usize, Vec<RaySegment>, Vec<RaySegment>)> = rays
         .rays
         .par_iter_mut()
-        .filter_map(|primary| {
+        .enumerate()
+        .filter(|(i, _)| visit(*i))
+        .filter_map(|(i, primary)| {
             let k = primary
                 .segments
                 .iter()
@@ -52,14 +69,15 @@ pub fn update_ray_set(
                 &mut primary.segments,
             );
             let new = primary.segments[k..].to_vec();
-            Some((old, new))
+            Some((i, old, new))
         })
         .collect();
     let mut update = RayUpdate {
         recalculated: changed.len(),
         ..Default::default()
     };
-    for (old, new) in changed {
+    for (i, old, new) in changed {
+        update.primaries.push(i);
         update.old.extend(old);
         update.new.extend(new);
     }

@@ -202,6 +202,11 @@ impl World {
             .unwrap_or(false)
     }
 
+    /// The box of the mobile objects at their current pose (empty without any).
+    pub fn mobile_bounds(&self) -> Aabb {
+        self.mobile_part.bounds
+    }
+
     /// Whether any mesh is mobile.
     pub fn has_mobile(&self) -> bool {
         !self.mobile_part.ids.is_empty()
