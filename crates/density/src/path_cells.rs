@@ -160,7 +160,8 @@ impl PathCells {
             // A zero direction: the segment is its origin.
             t1 = t0;
         }
-        // Pieces no longer than the smallest cell edge, each marked by its padded box.
+        // Pieces no longer than the smallest cell edge (at most 32: longer ones in a very flat grid), each marked by
+        // its padded box.
         let step = self.cell.min_element();
         let pieces = (((t1 - t0) / step).ceil() as usize).clamp(1, 4 * CELLS_PER_AXIS);
         let mut a = o + t0 * d;
