@@ -208,8 +208,9 @@ pub struct QuasiStatic {
     disc_sets: Option<(DiscSet, DiscSet)>,
     /// The static glossy vertices' lobe radiance towards the last eye.
     lobe_cache: LobeCache,
-    /// The cells each path passes, so that a frame visits only the paths near the mobile objects (beyond the paper).
-    paths: PathCells,
+    /// The cells each path passes, so that a frame visits only the paths near the mobile objects (beyond the paper);
+    /// `None` without mobile objects, whose simulation never moves.
+    paths: Option<PathCells>,
     /// The static scene's triangles binned for the reachable areas of artifact control (section 1.2.1), per disc
     /// radius (the points' and the glossy vertices'), built on first use: the static scene never moves.
     static_grids: [OnceLock<(f32, TriangleGrid)>; 2],
@@ -275,7 +276,9 @@ impl QuasiStatic {
         let photosimulation = t0.elapsed();
         let points = EstimationPoints::new(&scene, &world);
         let slack = crate::accel::scene_slack(&scene);
-        let paths = PathCells::new(scene.bounds(), slack, &rays);
+        let paths = world
+            .has_mobile()
+            .then(|| PathCells::new(scene.bounds(), slack, &rays));
         let state = match options.estimator {
             Estimator::ImpactCount => State::ImpactCount {
                 power: Vec::new(),
@@ -384,16 +387,16 @@ impl QuasiStatic {
         self.world.move_mobile(&self.scene);
         // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2).
         let moved = before.union(self.world.mobile_bounds());
-        let region = self.paths.region(moved.min, moved.max);
-        let paths = &self.paths;
         let update = update_ray_set_where(
             &self.scene,
             &self.world,
             &mut self.rays,
             &self.options.rays,
-            &|i| paths.may_meet(i, &region),
+            &path_filter(self.paths.as_ref(), moved.min, moved.max),
         )?;
-        self.paths.refresh(&self.rays, &update.primaries);
+        if let Some(paths) = &mut self.paths {
+            paths.refresh(&self.rays, &update.primaries);
+        }
         let photosimulation = t0.elapsed();
         let t1 = Instant::now();
         self.points.move_mobile(&self.scene);
@@ -556,13 +559,12 @@ impl QuasiStatic {
         let all: Vec<RaySegment> = match (&self.state, region) {
             (State::Detp { .. }, Some((lo, hi))) => {
                 let slack = self.slack;
-                let cells = self.paths.region(lo, hi);
-                let paths = &self.paths;
+                let visit = path_filter(self.paths.as_ref(), lo, hi);
                 self.rays
                     .rays
                     .par_iter()
                     .enumerate()
-                    .filter(|(i, _)| paths.may_meet(*i, &cells))
+                    .filter(|(i, _)| visit(*i))
                     .flat_map_iter(|(_, r)| {
                         r.segments
                             .iter()
@@ -849,6 +851,21 @@ fn add_impacts<'a>(power: &mut [DVec3], segments: impl Iterator<Item = &'a RaySe
         {
             *p += sign * s.power.as_dvec3();
         }
+    }
+}
+
+/// Whether each path (by index into the ray set) may pass through the box `lo..=hi`, by its cells in `paths`;
+/// every path when there are no masks.
+fn path_filter(
+    paths: Option<&PathCells>,
+    lo: Vec3,
+    hi: Vec3,
+) -> impl Fn(usize) -> bool + Sync + '_ {
+    let cells = paths.map(|p| (p, p.region(lo, hi)));
+    move |i| {
+        cells
+            .as_ref()
+            .is_none_or(|(p, region)| p.may_meet(i, region))
     }
 }
 
