@@ -69,9 +69,15 @@ pub fn material_module() -> String {
     format!("{}\n{MATERIAL_WGSL}", lustre_brdf::shaders::BRDF_WGSL)
 }
 
-/// `pass` (a pass's own WGSL) after [`material_module`].
+/// The BRDF of a material in a pass's storage array `materials`, its lobe slots written out (`src/shaders/common/material_storage.wgsl`); after [`material_module`], in a pass that declares `materials`.
+pub const MATERIAL_STORAGE_WGSL: &str = include_str!("shaders/common/material_storage.wgsl");
+
+// `material_storage.wgsl` writes out exactly four lobe slots.
+const _: () = assert!(crate::material::MAX_LOBES == 4);
+
+/// `pass` (a pass's own WGSL, which declares the storage array `materials: array<GpuMaterial>`) after [`material_module`] and [`MATERIAL_STORAGE_WGSL`].
 pub fn with_materials(pass: &str) -> String {
-    format!("{}\n{pass}", material_module())
+    format!("{}\n{MATERIAL_STORAGE_WGSL}\n{pass}", material_module())
 }
 
 /// The direct light pass as compiled: [`DIRECT_WGSL`] after [`material_module`].
@@ -85,6 +91,13 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
     vec![
         ("shaders/common/color.wgsl", COLOR_WGSL.to_owned()),
         ("shaders/common/material.wgsl", material_module()),
+        (
+            "shaders/common/material_storage.wgsl",
+            format!(
+                "{}\n@group(0) @binding(0) var<storage, read> materials: array<GpuMaterial>;\n{MATERIAL_STORAGE_WGSL}",
+                material_module()
+            ),
+        ),
         ("shaders/common/view.wgsl", VIEW_WGSL.to_owned()),
         ("passes/depth.wgsl", with_view(DEPTH_WGSL)),
         (

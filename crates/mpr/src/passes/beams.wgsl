@@ -8,7 +8,8 @@
 // E = Phi_s / A_perp cos(theta) min(P_E, 1) for a glossy one (figures 11, 12),
 // negative for shadow beams. The CPU twin is lustre-beams' Beam::arrival
 // (passes/beams.rs: beam_pixels_cpu); every function below mirrors the one of
-// lustre-beams named beside it. Needs the BRDF and material modules before it.
+// lustre-beams named beside it. Needs the BRDF and material modules before it
+// (shaders::with_materials).
 //
 // Notation
 // | symbol     | meaning                                                          | unit      |
@@ -455,25 +456,13 @@ fn beam_arrival(bi: u32, p: vec3f, normal: vec3f) -> Arrival {
     return out;
 }
 
-// material_brdf of materials[mi], one lobe at a time from storage (as direct.wgsl).
-fn beam_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
-    var f = vec3f(0.0);
-    for (var i = 0u; i < MAX_LOBES; i++) {
-        let kind = materials[mi].lobes[i].kind;
-        if kind != LOBE_NONE && materials[mi].lobes[i].weight > 0.0 {
-            f += materials[mi].lobes[i].weight * material_lobe(materials[mi].lobes[i], wi, wo);
-        }
-    }
-    return f;
-}
-
 // One beam's radiance towards the eye: f_r(-d, wo) E.
 fn beam_radiance(bi: u32, p: vec3f, n: vec3f, basis: mat3x3f, wo_local: vec3f, mi: u32) -> vec3f {
     let a = beam_arrival(bi, p, n);
     if !a.ok {
         return vec3f(0.0);
     }
-    return beam_brdf(mi, material_to_local(basis, -a.d), wo_local) * a.e;
+    return material_brdf_at(mi, material_to_local(basis, -a.d), wo_local) * a.e;
 }
 
 fn in_bounds(p: vec3f) -> bool {

@@ -4,7 +4,8 @@
 // scene is redrawn with an equal-depth test against the depth pre-pass, so
 // only the visible surface is shaded, and blended One/One into HDR radiance:
 //   L += f_r(wi, wo) I(wi) cos(theta_i) / d^2 V.
-// Needs the BRDF and material modules before it (shaders::with_materials).
+// Needs the BRDF and material modules before it, material_storage.wgsl
+// among them (shaders::with_materials).
 //
 // Notation
 // | symbol  | meaning                                                           | unit      |
@@ -170,19 +171,6 @@ fn window_transmission(p: vec3f) -> vec3f {
     return texel.rgb * ((1.0 - f) / (1.0 + f));
 }
 
-// material_brdf of materials[mi], reading one lobe at a time from storage
-// instead of copying the whole material (lavapipe copies it per invocation).
-fn direct_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
-    var f = vec3f(0.0);
-    for (var i = 0u; i < MAX_LOBES; i++) {
-        let kind = materials[mi].lobes[i].kind;
-        if kind != LOBE_NONE && materials[mi].lobes[i].weight > 0.0 {
-            f += materials[mi].lobes[i].weight * material_lobe(materials[mi].lobes[i], wi, wo);
-        }
-    }
-    return f;
-}
-
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     let wo_world = normalize(view.eye.xyz - in.world);
@@ -211,6 +199,6 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
         v = shadow_visibility(-to_light, d, cos_i);
     }
     let basis = material_basis(n);
-    let f = direct_brdf(in.material, material_to_local(basis, wi_world), material_to_local(basis, wo_world));
+    let f = material_brdf_at(in.material, material_to_local(basis, wi_world), material_to_local(basis, wo_world));
     return vec4f(f * intensity * (cos_i * v / (d * d)), 0.0);
 }

@@ -6,7 +6,8 @@
 // added into the HDR target. Each splat is restricted to the visible part of
 // its own surface either by the surface-id target (fs_splat_id*) or by the
 // per-surface stencil mask of section 2.2 (fs_mask, then fs_splat_stencil*).
-// Prepended: lustre-brdf's BRDF twins and common/material.wgsl.
+// Prepended: lustre-brdf's BRDF twins, common/material.wgsl and
+// common/material_storage.wgsl (shaders::with_materials).
 //
 // Notation
 // | symbol | meaning                                                          | unit       |
@@ -85,19 +86,6 @@ struct VertexOutput {
     //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
 }
 
-// material_brdf of materials[mi], reading one lobe at a time from storage
-// instead of copying the whole material (lavapipe copies it per invocation).
-fn splat_brdf(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
-    var f = vec3f(0.0);
-    for (var i = 0u; i < MAX_LOBES; i++) {
-        let kind = materials[mi].lobes[i].kind;
-        if kind != LOBE_NONE && materials[mi].lobes[i].weight > 0.0 {
-            f += materials[mi].lobes[i].weight * material_lobe(materials[mi].lobes[i], wi, wo);
-        }
-    }
-    return f;
-}
-
 @vertex
 fn vs_splat(
     @builtin(vertex_index) corner: u32,
@@ -132,7 +120,7 @@ fn splat_vertex(
     //clip_distances: out.clip_distances[0] = view_clip_distance(world);
     out.kernel = k;
     out.world = world;
-    let f = splat_brdf(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
+    let f = material_brdf_at(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
     out.colour = power * f / (h * h);
     out.surface = surface;
     return out;

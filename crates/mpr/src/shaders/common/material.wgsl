@@ -77,18 +77,6 @@ fn material_lobe(l: GpuLobe, wi: vec3f, wo: vec3f) -> vec3f {
     }
 }
 
-// f(wi, wo) of a material: the weighted sum of its lobes.
-fn material_brdf(m: GpuMaterial, wi: vec3f, wo: vec3f) -> vec3f {
-    var f = vec3f(0.0);
-    for (var i = 0u; i < MAX_LOBES; i++) {
-        let l = m.lobes[i];
-        if l.kind != LOBE_NONE && l.weight > 0.0 {
-            f += l.weight * material_lobe(l, wi, wo);
-        }
-    }
-    return f;
-}
-
 // A right-handed orthonormal basis around unit n (Duff et al. 2017), for world-to-local.
 fn material_basis(n: vec3f) -> mat3x3f {
     let s = select(-1.0, 1.0, n.z >= 0.0);
