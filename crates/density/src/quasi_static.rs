@@ -427,7 +427,7 @@ impl QuasiStatic {
             radiosity: t1.elapsed(),
             old_rays: update.old.len(),
             new_rays: update.new.len(),
-            recalculated: update.recalculated,
+            recalculated: update.primaries.len(),
         })
     }
 

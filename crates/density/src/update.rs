@@ -14,9 +14,7 @@ pub struct RayUpdate {
     pub old: Vec<RaySegment>,
     /// NewRays: the segments added to it.
     pub new: Vec<RaySegment>,
-    /// Number of primary rays with a recalculated path.
-    pub recalculated: usize,
-    /// The indices of those primary rays (into `RaySet::rays`), ascending.
+    /// The primary rays with a recalculated path, by index into `RaySet::rays`, ascending.
     pub primaries: Vec<usize>,
 }
 
@@ -72,10 +70,7 @@ pub fn update_ray_set_where(
             Some((i, old, new))
         })
         .collect();
-    let mut update = RayUpdate {
-        recalculated: changed.len(),
-        ..Default::default()
-    };
+    let mut update = RayUpdate::default();
     for (i, old, new) in changed {
         update.primaries.push(i);
         update.old.extend(old);
