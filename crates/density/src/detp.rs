@@ -104,16 +104,32 @@ pub fn detp(scene: &Scene, rays: &RaySet, radius: f32) -> Result<VertexIrradianc
 
 /// Whether `segment`, followed as far as any disc may see it (its length, or its hit plus its artifact-control extension, plus `slack`), passes through the box `lo..=hi` (slab test): false only when it crosses no disc whose [`Disc::bounds`] lie in the box, so a set of discs in a small region can skip every other segment (beyond the paper, section 2.5.2: the mobile object's discs against every ray).
 pub fn segment_meets_box(segment: &RaySegment, slack: f32, lo: Vec3, hi: Vec3) -> bool {
-    let reach = segment
+    let reach = segment_reach(segment, slack);
+    span_in_box(segment.origin, segment.direction, reach, lo, hi).is_some()
+}
+
+/// How far the tests follow a segment: its length, or its hit plus its artifact-control extension, plus `slack` (infinite for a segment without a hit).
+pub(crate) fn segment_reach(segment: &RaySegment, slack: f32) -> f32 {
+    segment
         .hit
         .map_or(f32::INFINITY, |h| h.distance + segment.extension.max(0.0))
-        + slack;
+        + slack
+}
+
+/// The part `[t0, t1]` of `origin + t direction`, `t` in `[0, reach]`, inside the box `lo..=hi` (the slab test); `None` when they do not meet.
+pub(crate) fn span_in_box(
+    origin: Vec3,
+    direction: Vec3,
+    reach: f32,
+    lo: Vec3,
+    hi: Vec3,
+) -> Option<(f32, f32)> {
     let (mut t0, mut t1) = (0.0f32, reach);
     for axis in 0..3 {
-        let (o, d) = (segment.origin[axis], segment.direction[axis]);
+        let (o, d) = (origin[axis], direction[axis]);
         if d == 0.0 {
             if o < lo[axis] || o > hi[axis] {
-                return false;
+                return None;
             }
             continue;
         }
@@ -121,8 +137,8 @@ pub fn segment_meets_box(segment: &RaySegment, slack: f32, lo: Vec3, hi: Vec3) -
         t0 = t0.max(a.min(b));
         t1 = t1.min(a.max(b));
         if t0 > t1 {
-            return false;
+            return None;
         }
     }
-    true
+    Some((t0, t1))
 }

@@ -23,6 +23,7 @@ use glam::Vec3;
 use lustre_geometry::Aabb;
 use rayon::prelude::*;
 
+use crate::detp::{segment_reach, span_in_box};
 use crate::ray_set::{PrimaryRay, RaySegment, RaySet};
 
 /// Cells of the grid per axis.
@@ -132,30 +133,14 @@ impl PathCells {
     /// Marks the cells a segment passes, followed to its reach; false when it cannot be followed (not finite).
     fn mark_segment(&self, segment: &RaySegment, mask: &mut Mask) -> bool {
         let (o, d) = (segment.origin, segment.direction);
-        let reach = segment
-            .hit
-            .map_or(f32::INFINITY, |h| h.distance + segment.extension.max(0.0))
-            + self.slack;
+        let reach = segment_reach(segment, self.slack);
         if !o.is_finite() || !d.is_finite() || reach.is_nan() {
             return false;
         }
-        // The part of [0, reach] inside the gridded box (slab test).
-        let (mut t0, mut t1) = (0.0f32, reach);
-        for axis in 0..3 {
-            if d[axis] == 0.0 {
-                if o[axis] < self.lo[axis] || o[axis] > self.hi[axis] {
-                    return true;
-                }
-                continue;
-            }
-            let a = (self.lo[axis] - o[axis]) / d[axis];
-            let b = (self.hi[axis] - o[axis]) / d[axis];
-            t0 = t0.max(a.min(b));
-            t1 = t1.min(a.max(b));
-        }
-        if !(t0 <= t1) {
+        // The part of [0, reach] inside the gridded box.
+        let Some((t0, mut t1)) = span_in_box(o, d, reach, self.lo, self.hi) else {
             return true;
-        }
+        };
         if !t1.is_finite() {
             // A zero direction: the segment is its origin.
             t1 = t0;
