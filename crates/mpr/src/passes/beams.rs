@@ -12,6 +12,16 @@
 //! point ([`lustre_beams::BeamSlab`]), where the CPU sorts and
 //! de-duplicates. CPU twin: [`beam_pixels_cpu`], lustre-beams'
 //! [`lustre_beams::Beam::arrival`] through the same BRDFs.
+//!
+//! Two choices here are for the software driver, not the paper. The pass's
+//! settings are a read-only storage buffer, not a uniform block: lavapipe
+//! (Mesa 22.3) folds uniform values that steer a fragment shader's loops and
+//! branches into the shader and compiles it anew whenever a bind group
+//! changes, and it kept doing so for this shader, whose linear traversal it
+//! unrolled over the beam count: the pass is drawn once per view, so a
+//! `glosbox` frame of 112 views spent about 10 s compiling. And the fragment
+//! stage calls the beam evaluation from one place for both traversals,
+//! since every call is inlined. The image is the same bit for bit.
 
 use lustre_beams::{Beam, BeamSet, GlossyVolume, Scatter, SplitPoint};
 use lustre_geometry::sampling::Frame;
@@ -154,7 +164,7 @@ pub struct GpuBeamItem {
     pub hi: f32,
 }
 
-/// The pass's uniform block (`BeamSettings` in `beams.wgsl`).
+/// The pass's settings (`BeamSettings` in `beams.wgsl`), read from a storage buffer (see the module notes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuBeamSettings {
@@ -284,18 +294,7 @@ impl BeamPass {
                     read_only(1),
                     read_only(2),
                     read_only(3),
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 4,
-                        visibility: wgpu::ShaderStages::FRAGMENT,
-                        ty: wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: false,
-                            min_binding_size: wgpu::BufferSize::new(
-                                size_of::<GpuBeamSettings>() as u64
-                            ),
-                        },
-                        count: None,
-                    },
+                    read_only(4),
                 ],
             });
             let pipeline = scene_pipeline(
@@ -352,13 +351,13 @@ impl BeamPass {
             let beam_buffer = storage(ctx, "beams", &flat.beams);
             let node_buffer = storage(ctx, "beam-nodes", &flat.nodes);
             let item_buffer = storage(ctx, "beam-items", &flat.items);
-            let uniforms = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("beam-settings"),
-                    contents: bytemuck::bytes_of(&settings),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
+            let settings_buffer =
+                ctx.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("beam-settings"),
+                        contents: bytemuck::bytes_of(&settings),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    });
             let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("beams"),
                 layout,
@@ -381,7 +380,7 @@ impl BeamPass {
                     },
                     wgpu::BindGroupEntry {
                         binding: 4,
-                        resource: uniforms.as_entire_binding(),
+                        resource: settings_buffer.as_entire_binding(),
                     },
                 ],
             });

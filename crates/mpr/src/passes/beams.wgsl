@@ -101,7 +101,9 @@ struct BeamSettings {
 @group(1) @binding(1) var<storage, read> beams: array<GpuBeam>;
 @group(1) @binding(2) var<storage, read> nodes: array<BeamNode>;
 @group(1) @binding(3) var<storage, read> items: array<BeamItem>;
-@group(1) @binding(4) var<uniform> settings: BeamSettings;
+// A storage buffer, not a uniform block: lavapipe recompiles a fragment
+// shader whose branches read uniforms at every bind group change (beams.rs).
+@group(1) @binding(4) var<storage, read> settings: BeamSettings;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -480,14 +482,42 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     let wo_local = material_to_local(basis, wo_world);
     let p = in.world;
     var l = vec3f(0.0);
-    if settings.hierarchy == 1u && settings.node_count > 0u && in_bounds(p) {
-        // Depth first over the hierarchy; the tree is balanced (median
-        // splits, leaves of four), so 64 entries hold any tree of fewer
-        // than 2^31 boxes.
-        var stack: array<u32, 64>;
-        var top = 1u;
-        stack[0] = 0u;
-        while top > 0u {
+    // One call site of beam_radiance for both traversals: lavapipe inlines
+    // every call, so a second site doubles the shader it compiles. The
+    // beams come in the order each traversal visits them, as before.
+    let hierarchy = settings.hierarchy == 1u && settings.node_count > 0u && in_bounds(p);
+    // Depth first over the hierarchy; the tree is balanced (median splits,
+    // leaves of four), so 64 entries hold any tree of fewer than 2^31 boxes.
+    var stack: array<u32, 64>;
+    var top = select(0u, 1u, hierarchy);
+    stack[0] = 0u;
+    // The current leaf's items [k, k_end), or the linear traversal's next beam k.
+    var k = 0u;
+    var k_end = select(settings.beam_count, 0u, hierarchy);
+    loop {
+        var bi = 0u;
+        var found = false;
+        loop {
+            if k < k_end {
+                if !hierarchy {
+                    bi = k;
+                    k += 1u;
+                    found = true;
+                    break;
+                }
+                let item = items[k];
+                k += 1u;
+                let s = dot(beams[item.beam].wavefront.xyz, p);
+                if s >= item.lo && s < item.hi {
+                    bi = item.beam;
+                    found = true;
+                    break;
+                }
+                continue;
+            }
+            if top == 0u {
+                break;
+            }
             top -= 1u;
             let i = stack[top];
             let node = nodes[i];
@@ -495,23 +525,18 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
                 continue;
             }
             if node.count > 0u {
-                for (var k = node.link; k < node.link + node.count; k++) {
-                    let item = items[k];
-                    let s = dot(beams[item.beam].wavefront.xyz, p);
-                    if s >= item.lo && s < item.hi {
-                        l += beam_radiance(item.beam, p, n, basis, wo_local, in.material);
-                    }
-                }
+                k = node.link;
+                k_end = node.link + node.count;
             } else if top + 2u <= 64u {
                 stack[top] = node.link;
                 stack[top + 1u] = i + 1u;
                 top += 2u;
             }
         }
-    } else {
-        for (var bi = 0u; bi < settings.beam_count; bi++) {
-            l += beam_radiance(bi, p, n, basis, wo_local, in.material);
+        if !found {
+            break;
         }
+        l += beam_radiance(bi, p, n, basis, wo_local, in.material);
     }
     return vec4f(l, 0.0);
 }
