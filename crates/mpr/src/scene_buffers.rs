@@ -60,6 +60,8 @@ pub struct SceneBuffers {
     pub surface_indices: wgpu::Buffer,
     /// The range of [`SceneBuffers::surface_indices`] of each surface, by `SurfaceId`.
     pub surface_ranges: Vec<std::ops::Range<u32>>,
+    /// The world box of each surface in this pose, by `SurfaceId` ([`crate::view::surface_boxes`]).
+    pub surface_boxes: Vec<[glam::Vec3; 2]>,
 }
 
 /// Vertex indices grouped by surface and the range of each surface, for `surfaces` surfaces.
@@ -127,6 +129,7 @@ impl SceneBuffers {
             vertex_count,
             surface_indices,
             surface_ranges,
+            surface_boxes: crate::view::surface_boxes_of(triangles, surfaces),
         })
     }
 }

@@ -457,8 +457,16 @@ pub fn intersect_rects(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
 /// The world bounding box of each surface of `scene` in its current pose,
 /// in `SurfaceId` order (`[+∞, −∞]` for a surface without triangles).
 pub fn surface_boxes(scene: &lustre_geometry::Scene) -> Vec<[Vec3; 2]> {
-    let mut boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; scene.surfaces().len()];
-    for t in &scene.world_triangles() {
+    surface_boxes_of(&scene.world_triangles(), scene.surfaces().len())
+}
+
+/// [`surface_boxes`] of world triangles of a scene with `surfaces` surfaces.
+pub fn surface_boxes_of(
+    triangles: &[lustre_geometry::WorldTriangle],
+    surfaces: usize,
+) -> Vec<[Vec3; 2]> {
+    let mut boxes = vec![[Vec3::INFINITY, Vec3::NEG_INFINITY]; surfaces];
+    for t in triangles {
         if let Some(b) = boxes.get_mut(t.surface as usize) {
             for p in t.positions {
                 b[0] = b[0].min(p);

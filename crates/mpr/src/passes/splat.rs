@@ -778,7 +778,9 @@ impl SplatPass {
                     pass.set_pipeline(&pipelines.splat_id);
                     views.bind(&mut pass, 0, slot);
                     pass.set_bind_group(1, &bind_group, &[]);
-                    draw_instances(&mut pass, splats, 0..splats.count);
+                    for range in visible_splats(scene, splats, targets, slot) {
+                        draw_instances(&mut pass, splats, range);
+                    }
                 }
             }
             Restriction::Stencil => {
@@ -991,6 +993,40 @@ impl SplatPass {
         );
         Ok(Some(low))
     }
+}
+
+/// The instance ranges of the splats of the surfaces that may show in the
+/// view's region ([`crate::view::surfaces_in_region`], the viewpoint culling
+/// of Diefenbach & Badler 1997, section 8), adjacent ranges merged. Under the
+/// surface-id restriction a splat adds only where its own surface is seen,
+/// so the splats left out add nothing there: the sums are the same, without
+/// the vertex work of every splat in every virtual view.
+fn visible_splats(
+    scene: &SceneBuffers,
+    splats: &SplatBuffers,
+    targets: &RenderTargets,
+    slot: ViewSlot,
+) -> Vec<Range<u32>> {
+    let (width, height) = (targets.width, targets.height);
+    let visible = crate::view::surfaces_in_region(
+        &scene.surface_boxes,
+        slot.view_projection,
+        slot.scissor_in(width, height),
+        width,
+        height,
+    );
+    let mut ranges: Vec<Range<u32>> = Vec::new();
+    for range in visible
+        .iter()
+        .filter_map(|&s| splats.surface_ranges.get(s as usize))
+        .filter(|r| !r.is_empty())
+    {
+        match ranges.last_mut() {
+            Some(last) if last.end == range.start => last.end = range.end,
+            _ => ranges.push(range.clone()),
+        }
+    }
+    ranges
 }
 
 /// Draws the splats of the global instance range `range`, chunk by chunk.
