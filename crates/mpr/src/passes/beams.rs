@@ -17,9 +17,10 @@
 //! settings are a read-only storage buffer, not a uniform block: lavapipe
 //! (Mesa 22.3) folds uniform values that steer a fragment shader's loops and
 //! branches into the shader and compiles it anew whenever a bind group
-//! changes, and it kept doing so for this shader, whose linear traversal it
-//! unrolled over the beam count: the pass is drawn once per view, so a
-//! `glosbox` frame of 112 views spent about 10 s compiling. And the fragment
+//! changes, and it kept doing so for this shader (most likely because the
+//! linear traversal's loop over the beam count unrolls, which its test of
+//! whether inlining paid reads as a gain): the pass is drawn once per view,
+//! so a `glosbox` frame of 112 views spent about 10 s compiling. And the fragment
 //! stage calls the beam evaluation from one place for both traversals,
 //! since every call is inlined. The image is the same bit for bit.
 
