@@ -477,6 +477,27 @@ pub fn surface_boxes_of(
     boxes
 }
 
+/// The ranges of `ranges` (one per surface, by `SurfaceId`) of the listed
+/// `surfaces`, in their order, empty ones left out and adjacent ones merged:
+/// the fewest draws of those surfaces' triangles or splats.
+pub fn surface_draw_ranges(
+    surfaces: &[u32],
+    ranges: &[std::ops::Range<u32>],
+) -> Vec<std::ops::Range<u32>> {
+    let mut merged: Vec<std::ops::Range<u32>> = Vec::new();
+    for range in surfaces
+        .iter()
+        .filter_map(|&s| ranges.get(s as usize))
+        .filter(|r| !r.is_empty())
+    {
+        match merged.last_mut() {
+            Some(last) if last.end == range.start => last.end = range.end,
+            _ => merged.push(range.clone()),
+        }
+    }
+    merged
+}
+
 /// The surfaces whose boxes may show in the pixels `region` (`[x, y, w,
 /// h]`) of a `width × height` target seen with `view_projection` (reverse
 /// Z): every box not wholly outside one side of the region's frustum or
@@ -680,6 +701,25 @@ mod tests {
             Vec3::Y,
             50.0,
         )
+    }
+
+    /// The listed surfaces' ranges, empty and unknown ones dropped, touching ones
+    /// merged: every index of a listed surface once, nothing else (checked
+    /// against the indices taken one by one).
+    #[test]
+    fn surface_draw_ranges_cover_the_listed_surfaces_once() {
+        let ranges = [0..3, 3..3, 3..7, 7..9, 12..15, 15..20];
+        let surfaces = [0u32, 1, 2, 4, 5, 9];
+        let merged = surface_draw_ranges(&surfaces, &ranges);
+        assert_eq!(merged, vec![0..7, 12..20]);
+        let drawn: Vec<u32> = merged.into_iter().flatten().collect();
+        let expected: Vec<u32> = surfaces
+            .iter()
+            .filter_map(|&s| ranges.get(s as usize))
+            .flat_map(|r| r.clone())
+            .collect();
+        assert_eq!(drawn, expected);
+        assert!(surface_draw_ranges(&[1, 7], &ranges).is_empty());
     }
 
     /// A box is kept when any point of it projects into the region in front

@@ -771,17 +771,7 @@ impl DirectPass {
                 message: format!("light #{light_index} of {}", lights.slots.len()),
             });
         };
-        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
-        for range in surfaces
-            .iter()
-            .filter_map(|&s| scene.surface_ranges.get(s as usize))
-            .filter(|r| !r.is_empty())
-        {
-            match ranges.last_mut() {
-                Some(last) if last.end == range.start => last.end = range.end,
-                _ => ranges.push(range.clone()),
-            }
-        }
+        let ranges = crate::view::surface_draw_ranges(surfaces, &scene.surface_ranges);
         if ranges.is_empty() {
             return Ok(());
         }

@@ -1015,18 +1015,7 @@ fn visible_splats(
         width,
         height,
     );
-    let mut ranges: Vec<Range<u32>> = Vec::new();
-    for range in visible
-        .iter()
-        .filter_map(|&s| splats.surface_ranges.get(s as usize))
-        .filter(|r| !r.is_empty())
-    {
-        match ranges.last_mut() {
-            Some(last) if last.end == range.start => last.end = range.end,
-            _ => ranges.push(range.clone()),
-        }
-    }
-    ranges
+    crate::view::surface_draw_ranges(&visible, &splats.surface_ranges)
 }
 
 /// Draws the splats of the global instance range `range`, chunk by chunk.
