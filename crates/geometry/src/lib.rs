@@ -43,6 +43,7 @@ pub mod sampling;
 mod scene;
 pub mod shadow_volume;
 pub mod slab;
+pub mod texture;
 mod wide_bvh;
 
 pub use aabb::Aabb;
@@ -56,6 +57,7 @@ pub use material::{Material, MaterialId, MaterialModel};
 pub use mesh::{Mesh, MeshId, triangle_area};
 pub use obj::{LoadedScene, ObjOptions, load_obj, load_obj_with};
 pub use plane::Plane;
+pub use texture::Texture;
 pub use ray::{Hit, LeanHit, Ray, TriangleHit, intersect_triangle};
 pub use scene::{
     Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,

@@ -7,8 +7,11 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::sync::Arc;
 
-use crate::Rgb;
+use glam::Vec2;
+
+use crate::{Rgb, Texture};
 
 /// Index of a material in [`crate::Scene::materials`].
 pub type MaterialId = u32;
@@ -162,8 +165,10 @@ pub struct Material {
     pub model: MaterialModel,
     /// Emitted radiance in W/(m^2 sr) (MTL `Ke`); zero for non-emitters.
     pub emission: Rgb,
-    /// Diffuse texture (MTL `map_Kd`), resolved relative to the MTL file.
+    /// Diffuse texture (MTL `map_Kd`, glTF `baseColorTexture`): the file it names, resolved relative to the MTL or glTF file (`None` for an embedded image).
     pub diffuse_texture: Option<PathBuf>,
+    /// The decoded diffuse texture, which scales the diffuse reflectance of the model's Lambertian part ([`MaterialModel::diffuse_reflectance`]) texel by texel at the hit's UV (MTL: `Kd` times `map_Kd`; glTF: `baseColorFactor` times `baseColorTexture`); `None` for an untextured material or a file that could not be read (a warning at load).
+    pub diffuse_map: Option<Arc<Texture>>,
     /// Specular texture (MTL `map_Ks`), resolved relative to the MTL file.
     pub specular_texture: Option<PathBuf>,
     /// Opacity (MTL `d`), 1 for opaque.
@@ -183,6 +188,7 @@ impl Material {
             model,
             emission: Rgb::ZERO,
             diffuse_texture: None,
+            diffuse_map: None,
             specular_texture: None,
             opacity: 1.0,
         }
@@ -192,6 +198,17 @@ impl Material {
     pub fn with_emission(mut self, emission: Rgb) -> Self {
         self.emission = emission;
         self
+    }
+
+    /// This material with a diffuse texture map.
+    pub fn with_diffuse_map(mut self, map: Arc<Texture>) -> Self {
+        self.diffuse_map = Some(map);
+        self
+    }
+
+    /// The factor by which [`Material::diffuse_map`] scales the Lambertian part's reflectance at texture coordinates `uv` (bilinear, repeated: [`Texture::sample`]); one without a map.
+    pub fn diffuse_tint(&self, uv: Vec2) -> Rgb {
+        self.diffuse_map.as_ref().map_or(Rgb::ONE, |t| t.sample(uv))
     }
 
     /// Whether the material emits light.

@@ -29,13 +29,25 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// A mesh with flat normals (one normal per triangle, vertices duplicated) and zero UVs.
+    /// A mesh with flat normals (one normal per triangle, vertices duplicated) and per-triangle UVs `(0, 0)`, `(1, 0)`, `(0, 1)`.
     pub fn flat(
         name: impl Into<String>,
         positions: &[Vec3],
         indices: &[[u32; 3]],
         material: MaterialId,
     ) -> Self {
+        Self::flat_with_uvs(name, positions, &[], indices, material)
+    }
+
+    /// A mesh with flat normals (one normal per triangle, vertices duplicated) and the UVs of `uvs` (one per position); with fewer UVs than positions, [`Mesh::flat`]'s.
+    pub fn flat_with_uvs(
+        name: impl Into<String>,
+        positions: &[Vec3],
+        uvs: &[Vec2],
+        indices: &[[u32; 3]],
+        material: MaterialId,
+    ) -> Self {
+        let keep_uvs = uvs.len() >= positions.len();
         let mut mesh = Self {
             name: name.into(),
             positions: Vec::with_capacity(indices.len() * 3),
@@ -50,7 +62,11 @@ impl Mesh {
             let base = mesh.positions.len() as u32;
             mesh.positions.extend(p);
             mesh.normals.extend([n; 3]);
-            mesh.uvs.extend([Vec2::ZERO, Vec2::X, Vec2::Y]);
+            if keep_uvs {
+                mesh.uvs.extend(tri.map(|i| uvs[i as usize]));
+            } else {
+                mesh.uvs.extend([Vec2::ZERO, Vec2::X, Vec2::Y]);
+            }
             mesh.indices.push([base, base + 1, base + 2]);
         }
         mesh

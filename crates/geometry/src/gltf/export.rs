@@ -53,7 +53,8 @@ pub fn export_gltf(scene: &Scene, path: &Path) -> Result<Vec<String>> {
                 None,
             );
             let uv = buffer.accessor(
-                mesh.uvs.iter().flat_map(|u| u.to_array()),
+                // Back into glTF's v, which grows downwards.
+                mesh.uvs.iter().flat_map(|u| [u.x, 1.0 - u.y]),
                 mesh.uvs.len(),
                 "VEC2",
                 None,

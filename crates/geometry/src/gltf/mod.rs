@@ -2,7 +2,9 @@
 //! the default scene's node tree with each node's world transform baked into
 //! its meshes, metallic-roughness materials mapped to Lustre's models
 //! ([`material`]), `KHR_lights_punctual` lights, the first perspective
-//! camera, and file textures recorded as the OBJ loader records them.
+//! camera, and base colour textures decoded (files, `data:` URIs and buffer
+//! views) into [`crate::Material::diffuse_map`], their `v` flipped into the
+//! scene model's convention (OBJ's, `v` up).
 //!
 //! Parsing and validation of the JSON and GLB container are the `gltf`
 //! crate's; buffers are read here (GLB chunk, base64 `data:` URI or a file
@@ -22,7 +24,9 @@ pub mod material;
 
 pub use export::export_gltf;
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::camera::Projection;
@@ -37,7 +41,7 @@ use crate::material::{Material, MaterialId};
 use crate::mesh::{Mesh, MeshId};
 use crate::obj::{LoadedScene, Parts, finish};
 use crate::scene::Object;
-use crate::{Camera, Rgb};
+use crate::{Camera, Rgb, Texture};
 
 use material::GltfMaterial;
 
@@ -77,6 +81,8 @@ pub fn load_gltf(path: &Path) -> Result<LoadedScene> {
         material_of: vec![None; gltf.document.materials().len()],
         default_material: None,
         materials: Vec::new(),
+        images: HashMap::new(),
+        file: path,
         warnings: &mut warnings,
     };
     let scene = gltf
@@ -168,6 +174,10 @@ struct Loader<'a> {
     material_of: Vec<Option<MaterialId>>,
     default_material: Option<MaterialId>,
     materials: Vec<Material>,
+    /// Each glTF image decoded so far (`None`: it could not be, and was warned about).
+    images: HashMap<usize, Option<Arc<Texture>>>,
+    /// The asset, for messages.
+    file: &'a Path,
     warnings: &'a mut Vec<String>,
 }
 
@@ -308,7 +318,11 @@ impl Loader<'_> {
             )?
             .and(reader.read_tex_coords(0))
             {
-                Some(uvs) => uvs.into_f32().map(Vec2::from).collect(),
+                // glTF's v grows downwards from the image's top; the scene model's (OBJ's) upwards.
+                Some(uvs) => uvs
+                    .into_f32()
+                    .map(|[u, v]| Vec2::new(u, 1.0 - v))
+                    .collect(),
                 None => vec![Vec2::ZERO; positions.len()],
             };
             let mesh = match normals {
@@ -320,8 +334,8 @@ impl Loader<'_> {
                     indices,
                     material,
                 },
-                // glTF: without normals, flat shading.
-                _ => Mesh::flat(name, &positions, &indices, material),
+                // glTF: without normals, flat shading (the UVs kept).
+                _ => Mesh::flat_with_uvs(name, &positions, &uvs, &indices, material),
             };
             ids.push(self.meshes.len() as MeshId);
             self.meshes.push(mesh);
@@ -389,18 +403,76 @@ impl Loader<'_> {
         };
         let mut lustre = parameters.to_material(self.warnings);
         if let Some(info) = material.pbr_metallic_roughness().base_color_texture() {
-            match info.texture().source().source() {
-                ::gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
-                    lustre.diffuse_texture = Some(resolve(uri, self.base));
-                }
-                _ => self.warnings.push(format!(
-                    "material `{}`: its embedded base colour texture is not used",
-                    lustre.name
-                )),
-            }
+            self.base_colour_texture(&info, &mut lustre, parameters.metallic);
         }
         self.materials.push(lustre);
         id
+    }
+
+    /// Decodes a material's base colour texture into [`Material::diffuse_map`] (a file beside the asset, a `data:` URI or a buffer view), once per image; a texture that cannot be read is a warning and the material is drawn without it.
+    fn base_colour_texture(
+        &mut self,
+        info: &::gltf::texture::Info,
+        lustre: &mut Material,
+        metallic: f32,
+    ) {
+        if info.tex_coord() != 0 {
+            self.warnings.push(format!(
+                "material `{}`: its base colour texture reads TEXCOORD_{}, Lustre reads only TEXCOORD_0",
+                lustre.name,
+                info.tex_coord()
+            ));
+        }
+        if metallic > 0.0 {
+            self.warnings.push(format!(
+                "material `{}`: its base colour texture tints only the diffuse part (metallic {metallic}), not the metal's reflectance",
+                lustre.name
+            ));
+        }
+        let image = info.texture().source();
+        let slot = image.index();
+        if let Some(decoded) = self.images.get(&slot) {
+            lustre.diffuse_map = decoded.clone();
+            if let ::gltf::image::Source::Uri { uri, .. } = image.source()
+                && !uri.starts_with("data:")
+            {
+                lustre.diffuse_texture = Some(resolve(uri, self.base));
+            }
+            return;
+        }
+        let name = format!("image {slot}");
+        let bytes = match image.source() {
+            ::gltf::image::Source::Uri { uri, .. } => {
+                if !uri.starts_with("data:") {
+                    lustre.diffuse_texture = Some(resolve(uri, self.base));
+                }
+                read_uri(uri, self.base)
+            }
+            ::gltf::image::Source::View { view, .. } => self
+                .buffers
+                .get(view.buffer().index())
+                .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?))
+                .map(<[u8]>::to_vec)
+                .ok_or_else(|| format!("its buffer view {} lies outside its buffer", view.index())),
+        };
+        let decoded = bytes
+            .and_then(|bytes| {
+                let label = lustre
+                    .diffuse_texture
+                    .as_ref()
+                    .map_or_else(|| format!("{}: {name}", self.file.display()), |f| f.display().to_string());
+                Texture::decode(&bytes, &label).map_err(|e| e.to_string())
+            })
+            .map(Arc::new)
+            .map_err(|e| {
+                self.warnings.push(format!(
+                    "material `{}`: base colour texture ({name}) not used: {e}",
+                    lustre.name
+                ))
+            })
+            .ok();
+        self.images.insert(slot, decoded.clone());
+        lustre.diffuse_map = decoded;
     }
 
     /// A `KHR_lights_punctual` light at the node's pose (glTF lights shine down their node's −Z).

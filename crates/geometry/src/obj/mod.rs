@@ -87,7 +87,7 @@
 //! | `illum n` | illumination model | 0..=10 | none |
 //! | `Pr r` | PBR roughness | [0, 1] | 1 when `Pm` is given |
 //! | `Pm m` | PBR metallic | [0, 1] | 0 when `Pr` is given |
-//! | `map_Kd [options] file` | [`Material::diffuse_texture`] | a missing file: warning, no texture | |
+//! | `map_Kd [options] file` | [`Material::diffuse_texture`], decoded into [`Material::diffuse_map`] (PNG or JPEG, sRGB), which scales `Kd` (1 when `Kd` is absent) | a missing or undecodable file: warning, no texture | |
 //! | `map_Ks [options] file` | [`Material::specular_texture`] | a missing file: warning, no texture | |
 //! | `Ka` | ambient, ignored (numbers still checked) | | |
 //!

@@ -3,10 +3,11 @@
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use super::{parse_error, parse_number, read_text, split_keyword};
 use crate::material::{ConductorFresnel, MicrofacetDistribution};
-use crate::{GeometryError, Material, MaterialModel, Result, Rgb};
+use crate::{GeometryError, Material, MaterialModel, Result, Rgb, Texture};
 
 /// The materials of one MTL file.
 #[derive(Debug, Clone, PartialEq)]
@@ -397,9 +398,35 @@ pub(super) fn parse_library(
             if count == 1 { "" } else { "s" }
         ));
     }
-    raws.iter()
+    let mut materials = raws
+        .iter()
         .map(|m| to_material(path, m, warnings))
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    decode_diffuse_maps(&mut materials, warnings);
+    Ok(materials)
+}
+
+/// Decodes each material's `map_Kd` file once ([`Material::diffuse_map`]); a file that cannot be decoded is a warning and the material is drawn without it.
+fn decode_diffuse_maps(materials: &mut [Material], warnings: &mut Vec<String>) {
+    let mut decoded: HashMap<PathBuf, Option<Arc<Texture>>> = HashMap::new();
+    for material in materials {
+        let Some(file) = material.diffuse_texture.clone() else {
+            continue;
+        };
+        material.diffuse_map = decoded
+            .entry(file)
+            .or_insert_with_key(|file| match Texture::load(file) {
+                Ok(texture) => Some(Arc::new(texture)),
+                Err(e) => {
+                    warnings.push(format!(
+                        "material `{}`: diffuse texture not used: {e}",
+                        material.name
+                    ));
+                    None
+                }
+            })
+            .clone();
+    }
 }
 
 /// Maps a material as written to a [`Material`] by the rules of [`crate::obj`].
@@ -418,7 +445,11 @@ fn to_material(path: &Path, m: &RawMaterial, warnings: &mut Vec<String>) -> Resu
             m.name
         ));
     };
-    let kd = m.kd.map_or(Rgb::ZERO, |a| a.value);
+    // A diffuse map without `Kd` is the colour itself (`Kd` 1), as other viewers draw it.
+    let kd = m.kd.map_or(
+        if m.map_kd.is_some() { Rgb::ONE } else { Rgb::ZERO },
+        |a| a.value,
+    );
     let ks = m.ks.map_or(Rgb::ZERO, |a| a.value);
     let tf = m.tf.map_or(Rgb::ONE, |a| a.value);
     let opacity = match (m.d, m.tr) {
@@ -663,6 +694,7 @@ fn to_material(path: &Path, m: &RawMaterial, warnings: &mut Vec<String>) -> Resu
         model,
         emission: m.ke.map_or(Rgb::ZERO, |a| a.value),
         diffuse_texture: m.map_kd.clone(),
+        diffuse_map: None,
         specular_texture: m.map_ks.clone(),
         opacity,
     })
