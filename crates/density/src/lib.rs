@@ -112,6 +112,39 @@ pub use world::{World, WorldHit};
 /// Irradiance `E` (W/m², RGB) at each vertex of each mesh, indexed `[mesh][vertex]` (section 2.4.1, figure 2.3: one value per vertex).
 pub type VertexIrradiance = Vec<Vec<lustre_geometry::Rgb>>;
 
+/// The Lambertian reflectance `ρ` of equation 2.2 at texture coordinates `uv` of a surface of `material`: its model's diffuse reflectance scaled by its diffuse map, `ρ_d ⊙ t(uv)` ([`lustre_geometry::Material::diffuse_tint`]); `ρ_d` itself without a map.
+pub fn textured_reflectance(
+    material: &lustre_geometry::Material,
+    uv: glam::Vec2,
+) -> lustre_geometry::Rgb {
+    let rho = material.model.diffuse_reflectance();
+    if material.diffuse_map.is_some() {
+        rho * material.diffuse_tint(uv)
+    } else {
+        rho
+    }
+}
+
+/// The Lambertian reflectance of equation 2.2 at every vertex of mesh `mesh`, [`textured_reflectance`] at the vertex's texture coordinates (section 2.4.2: `B = ρ E` per vertex); empty for a mesh that does not exist.
+pub fn vertex_reflectances(
+    scene: &lustre_geometry::Scene,
+    mesh: lustre_geometry::MeshId,
+) -> Vec<lustre_geometry::Rgb> {
+    let Some(m) = scene.meshes().get(mesh as usize) else {
+        return Vec::new();
+    };
+    let Some(material) = scene.materials().get(m.material as usize) else {
+        return vec![lustre_geometry::Rgb::ZERO; m.positions.len()];
+    };
+    if material.diffuse_map.is_none() {
+        return vec![material.model.diffuse_reflectance(); m.positions.len()];
+    }
+    m.uvs
+        .iter()
+        .map(|&uv| textured_reflectance(material, uv))
+        .collect()
+}
+
 /// Reflected radiance of a diffuse surface, `L_r = ρ/π E` (section 2.4.2, equation 2.2).
 pub fn diffuse_radiance(
     reflectance: lustre_geometry::Rgb,

@@ -683,11 +683,12 @@ impl QuasiStatic {
                 .enumerate()
                 .map(|(m, (a, b))| {
                     let lobe = if a.is_empty() { b } else { a };
-                    let rho = self.scene.meshes()[m].material as usize;
-                    let rho = self.scene.materials()[rho].model.diffuse_reflectance();
+                    // ρ ⊙ t(uv) per vertex for a textured material (equation 2.2).
+                    let rho = crate::vertex_reflectances(&self.scene, m as MeshId);
                     lobe.iter()
                         .zip(&irradiance[m])
-                        .map(|(&l, &e)| l + crate::diffuse_radiance(rho, e))
+                        .zip(&rho)
+                        .map(|((&l, &e), &rho)| l + crate::diffuse_radiance(rho, e))
                         .collect()
                 })
                 .collect(),

@@ -19,14 +19,17 @@
 //! beyond both), exactly as for the irradiance.
 //!
 //! A diffuse `f_r = ρ/π` gives back `ρ/π E` of equation 2.2 exactly, so the
-//! diffuse part of a blended material is the one the irradiance gives. The
+//! diffuse part of a blended material is the one the irradiance gives. A
+//! material with a diffuse map has `ρ_d ⊙ t(uv)` in place of its Lambertian
+//! part's `ρ_d` at a vertex of texture coordinates `uv`: `f_r` is shifted by
+//! `(t − 1) ⊙ ρ_d / π` there. The
 //! BRDF is evaluated as `f_r(ωi, ωo)` in the vertex's shading frame, the
 //! order non-reciprocal models (Phong) need.
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use lustre_brdf::{BoxedBrdf, Brdf};
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{Bvh, MeshId, Rgb, Scene, triangle_area};
+use lustre_geometry::{Bvh, Material, MeshId, Rgb, Scene, triangle_area};
 use rayon::prelude::*;
 
 use crate::boundary::{DiscPattern, Surfaces};
@@ -43,9 +46,33 @@ fn world_incident(segment: &RaySegment) -> IncidentRay {
     }
 }
 
-/// One term of equation 2.1 at a vertex with shading frame `frame` and local eye direction `wo`: `f_r(ωi, ωo) φ`, `ωi` the world incident direction.
-fn term(brdf: &dyn Brdf, frame: &Frame, wo: Vec3, wi: Vec3, power: Rgb) -> DVec3 {
-    (brdf.eval(frame.to_local(wi), wo) * power).as_dvec3()
+/// One term of equation 2.1 at a vertex with shading frame `frame` and local eye direction `wo`: `f_r(ωi, ωo) φ`, `ωi` the world incident direction; with a diffuse map, `f_r` is the textured `f_r + shift` of [`diffuse_shift`] where the Lambertian part lives (both directions above the surface).
+fn term(
+    brdf: &dyn Brdf,
+    frame: &Frame,
+    wo: Vec3,
+    wi: Vec3,
+    power: Rgb,
+    shift: Option<Rgb>,
+) -> DVec3 {
+    let wi = frame.to_local(wi);
+    let mut f = brdf.eval(wi, wo);
+    if let Some(shift) = shift {
+        if wi.z > 0.0 && wo.z > 0.0 {
+            f = (f + shift).max(Rgb::ZERO);
+        }
+    }
+    (f * power).as_dvec3()
+}
+
+/// The change `(t(uv) − 1) ⊙ ρ_d / π` a diffuse map makes to the BRDF of `material` at texture coordinates `uv` (equation 2.2's `ρ` becomes `ρ_d ⊙ t`, the rest of `f_r` is unchanged); `None` without a map, so untextured vertices evaluate the BRDF alone.
+fn diffuse_shift(material: Option<&Material>, uv: Vec2) -> Option<Rgb> {
+    let material = material.filter(|m| m.diffuse_map.is_some())?;
+    Some(
+        (material.diffuse_tint(uv) - Rgb::ONE)
+            * material.model.diffuse_reflectance()
+            * std::f32::consts::FRAC_1_PI,
+    )
 }
 
 /// The local eye direction at a vertex, `None` for a degenerate normal or an eye on the vertex.
@@ -158,6 +185,7 @@ impl TriangleImpacts {
                 }
                 let brdf = mesh_brdf(scene, brdfs, m)?.as_ref();
                 let mesh = &scene.meshes()[m as usize];
+                let material = scene.materials().get(mesh.material as usize);
                 let positions = scene.world_positions(m);
                 let normals = scene.world_normals(m);
                 // The triangles meeting at each vertex, in triangle order (a fixed summation order).
@@ -172,16 +200,18 @@ impl TriangleImpacts {
                     .par_iter()
                     .zip(normals.par_iter())
                     .zip(around.par_iter())
-                    .map(|((&x, &n), tris)| {
+                    .zip(mesh.uvs.par_iter())
+                    .map(|(((&x, &n), tris), &uv)| {
                         let Some((frame, wo)) = view_frame(n, x, eye) else {
                             return Rgb::ZERO;
                         };
+                        let shift = diffuse_shift(material, uv);
                         let mut sum = DVec3::ZERO;
                         let mut area = 0.0f64;
                         for &t in tris {
                             area += self.area[t];
                             for r in self.impacts(t) {
-                                sum += term(brdf, &frame, wo, r.wi, r.power);
+                                sum += term(brdf, &frame, wo, r.wi, r.power, shift);
                             }
                         }
                         if area > 0.0 {
@@ -289,11 +319,25 @@ impl ImpactMap {
         eye: Vec3,
         k: usize,
     ) -> DVec3 {
+        self.radiance_shifted(surfaces, brdf, None, x, normal, eye, k)
+    }
+
+    /// [`ImpactMap::radiance`] with the BRDF shifted by a diffuse map's `shift` ([`diffuse_shift`]).
+    fn radiance_shifted(
+        &self,
+        surfaces: Option<&dyn Surfaces>,
+        brdf: &dyn Brdf,
+        shift: Option<Rgb>,
+        x: Vec3,
+        normal: Vec3,
+        eye: Vec3,
+        k: usize,
+    ) -> DVec3 {
         let Some((frame, wo)) = view_frame(normal, x, eye) else {
             return DVec3::ZERO;
         };
         self.weighted(surfaces, x, normal, k, |j| {
-            term(brdf, &frame, wo, self.incident[j], self.powers[j])
+            term(brdf, &frame, wo, self.incident[j], self.powers[j], shift)
         })
     }
 
@@ -370,12 +414,19 @@ impl ImpactMap {
                     return Ok(Vec::new());
                 }
                 let brdf = mesh_brdf(scene, brdfs, m)?.as_ref();
+                let mesh = &scene.meshes()[m as usize];
+                let material = scene.materials().get(mesh.material as usize);
                 let positions = scene.world_positions(m);
                 let normals = scene.world_normals(m);
                 Ok(positions
                     .par_iter()
                     .zip(normals.par_iter())
-                    .map(|(&x, &n)| self.radiance(surfaces, brdf, x, n, eye, k).as_vec3())
+                    .zip(mesh.uvs.par_iter())
+                    .map(|((&x, &n), &uv)| {
+                        let shift = diffuse_shift(material, uv);
+                        self.radiance_shifted(surfaces, brdf, shift, x, n, eye, k)
+                            .as_vec3()
+                    })
                     .collect())
             })
             .collect()

@@ -386,10 +386,17 @@ impl<'a> Tracer<'a> {
             let u = rng.next_vec2();
             let u_lobe = rng.next_f32();
             // The adjoint BSDF f(ω_in, ω_out) carries the photon (Veach 3.7.6), as in lustre-photon's tracer.
-            let Some(sample) = brdf.sample_adjoint(frame.to_local(incoming), u, u_lobe) else {
+            let wi = frame.to_local(incoming);
+            let Some(sample) = brdf.sample_adjoint(wi, u, u_lobe) else {
                 break;
             };
-            let w = sample.weight;
+            // A diffuse map scales the Lambertian part per hit, as in lustre-photon's tracer.
+            let w = match self.scene.materials().get(hit.material as usize) {
+                Some(material) => {
+                    lustre_photon::trace::textured_weight(material, hit.uv, wi, &sample)
+                }
+                None => sample.weight,
+            };
             if !w.is_finite() || !(w.max_element() > 0.0) {
                 break;
             }

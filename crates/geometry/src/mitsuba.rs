@@ -20,14 +20,27 @@
 //! | [`Light::Spot`] | `spot` emitter with `intensity`, `cutoff_angle` and `beam_width` in degrees |
 //! | [`Camera`] | `perspective` sensor with `fov_axis="y"`, a `lookat` `to_world`, `hdrfilm` and an `independent` sampler |
 //!
+//! A material's decoded diffuse map ([`Material::diffuse_map`]) is exported
+//! as a `bitmap` texture for the `reflectance` of the `diffuse` BSDF that
+//! carries its Lambertian part (that of `Diffuse`, of the diffuse term of an
+//! approximated Phong or Ward, of each diffuse BSDF nested in a `blendbsdf`):
+//! the texels times that BSDF's reflectance, baked into a linear float32
+//! OpenEXR file in a `textures/` folder beside the XML, read `raw` (not
+//! re-linearised), filtered bilinearly and repeated like
+//! [`crate::Texture::sample`]. Mitsuba's bitmap has `(0, 0)` at the image's
+//! top-left corner (its `v` grows downwards, checked against Mitsuba 3.9 by
+//! `tests/tests/mitsuba_equivalence.rs`) while the PLY UVs keep OBJ's `v`
+//! up, so the texture's `to_uv` maps `(u, v)` to `(u, 1 − v)`.
+//!
 //! Mitsuba has no Phong, Ward, Gaussian-distribution or named models, no
 //! cosine point light and no explicit (mesh-less) area light, and texture
-//! maps are not exported yet; they are [`GeometryError::Unsupported`] unless
+//! files that were not decoded (and specular maps) are not exported; they
+//! are [`GeometryError::Unsupported`] unless
 //! [`ExportOptions::approximate`] asks for an approximation (Phong and Ward
 //! become their diffuse term, Gaussian becomes Beckmann of the same alpha, a
 //! named model a diffuse reflector, a cosine point light a tiny square area
 //! light of the same far field, a mesh-less area light an emitting shape
-//! with a `null` BSDF, textures are dropped), each listed in
+//! with a `null` BSDF, those textures are dropped), each listed in
 //! [`ExportReport::warnings`].
 //!
 //! UVs are written as stored (OBJ's convention, v up); Mitsuba's PLY loader
@@ -147,20 +160,35 @@ pub struct ExportReport {
     pub xml: PathBuf,
     /// The PLY files: one per mesh in mesh order, then those of approximated lights.
     pub meshes: Vec<PathBuf>,
+    /// The EXR files of the diffuse maps, in material order.
+    pub textures: Vec<PathBuf>,
     /// Every approximation or mismatch, one line each (empty for an exact export).
     pub warnings: Vec<String>,
 }
 
 /// Writes `scene` as a Mitsuba 3 XML file at `xml_path`, with its meshes as
-/// PLY files in `meshes/` beside it; every file is written to a temporary
-/// name and renamed.
+/// PLY files in `meshes/` and its diffuse maps as EXR files in `textures/`
+/// beside it; every file is written to a temporary name and renamed.
 pub fn export(scene: &Scene, xml_path: &Path, options: &ExportOptions) -> Result<ExportReport> {
     let dir = match xml_path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
     let mut warnings = Vec::new();
-    let (xml, extra) = build(scene, options, &mut warnings)?;
+    let (xml, extra, baked) = build(scene, options, &mut warnings)?;
+    let mut textures = Vec::with_capacity(baked.len());
+    if !baked.is_empty() {
+        let texture_dir = dir.join("textures");
+        std::fs::create_dir_all(&texture_dir).map_err(|source| GeometryError::Io {
+            path: texture_dir.clone(),
+            source,
+        })?;
+    }
+    for texture in &baked {
+        let path = dir.join(&texture.file);
+        write_atomically(&path, &texture.exr(&path)?)?;
+        textures.push(path);
+    }
     let mesh_dir = dir.join("meshes");
     std::fs::create_dir_all(&mesh_dir).map_err(|source| GeometryError::Io {
         path: mesh_dir.clone(),
@@ -191,8 +219,85 @@ pub fn export(scene: &Scene, xml_path: &Path, options: &ExportOptions) -> Result
     Ok(ExportReport {
         xml: xml_path.to_path_buf(),
         meshes,
+        textures,
         warnings,
     })
+}
+
+/// A diffuse map baked for one `diffuse` BSDF: its texels times that BSDF's reflectance, to write beside the XML.
+struct BakedTexture {
+    /// Path relative to the XML.
+    file: String,
+    /// Width in texels.
+    width: u32,
+    /// Height in texels.
+    height: u32,
+    /// Linear RGB, row by row from the top.
+    texels: Vec<Rgb>,
+}
+
+impl BakedTexture {
+    /// The texels as a float32 RGB OpenEXR file (row 0 at the top, ZIP-compressed); `path` names the file in errors.
+    fn exr(&self, path: &Path) -> Result<Vec<u8>> {
+        use exr::prelude::{Encoding, Image, SpecificChannels, WritableImage};
+        let width = self.width as usize;
+        let size = (width, self.height as usize);
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        Image::from_encoded_channels(
+            size,
+            Encoding::SMALL_LOSSLESS,
+            SpecificChannels::rgb(|p: exr::math::Vec2<usize>| {
+                let t = self.texels[p.y() * width + p.x()];
+                (t.x, t.y, t.z)
+            }),
+        )
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| GeometryError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(e),
+        })?;
+        Ok(bytes.into_inner())
+    }
+}
+
+/// The diffuse map of the material being written and where its baked copies go.
+struct DiffuseMap<'a> {
+    /// The decoded map.
+    texture: &'a crate::Texture,
+    /// The stem of the baked files' names (`textures/STEM-K.exr`).
+    stem: String,
+    /// The baked textures of the whole export.
+    out: &'a mut Vec<BakedTexture>,
+}
+
+impl DiffuseMap<'_> {
+    /// Bakes `reflectance ⊙ texels` and writes the `bitmap` texture that reads it as `reflectance`: raw, bilinear, repeated, with `to_uv` turning OBJ's `v` up into Mitsuba's `v` down.
+    fn reflectance(&mut self, x: &mut Xml, reflectance: Rgb) {
+        let file = format!("textures/{}-{}.exr", self.stem, self.out.len());
+        self.out.push(BakedTexture {
+            file: file.clone(),
+            width: self.texture.width(),
+            height: self.texture.height(),
+            texels: self
+                .texture
+                .texels()
+                .iter()
+                .map(|t| *t * reflectance)
+                .collect(),
+        });
+        x.open("texture", &[("type", "bitmap"), ("name", "reflectance")]);
+        x.property("string", "filename", &file);
+        x.property("boolean", "raw", true);
+        x.property("string", "filter_type", "bilinear");
+        x.property("string", "wrap_mode", "repeat");
+        // (u, v) ↦ (u, 1 − v): Mitsuba's (0, 0) is the image's top-left corner.
+        x.open("transform", &[("name", "to_uv")]);
+        x.leaf("scale", &[("x", "1"), ("y", "-1")]);
+        x.leaf("translate", &[("x", "0"), ("y", "1")]);
+        x.close();
+        x.close();
+    }
 }
 
 /// A PLY file to write beside the XML.
@@ -282,15 +387,15 @@ pub fn scene_xml(
     options: &ExportOptions,
     warnings: &mut Vec<String>,
 ) -> Result<String> {
-    build(scene, options, warnings).map(|(xml, _)| xml)
+    build(scene, options, warnings).map(|(xml, _, _)| xml)
 }
 
-/// The XML and the PLY files of approximated lights (the scene's meshes are written by [`export`]).
+/// The XML, the PLY files of approximated lights and the baked diffuse maps (the scene's meshes are written by [`export`]).
 fn build(
     scene: &Scene,
     options: &ExportOptions,
     warnings: &mut Vec<String>,
-) -> Result<(String, Vec<ExtraMesh>)> {
+) -> Result<(String, Vec<ExtraMesh>, Vec<BakedTexture>)> {
     if options.width == 0 || options.height == 0 || options.spp == 0 {
         return Err(GeometryError::Unsupported {
             what: format!("scene `{}`", scene.name),
@@ -323,6 +428,7 @@ fn build(
     }
     x.close();
     sensor_xml(&mut x, scene, options, warnings);
+    let mut textures = Vec::new();
     for (i, material) in scene.materials().iter().enumerate() {
         x.comment(&format!("material \"{}\"", material.name));
         material_bsdf(
@@ -331,6 +437,7 @@ fn build(
             &material_id(i, &material.name),
             options,
             warnings,
+            &mut textures,
         )?;
     }
     for (m, mesh) in scene.meshes().iter().enumerate() {
@@ -355,7 +462,7 @@ fn build(
     }
     x.close();
     debug_assert!(x.open.is_empty());
-    Ok((x.out, extra))
+    Ok((x.out, extra, textures))
 }
 
 /// Whether the integrator should hide directly visible emitters when point
@@ -576,11 +683,17 @@ fn material_bsdf(
     id: &str,
     options: &ExportOptions,
     warnings: &mut Vec<String>,
+    textures: &mut Vec<BakedTexture>,
 ) -> Result<()> {
     let what = format!("material `{}`", material.name);
+    // A decoded diffuse map is exported; a file that was not decoded is what Lustre renders without.
+    let undecoded = material
+        .diffuse_texture
+        .as_ref()
+        .filter(|_| material.diffuse_map.is_none());
     for (texture, kind) in [
-        (&material.diffuse_texture, "diffuse"),
-        (&material.specular_texture, "specular"),
+        (undecoded, "diffuse"),
+        (material.specular_texture.as_ref(), "specular"),
     ] {
         if let Some(path) = texture {
             if !options.approximate {
@@ -613,7 +726,20 @@ fn material_bsdf(
         attr = ("name", "nested");
         wrappers += 1;
     }
-    model_bsdf(x, &material.model, attr, &what, options, warnings)?;
+    let mut map = material.diffuse_map.as_deref().map(|texture| DiffuseMap {
+        texture,
+        stem: sanitize(id),
+        out: textures,
+    });
+    model_bsdf(
+        x,
+        &material.model,
+        attr,
+        &what,
+        options,
+        warnings,
+        map.as_mut(),
+    )?;
     for _ in 0..wrappers {
         x.close();
     }
@@ -628,6 +754,7 @@ fn model_bsdf(
     what: &str,
     options: &ExportOptions,
     warnings: &mut Vec<String>,
+    mut map: Option<&mut DiffuseMap<'_>>,
 ) -> Result<()> {
     let mut approximate = |why: &str, approximation: &str| -> Result<()> {
         if options.approximate {
@@ -640,13 +767,17 @@ fn model_bsdf(
             })
         }
     };
-    let diffuse = |x: &mut Xml, reflectance: Rgb| {
+    // The Lambertian part: its reflectance, or the diffuse map times it.
+    let diffuse = |x: &mut Xml, reflectance: Rgb, map: Option<&mut DiffuseMap<'_>>| {
         x.open("bsdf", &[("type", "diffuse"), attr]);
-        x.rgb("reflectance", reflectance);
+        match map {
+            Some(map) => map.reflectance(x, reflectance),
+            None => x.rgb("reflectance", reflectance),
+        }
         x.close();
     };
     match model {
-        MaterialModel::Diffuse { reflectance } => diffuse(x, *reflectance),
+        MaterialModel::Diffuse { reflectance } => diffuse(x, *reflectance, map),
         MaterialModel::RoughConductor {
             distribution,
             alpha,
@@ -694,17 +825,25 @@ fn model_bsdf(
             // they are named in the same order.
             x.open("bsdf", &[("type", "blendbsdf"), attr]);
             x.property("float", "weight", weight);
-            model_bsdf(x, first, ("name", "bsdf_0"), what, options, warnings)?;
-            model_bsdf(x, second, ("name", "bsdf_1"), what, options, warnings)?;
+            model_bsdf(
+                x,
+                first,
+                ("name", "bsdf_0"),
+                what,
+                options,
+                warnings,
+                map.as_deref_mut(),
+            )?;
+            model_bsdf(x, second, ("name", "bsdf_1"), what, options, warnings, map)?;
             x.close();
         }
         MaterialModel::Phong { diffuse: kd, .. } => {
             approximate("Mitsuba has no Phong model", "its diffuse term")?;
-            diffuse(x, *kd);
+            diffuse(x, *kd, map);
         }
         MaterialModel::Ward { diffuse: kd, .. } => {
             approximate("Mitsuba has no Ward model", "its diffuse term")?;
-            diffuse(x, *kd);
+            diffuse(x, *kd, map);
         }
         MaterialModel::Named { model, params } if model == THIN_DIELECTRIC => {
             let value = |name: &str| params.get(name).map(Vec::as_slice);
@@ -759,7 +898,8 @@ fn model_bsdf(
                     _ => None,
                 })
                 .unwrap_or(Rgb::splat(0.5));
-            diffuse(x, kd);
+            // A named model has no Lambertian part in Lustre (`diffuse_reflectance` is 0), so its map changes nothing.
+            diffuse(x, kd, None);
         }
     }
     Ok(())
@@ -1312,6 +1452,100 @@ mod tests {
             .filter(|n| n.contains(".tmp-"))
             .collect();
         assert!(leftovers.is_empty(), "{leftovers:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A 2 × 1 texture (red, blue) on cornell's first material with `model`.
+    fn textured(model: MaterialModel) -> Scene {
+        let scene = builtin("cornell").unwrap();
+        let mut materials = scene.materials().to_vec();
+        let map = crate::Texture::new(
+            "two",
+            2,
+            1,
+            vec![Rgb::new(0.5, 0.0, 0.0), Rgb::new(0.0, 0.0, 0.25)],
+        )
+        .unwrap();
+        materials[0] = Material::new("painted", model).with_diffuse_map(std::sync::Arc::new(map));
+        scene.with_materials(materials).unwrap()
+    }
+
+    #[test]
+    fn diffuse_maps_are_exported_as_baked_bitmaps() {
+        let kd = Rgb::new(0.8, 0.6, 0.4);
+        let dir = std::env::temp_dir().join(format!("lustre-mitsuba-maps-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        // Diffuse: one bitmap, Kd · texel, raw, bilinear, repeated, v flipped.
+        let scene = textured(MaterialModel::Diffuse { reflectance: kd });
+        let report = export(&scene, &dir.join("a.xml"), &ExportOptions::default()).unwrap();
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        let xml = std::fs::read_to_string(&report.xml).unwrap();
+        check_well_formed(&xml).unwrap();
+        assert_eq!(xml.matches("type=\"bitmap\"").count(), 1, "{xml}");
+        for needle in [
+            "<texture type=\"bitmap\" name=\"reflectance\">",
+            "<boolean name=\"raw\" value=\"true\"/>",
+            "<string name=\"filter_type\" value=\"bilinear\"/>",
+            "<string name=\"wrap_mode\" value=\"repeat\"/>",
+            "<transform name=\"to_uv\">",
+            "<scale x=\"1\" y=\"-1\"/>",
+            "<translate x=\"0\" y=\"1\"/>",
+        ] {
+            assert!(xml.contains(needle), "{needle} missing:\n{xml}");
+        }
+        assert_eq!(report.textures.len(), 1);
+        let rel = report.textures[0]
+            .strip_prefix(&dir)
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .to_owned();
+        assert!(
+            rel.starts_with("textures/") && rel.ends_with(".exr"),
+            "{rel}"
+        );
+        assert!(xml.contains(&format!("value=\"{rel}\"")), "{rel} not named");
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            &report.textures[0],
+            |r, _| (r.width(), vec![[0.0f32; 3]; r.width() * r.height()]),
+            |(w, px): &mut (usize, Vec<[f32; 3]>), p, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[p.y() * *w + p.x()] = [r, g, b];
+            },
+        )
+        .unwrap();
+        let (w, px) = image.layer_data.channel_data.pixels;
+        assert_eq!(w, 2);
+        assert_eq!(px, vec![[0.5 * kd.x, 0.0, 0.0], [0.0, 0.0, 0.25 * kd.z]]);
+        // Blend of a diffuse and an approximated Phong: each nested diffuse gets its own bake.
+        let kd2 = Rgb::new(0.2, 0.4, 0.6);
+        let blend = textured(MaterialModel::Blend {
+            weight: 0.3,
+            first: Box::new(MaterialModel::Diffuse { reflectance: kd }),
+            second: Box::new(MaterialModel::Phong {
+                diffuse: kd2,
+                specular: Rgb::splat(0.2),
+                exponent: 10.0,
+            }),
+        });
+        let options = ExportOptions {
+            approximate: true,
+            ..ExportOptions::default()
+        };
+        let report = export(&blend, &dir.join("b.xml"), &options).unwrap();
+        let xml = std::fs::read_to_string(&report.xml).unwrap();
+        check_well_formed(&xml).unwrap();
+        assert_eq!(report.textures.len(), 2);
+        assert_eq!(xml.matches("type=\"bitmap\"").count(), 2, "{xml}");
+        assert_ne!(report.textures[0], report.textures[1]);
+        // Untextured scenes write no texture folder.
+        let plain = export(
+            &builtin("cornell").unwrap(),
+            &dir.join("c.xml"),
+            &ExportOptions::default(),
+        )
+        .unwrap();
+        assert!(plain.textures.is_empty());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

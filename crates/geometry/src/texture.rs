@@ -52,6 +52,15 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// The inverse of [`srgb_to_linear`]: a linear value in `[0, 1]` to its sRGB encoding.
+pub fn linear_to_srgb(c: f32) -> f32 {
+    if c <= 0.003_130_8 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
 impl Texture {
     /// A texture of `width × height` linear texels, row by row from the top; fails on a zero side, a wrong texel count or texels that are not finite and non-negative.
     pub fn new(name: impl Into<String>, width: u32, height: u32, texels: Vec<Rgb>) -> Result<Self> {
@@ -126,6 +135,29 @@ impl Texture {
             .map(|p| Rgb::from(p.0.map(|c| srgb_to_linear(c.clamp(0.0, 1.0)))))
             .collect();
         Self::new(name, width, height, texels)
+    }
+
+    /// The texture as a 16-bit sRGB PNG (texels clamped to `[0, 1]`), which [`Texture::decode`] reads back within 10⁻⁴.
+    pub fn encode_png16(&self) -> Result<Vec<u8>> {
+        let samples: Vec<u16> = self
+            .texels
+            .iter()
+            .flat_map(|t| t.to_array())
+            .map(|c| (linear_to_srgb(c.clamp(0.0, 1.0)) * 65535.0).round() as u16)
+            .collect();
+        let image = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(self.width, self.height, samples)
+            .ok_or_else(|| GeometryError::Unsupported {
+                what: format!("texture `{}`", self.name),
+                why: "its texels do not fill its size".into(),
+            })?;
+        let mut png = Vec::new();
+        image
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| GeometryError::Unsupported {
+                what: format!("texture `{}`", self.name),
+                why: format!("cannot encode it as PNG: {e}"),
+            })?;
+        Ok(png)
     }
 
     /// The file (or embedded image) it was decoded from, or the name it was made with.
@@ -231,6 +263,20 @@ mod tests {
         assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
         // Continuous at the linear segment's end.
         assert!((srgb_to_linear(0.04045) - 0.04045 / 12.92).abs() < 1e-7);
+    }
+
+    #[test]
+    fn png16_round_trip() {
+        let texels = (0..12).map(|i| Rgb::new(i as f32 / 11.0, 0.5, (i as f32 / 11.0).powi(3))).collect();
+        let t = Texture::new("ramp", 4, 3, texels).unwrap();
+        let back = Texture::decode(&t.encode_png16().unwrap(), "ramp.png").unwrap();
+        assert_eq!((back.width(), back.height()), (4, 3));
+        for (a, b) in t.texels().iter().zip(back.texels()) {
+            assert!((*a - *b).abs().max_element() < 1e-4, "{a} {b}");
+        }
+        for c in [0.0, 0.001, 0.2, 0.9, 1.0] {
+            assert!((srgb_to_linear(linear_to_srgb(c)) - c).abs() < 1e-6);
+        }
     }
 
     #[test]

@@ -30,11 +30,21 @@
 //! [`TraceOptions::max_bounces`] hits (a truncation bias below `a^max` of the
 //! power), or when it leaves the scene.
 //!
+//! ## Diffuse texture maps
+//!
+//! A material's BRDF is built once, untextured; at a hit on a material with
+//! a diffuse map its Lambertian part `ρ_d / π` is scaled by the map's tint
+//! `t(uv)`, so the photon scatters with `f' = f + (t − 1) ⊙ ρ_d / π`. The
+//! direction is still drawn by the untextured sampler and a smooth draw is
+//! reweighted to `f' |cos θ_out| / p` (importance sampling with the
+//! untextured proposal, unbiased since `f' > 0` only where `p > 0`); delta
+//! draws are unchanged, and untextured materials take the path above.
+//!
 //! Surfaces are two-sided: the shading normal is flipped to the side the
 //! photon arrives from. Planar surfaces use their [`crate::PlanarFrame`]
 //! (tangent `u_axis`); curved ones the interpolated shading normal.
 
-use lustre_brdf::{BoxedBrdf, from_model};
+use lustre_brdf::{BoxedBrdf, BrdfSample, from_model};
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Hit, Ray, Scene};
 use rayon::prelude::*;
@@ -382,7 +392,11 @@ impl<'a> PhotonTracer<'a> {
             let Some(sample) = brdf.sample_adjoint(wi, u, u_lobe) else {
                 return;
             };
-            let w = sample.weight;
+            // A textured material's Lambertian part, applied per hit (module documentation).
+            let w = match self.scene.materials().get(hit.material as usize) {
+                Some(material) => textured_weight(material, hit.uv, wi, &sample),
+                None => sample.weight,
+            };
             if !w.is_finite() || !(w.max_element() > 0.0) {
                 return;
             }
@@ -401,6 +415,36 @@ impl<'a> PhotonTracer<'a> {
             ray = Ray::new(hit.position + self.epsilon * offset, direction);
         }
     }
+}
+
+/// The adjoint weight of `sample`, drawn by [`lustre_brdf::Brdf::sample_adjoint`]
+/// for light arriving from the local direction `wi`, on a surface of
+/// `material` at texture coordinates `uv`: `sample.weight` itself for an
+/// untextured material or a delta draw; for a smooth draw on a material with
+/// a diffuse map, `f'(ω_in, ω_out) |cos θ_out| / p` with
+/// `f' = f + (t(uv) − 1) ⊙ ρ_d / π` on the upper hemisphere (where the
+/// Lambertian part lives), from `sample.weight = f |cos θ_out| / p` and its
+/// density `p`. The proposal is the untextured one, so the estimate stays
+/// unbiased wherever `f' > 0` implies `p > 0`: `f' ≤ f` for `t ≤ 1`, and a
+/// Lambertian part with `ρ_d > 0` is always drawn with positive density.
+pub fn textured_weight(
+    material: &lustre_geometry::Material,
+    uv: glam::Vec2,
+    wi: glam::Vec3,
+    sample: &BrdfSample,
+) -> glam::Vec3 {
+    let (w, pdf, wo) = (sample.weight, sample.pdf, sample.wi);
+    if material.diffuse_map.is_none()
+        || sample.delta
+        || !(wi.z > 0.0 && wo.z > 0.0)
+        || !(pdf > 0.0 && pdf.is_finite())
+    {
+        return w;
+    }
+    let rho_d = material.model.diffuse_reflectance();
+    let tint = material.diffuse_tint(uv);
+    let correction = (tint - glam::Vec3::ONE) * rho_d * (wo.z * std::f32::consts::FRAC_1_PI / pdf);
+    (w + correction).max(glam::Vec3::ZERO)
 }
 
 /// Traces `options.photons` photons through a scene (section 2.1): builds the BRDFs and parameterisations, then runs [`PhotonTracer::trace`] on the current rayon pool.

@@ -7,7 +7,9 @@
 //! node's transform is the identity); materials go through
 //! [`GltfMaterial::from_material`]; point and spot lights become
 //! `KHR_lights_punctual` lights of `683 I` candela; the camera a
-//! perspective camera node. Area lights are their emissive meshes. What glTF
+//! perspective camera node. Area lights are their emissive meshes. A
+//! material's diffuse map becomes its base colour texture, a 16-bit sRGB PNG
+//! in the buffer. What glTF
 //! cannot hold (cosine point lights, models without a glTF counterpart) is
 //! left out or approximated, one warning each.
 
@@ -72,11 +74,24 @@ pub fn export_gltf(scene: &Scene, path: &Path) -> Result<Vec<String>> {
         nodes.push(json!({"name": object.name, "mesh": meshes.len()}));
         meshes.push(json!({"name": object.name, "primitives": primitives}));
     }
-    let materials: Vec<Value> = scene
-        .materials()
-        .iter()
-        .map(|m| material_json(&GltfMaterial::from_material(m, &mut warnings)))
-        .collect();
+    let mut images: Vec<Value> = Vec::new();
+    let mut textures: Vec<Value> = Vec::new();
+    let mut materials: Vec<Value> = Vec::new();
+    for m in scene.materials() {
+        let mut material = material_json(&GltfMaterial::from_material(m, &mut warnings));
+        if let Some(map) = &m.diffuse_map {
+            // The base colour texture: the diffuse map as a 16-bit PNG in the buffer.
+            let png = map.encode_png16()?;
+            let start = buffer.bytes.len();
+            buffer.bytes.extend_from_slice(&png);
+            let view = buffer.raw_view(start);
+            images.push(json!({"bufferView": view, "mimeType": "image/png"}));
+            textures.push(json!({"source": images.len() - 1}));
+            material["pbrMetallicRoughness"]["baseColorTexture"] =
+                json!({"index": textures.len() - 1});
+        }
+        materials.push(material);
+    }
     let mut lights = Vec::new();
     for (i, light) in scene.lights().iter().enumerate() {
         let (position, direction, intensity, spot) = match light {
@@ -155,6 +170,10 @@ pub fn export_gltf(scene: &Scene, path: &Path) -> Result<Vec<String>> {
     });
     if !lights.is_empty() {
         doc["extensions"] = json!({"KHR_lights_punctual": {"lights": lights}});
+    }
+    if !images.is_empty() {
+        doc["images"] = json!(images);
+        doc["textures"] = json!(textures);
     }
     let glb = path
         .extension()
@@ -252,6 +271,19 @@ impl Buffer {
             "type": "SCALAR",
         }));
         self.accessors.len() - 1
+    }
+
+    /// A view without a target of the bytes from `start` to the end (an image), the buffer then padded to 4 bytes for the views after it.
+    fn raw_view(&mut self, start: usize) -> usize {
+        self.views.push(json!({
+            "buffer": 0,
+            "byteOffset": start,
+            "byteLength": self.bytes.len() - start,
+        }));
+        while !self.bytes.len().is_multiple_of(4) {
+            self.bytes.push(0);
+        }
+        self.views.len() - 1
     }
 
     /// A view of the bytes from `start` to the end (4-byte aligned: every element here is 4 bytes).

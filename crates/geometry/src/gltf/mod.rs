@@ -405,6 +405,29 @@ impl Loader<'_> {
         if let Some(info) = material.pbr_metallic_roughness().base_color_texture() {
             self.base_colour_texture(&info, &mut lustre, parameters.metallic);
         }
+        let ignored: Vec<&str> = [
+            (
+                material
+                    .pbr_metallic_roughness()
+                    .metallic_roughness_texture()
+                    .is_some(),
+                "metallic-roughness",
+            ),
+            (material.normal_texture().is_some(), "normal"),
+            (material.occlusion_texture().is_some(), "occlusion"),
+            (material.emissive_texture().is_some(), "emissive"),
+        ]
+        .into_iter()
+        .filter_map(|(present, what)| present.then_some(what))
+        .collect();
+        if !ignored.is_empty() {
+            self.warnings.push(format!(
+                "material `{}`: its {} texture{} not used (Lustre draws base colour textures only)",
+                lustre.name,
+                ignored.join(", "),
+                if ignored.len() == 1 { " is" } else { "s are" }
+            ));
+        }
         self.materials.push(lustre);
         id
     }
