@@ -125,7 +125,7 @@ impl Bounds {
 pub struct Case {
     /// Name of the case.
     pub name: &'static str,
-    /// The built-in scene; its reference is `tests/references/<scene>.exr`.
+    /// The built-in scene, or a scene file relative to the workspace root (`tests/scenes/...`); its reference is `tests/references/<scene>.exr`, `<scene>` the file's stem for a file ([`reference_name`]).
     pub scene: &'static str,
     /// Options of `lustre render` after the scene (without `--out`).
     pub args: &'static [&'static str],
@@ -521,20 +521,50 @@ enum Outcome {
     Skipped(String),
 }
 
+/// Whether a case's scene is a file (it has an extension or a folder) rather than a built-in's name.
+fn is_scene_file(scene: &str) -> bool {
+    scene.contains('/') || Path::new(scene).extension().is_some()
+}
+
+/// The name of a case's reference in `tests/references/`: the built-in scene's name, or the scene file's stem.
+pub fn reference_name(scene: &str) -> &str {
+    if is_scene_file(scene) {
+        Path::new(scene)
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or(scene)
+    } else {
+        scene
+    }
+}
+
+/// The scene argument of `lustre` for a case: a built-in's name, or the scene file under the workspace root.
+fn scene_arg(scene: &str) -> String {
+    if is_scene_file(scene) {
+        crate::workspace_root().join(scene).display().to_string()
+    } else {
+        scene.to_owned()
+    }
+}
+
 /// Renders `case` and measures it against its reference.
 fn run_case(lustre: &Lustre, case: &Case, scratch: &Path, require_gpu: bool) -> Result<Outcome> {
-    let reference =
-        crate::converge::load_reference(&crate::converge::references_dir(), case.scene)?.image;
+    let reference = crate::converge::load_reference(
+        &crate::converge::references_dir(),
+        reference_name(case.scene),
+    )?
+    .image;
+    let scene = scene_arg(case.scene);
     let out = scratch.join(format!("{}.exr", case.name));
     let start = Instant::now();
     let photons = scratch.join(format!("{}.lph", case.name));
     let mut args: Vec<&str> = case.args.to_vec();
     if let Some(trace) = case.trace {
-        lustre.trace(case.scene, trace, &photons)?;
+        lustre.trace(&scene, trace, &photons)?;
         let path = photons.to_str().context("non-UTF-8 scratch path")?;
         args.extend(["--photons-file", path]);
     }
-    let render = match lustre.render(case.scene, &args, &out) {
+    let render = match lustre.render(&scene, &args, &out) {
         Ok(render) => render,
         Err(error) => match error.downcast_ref::<NoAdapter>() {
             Some(no_adapter) if !require_gpu => {
@@ -830,6 +860,32 @@ mod tests {
             assert!(!case.args.contains(&"--out"), "{}", case.name);
         }
         assert!(select(Some("nope")).is_err());
+    }
+
+    #[test]
+    fn scene_files_name_their_reference_by_stem() {
+        assert_eq!(reference_name("cornell"), "cornell");
+        assert_eq!(
+            reference_name("tests/scenes/textured-cornell/textured-cornell.obj"),
+            "textured-cornell"
+        );
+        for case in CASES.iter().filter(|c| is_scene_file(c.scene)) {
+            let path = crate::workspace_root().join(case.scene);
+            assert!(
+                path.is_file(),
+                "{}: no scene file {}",
+                case.name,
+                path.display()
+            );
+            let reference = crate::converge::references_dir()
+                .join(format!("{}.exr", reference_name(case.scene)));
+            assert!(
+                reference.is_file(),
+                "{}: no reference {}",
+                case.name,
+                reference.display()
+            );
+        }
     }
 
     #[test]

@@ -57,11 +57,11 @@ pub use material::{Material, MaterialId, MaterialModel};
 pub use mesh::{Mesh, MeshId, triangle_area};
 pub use obj::{LoadedScene, ObjOptions, load_obj, load_obj_with};
 pub use plane::Plane;
-pub use texture::Texture;
 pub use ray::{Hit, LeanHit, Ray, TriangleHit, intersect_triangle};
 pub use scene::{
     Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,
 };
+pub use texture::Texture;
 
 /// Linear Rec.709 RGB.
 pub type Rgb = glam::Vec3;

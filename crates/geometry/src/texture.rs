@@ -81,8 +81,13 @@ impl Texture {
                 texels.len()
             )));
         }
-        if let Some(t) = texels.iter().find(|t| !t.is_finite() || t.min_element() < 0.0) {
-            return Err(bad(format!("texel {t} is not a finite non-negative colour")));
+        if let Some(t) = texels
+            .iter()
+            .find(|t| !t.is_finite() || t.min_element() < 0.0)
+        {
+            return Err(bad(format!(
+                "texel {t} is not a finite non-negative colour"
+            )));
         }
         Ok(Self {
             name,
@@ -145,11 +150,12 @@ impl Texture {
             .flat_map(|t| t.to_array())
             .map(|c| (linear_to_srgb(c.clamp(0.0, 1.0)) * 65535.0).round() as u16)
             .collect();
-        let image = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(self.width, self.height, samples)
-            .ok_or_else(|| GeometryError::Unsupported {
-                what: format!("texture `{}`", self.name),
-                why: "its texels do not fill its size".into(),
-            })?;
+        let image =
+            image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(self.width, self.height, samples)
+                .ok_or_else(|| GeometryError::Unsupported {
+                    what: format!("texture `{}`", self.name),
+                    why: "its texels do not fill its size".into(),
+                })?;
         let mut png = Vec::new();
         image
             .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
@@ -220,13 +226,7 @@ mod tests {
 
     fn checker() -> Texture {
         // 2 × 2: top row red, green; bottom row blue, white.
-        Texture::new(
-            "checker",
-            2,
-            2,
-            vec![Rgb::X, Rgb::Y, Rgb::Z, Rgb::ONE],
-        )
-        .unwrap()
+        Texture::new("checker", 2, 2, vec![Rgb::X, Rgb::Y, Rgb::Z, Rgb::ONE]).unwrap()
     }
 
     #[test]
@@ -243,9 +243,19 @@ mod tests {
     fn bilinear_between_centres_and_repeat_across_edges() {
         let t = checker();
         // Half-way between the two top texels.
-        assert!((t.sample(Vec2::new(0.5, 0.75)) - Rgb::new(0.5, 0.5, 0.0)).abs().max_element() < 1e-6);
+        assert!(
+            (t.sample(Vec2::new(0.5, 0.75)) - Rgb::new(0.5, 0.5, 0.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
         // At u = 0 the left and right columns wrap onto each other.
-        assert!((t.sample(Vec2::new(0.0, 0.75)) - Rgb::new(0.5, 0.5, 0.0)).abs().max_element() < 1e-6);
+        assert!(
+            (t.sample(Vec2::new(0.0, 0.75)) - Rgb::new(0.5, 0.5, 0.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
         // Repeat: one period away reads the same.
         for uv in [Vec2::new(0.3, 0.6), Vec2::new(0.9, 0.1)] {
             let d = t.sample(uv) - t.sample(uv + Vec2::new(3.0, -2.0));
@@ -267,7 +277,9 @@ mod tests {
 
     #[test]
     fn png16_round_trip() {
-        let texels = (0..12).map(|i| Rgb::new(i as f32 / 11.0, 0.5, (i as f32 / 11.0).powi(3))).collect();
+        let texels = (0..12)
+            .map(|i| Rgb::new(i as f32 / 11.0, 0.5, (i as f32 / 11.0).powi(3)))
+            .collect();
         let t = Texture::new("ramp", 4, 3, texels).unwrap();
         let back = Texture::decode(&t.encode_png16().unwrap(), "ramp.png").unwrap();
         assert_eq!((back.width(), back.height()), (4, 3));
@@ -282,14 +294,21 @@ mod tests {
     #[test]
     fn png_round_trip_and_bad_files() {
         let mut png = Vec::new();
-        let img = image::RgbImage::from_fn(3, 2, |x, y| image::Rgb([x as u8 * 100, y as u8 * 255, 128]));
+        let img =
+            image::RgbImage::from_fn(3, 2, |x, y| image::Rgb([x as u8 * 100, y as u8 * 255, 128]));
         img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
             .unwrap();
         let t = Texture::decode(&png, "mem.png").unwrap();
         assert_eq!((t.width(), t.height()), (3, 2));
-        let want = Rgb::new(srgb_to_linear(200.0 / 255.0), 1.0, srgb_to_linear(128.0 / 255.0));
+        let want = Rgb::new(
+            srgb_to_linear(200.0 / 255.0),
+            1.0,
+            srgb_to_linear(128.0 / 255.0),
+        );
         assert!((t.texel(2, 1) - want).abs().max_element() < 1e-6);
-        let err = Texture::decode(b"not an image", "junk.png").unwrap_err().to_string();
+        let err = Texture::decode(b"not an image", "junk.png")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("junk.png"), "{err}");
         assert!(Texture::new("empty", 0, 4, vec![]).is_err());
         assert!(Texture::new("short", 2, 2, vec![Rgb::ONE; 3]).is_err());

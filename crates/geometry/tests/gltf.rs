@@ -395,7 +395,11 @@ fn built_in_scenes_survive_a_round_trip() {
                 // glTF's v is 1 − v both ways: equal within the rounding of 1 − (1 − v).
                 assert_eq!(a.uvs.len(), b.uvs.len(), "{name}: {}", a.name);
                 for (ua, ub) in a.uvs.iter().zip(&b.uvs) {
-                    assert!((*ua - *ub).abs().max_element() <= 1e-6, "{name}: {}: {ua} {ub}", a.name);
+                    assert!(
+                        (*ua - *ub).abs().max_element() <= 1e-6,
+                        "{name}: {}: {ua} {ub}",
+                        a.name
+                    );
                 }
                 for (n, nb) in normals.iter().zip(&b.normals) {
                     assert!(close(*n, *nb), "{name}: {}: {n} {nb}", a.name);

@@ -45,12 +45,7 @@ const GREY: f32 = 128.0 / 255.0;
 
 /// The linear colour of each quadrant of [`quadrants_png`]: top left, top right, bottom left, bottom right.
 fn quadrant_colours() -> [Rgb; 4] {
-    [
-        Rgb::X,
-        Rgb::Y,
-        Rgb::Z,
-        Rgb::splat(srgb_to_linear(GREY)),
-    ]
+    [Rgb::X, Rgb::Y, Rgb::Z, Rgb::splat(srgb_to_linear(GREY))]
 }
 
 fn close(a: Rgb, b: Rgb) -> bool {
@@ -99,7 +94,10 @@ fn map_kd_is_decoded_and_hits_read_it_the_right_way_up() {
         .unwrap();
     let map = floor.diffuse_map.as_ref().expect("map_Kd decoded");
     assert_eq!((map.width(), map.height()), (2, 2));
-    assert_eq!(floor.diffuse_texture.as_deref(), Some(dir.0.join("quadrants.png").as_path()));
+    assert_eq!(
+        floor.diffuse_texture.as_deref(),
+        Some(dir.0.join("quadrants.png").as_path())
+    );
     // The far edge of the floor (z = −1) is v = 1, the image's top row.
     let [top_left, top_right, bottom_left, bottom_right] = quadrant_colours();
     assert!(close(tint_at(scene, 0.25, -0.75), top_left));
@@ -113,13 +111,26 @@ fn map_kd_is_decoded_and_hits_read_it_the_right_way_up() {
         let out = dir.0.join(format!("floor.{ext}"));
         export_gltf(scene, &out).unwrap();
         let back = load_gltf(&out).unwrap();
-        for (x, z) in [(0.25, -0.75), (0.75, -0.75), (0.3, -0.2), (0.5, -0.5), (0.9, -0.6)] {
+        for (x, z) in [
+            (0.25, -0.75),
+            (0.75, -0.75),
+            (0.3, -0.2),
+            (0.5, -0.5),
+            (0.9, -0.6),
+        ] {
             let (a, b) = (tint_at(scene, x, z), tint_at(&back.scene, x, z));
-            assert!((a - b).abs().max_element() < 1e-4, "{ext} at ({x}, {z}): {a} {b}");
+            assert!(
+                (a - b).abs().max_element() < 1e-4,
+                "{ext} at ({x}, {z}): {a} {b}"
+            );
         }
     }
     // The light is untextured: a tint of one.
-    let light = scene.materials().iter().find(|m| m.name == "light").unwrap();
+    let light = scene
+        .materials()
+        .iter()
+        .find(|m| m.name == "light")
+        .unwrap();
     assert!(light.diffuse_map.is_none());
     assert_eq!(light.diffuse_tint(Vec2::splat(0.3)), Rgb::ONE);
 }
@@ -142,7 +153,11 @@ fn one_file_is_decoded_once_and_kd_defaults_to_one_under_a_map() {
     assert_eq!(maps.len(), 2);
     assert!(Arc::ptr_eq(&maps[0], &maps[1]), "decoded once, shared");
     let floor = &library.materials[0];
-    assert_eq!(floor.model.diffuse_reflectance(), Rgb::ONE, "map_Kd without Kd");
+    assert_eq!(
+        floor.model.diffuse_reflectance(),
+        Rgb::ONE,
+        "map_Kd without Kd"
+    );
     assert!(load_obj(&path).is_ok());
 }
 
@@ -175,10 +190,19 @@ fn an_undecodable_or_missing_map_is_a_warning_not_a_failure() {
 }
 
 /// A glTF document of one unit quad at y = 0 (corners as [`write_obj`]'s floor, UVs in glTF's convention: v = 0 at the far edge) and a point light, its base colour texture from `image`.
-fn gltf_document(buffer_uri: Option<String>, image: serde_json::Value) -> (serde_json::Value, Vec<u8>) {
+fn gltf_document(
+    buffer_uri: Option<String>,
+    image: serde_json::Value,
+) -> (serde_json::Value, Vec<u8>) {
     let mut bin = Vec::new();
-    for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, -1.0], [0.0, 0.0, -1.0]] {
-        p.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    for p in [
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 0.0, -1.0],
+        [0.0, 0.0, -1.0],
+    ] {
+        p.iter()
+            .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
     }
     for _ in 0..4 {
         [0.0f32, 1.0, 0.0]
@@ -187,7 +211,8 @@ fn gltf_document(buffer_uri: Option<String>, image: serde_json::Value) -> (serde
     }
     // glTF's v grows downwards: the far edge (z = −1) is the image's top, v = 0.
     for uv in [[0.0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
-        uv.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+        uv.iter()
+            .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
     }
     for i in [0u16, 1, 2, 0, 2, 3] {
         bin.extend_from_slice(&i.to_le_bytes());
@@ -231,9 +256,18 @@ fn check_gltf_floor(path: &Path) {
     let loaded = load_gltf(path).unwrap();
     let scene = &loaded.scene;
     let floor = &scene.materials()[scene.meshes()[0].material as usize];
-    assert!(floor.diffuse_map.is_some(), "{}: {:?}", path.display(), loaded.warnings);
+    assert!(
+        floor.diffuse_map.is_some(),
+        "{}: {:?}",
+        path.display(),
+        loaded.warnings
+    );
     let [top_left, top_right, bottom_left, bottom_right] = quadrant_colours();
-    assert!(close(tint_at(scene, 0.25, -0.75), top_left), "{}", path.display());
+    assert!(
+        close(tint_at(scene, 0.25, -0.75), top_left),
+        "{}",
+        path.display()
+    );
     assert!(close(tint_at(scene, 0.75, -0.75), top_right));
     assert!(close(tint_at(scene, 0.25, -0.25), bottom_left));
     assert!(close(tint_at(scene, 0.75, -0.25), bottom_right));
@@ -251,7 +285,10 @@ fn gltf_base_colour_textures_from_files_data_uris_and_buffer_views() {
     check_gltf_floor(&file);
     let loaded = load_gltf(&file).unwrap();
     let floor = &loaded.scene.materials()[0];
-    assert_eq!(floor.diffuse_texture.as_deref(), Some(dir.0.join("quadrants.png").as_path()));
+    assert_eq!(
+        floor.diffuse_texture.as_deref(),
+        Some(dir.0.join("quadrants.png").as_path())
+    );
     // A data: URI.
     let uri = format!(
         "data:image/png;base64,{}",
@@ -278,7 +315,10 @@ fn a_broken_gltf_image_is_a_warning_and_the_v_flip_survives_export() {
     let loaded = load_gltf(&path).unwrap();
     assert!(loaded.scene.materials()[0].diffuse_map.is_none());
     assert!(
-        loaded.warnings.iter().any(|w| w.contains("floor") && w.contains("missing.png")),
+        loaded
+            .warnings
+            .iter()
+            .any(|w| w.contains("floor") && w.contains("missing.png")),
         "{:?}",
         loaded.warnings
     );

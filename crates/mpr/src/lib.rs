@@ -27,7 +27,8 @@
 //! light path with BVH ray casts.
 //!
 //! Materials reach the GPU as weighted BRDF lobes ([`material`]) evaluated by
-//! the WGSL twins of `lustre-brdf`.
+//! the WGSL twins of `lustre-brdf`, their diffuse texture maps as one
+//! mip-mapped texture array ([`diffuse_map`]) that scales the lobes' `kd`.
 //!
 //! ```no_run
 //! use lustre_mpr::{AdapterPreference, GpuContext, RenderTargets};
@@ -41,6 +42,7 @@
 
 pub mod beam_paths;
 mod device;
+pub mod diffuse_map;
 mod error;
 pub mod frame;
 pub mod ibr;

@@ -66,6 +66,8 @@ pub struct GpuLobe {
 pub struct GpuMaterial {
     /// The lobes; unused slots are [`LOBE_NONE`].
     pub lobes: [GpuLobe; MAX_LOBES],
+    /// `x`: the layer of the material's diffuse map in [`crate::diffuse_map::DiffuseMaps`], which scales every lobe's `kd` ([`crate::diffuse_map::WHITE_LAYER`]: none); `yzw` unused.
+    pub diffuse_map: [u32; 4],
 }
 
 /// How glossy lobes are evaluated on the GPU.
@@ -295,12 +297,18 @@ impl GpuMaterial {
     }
 }
 
-/// Every material of a scene, in `MaterialId` order.
+/// Every material of a scene, in `MaterialId` order, each with the layer of its diffuse map ([`crate::diffuse_map::diffuse_map_layers`]).
 pub fn scene_materials(scene: &Scene, glossy: GlossyModel) -> Result<Vec<GpuMaterial>> {
+    let (layers, _) = crate::diffuse_map::diffuse_map_layers(scene);
     scene
         .materials()
         .iter()
-        .map(|m| GpuMaterial::from_model(&m.name, &m.model, glossy))
+        .zip(layers)
+        .map(|(m, layer)| {
+            let mut g = GpuMaterial::from_model(&m.name, &m.model, glossy)?;
+            g.diffuse_map[0] = layer;
+            Ok(g)
+        })
         .collect()
 }
 
@@ -310,9 +318,9 @@ mod tests {
     use lustre_geometry::builtin;
 
     #[test]
-    fn gpu_material_is_the_std430_size_of_four_lobes() {
+    fn gpu_material_is_the_std430_size_of_four_lobes_and_a_map_layer() {
         assert_eq!(size_of::<GpuLobe>(), 96);
-        assert_eq!(size_of::<GpuMaterial>(), 4 * 96);
+        assert_eq!(size_of::<GpuMaterial>(), 4 * 96 + 16);
     }
 
     #[test]

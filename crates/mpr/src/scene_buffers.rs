@@ -10,7 +10,7 @@ use wgpu::util::DeviceExt;
 
 use crate::{GpuContext, Result};
 
-/// One vertex as the passes read it: world position, the triangle's `SurfaceId`, shading normal and `MaterialId`.
+/// One vertex as the passes read it: world position, the triangle's `SurfaceId`, shading normal, `MaterialId` and texture coordinates.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct GpuVertex {
@@ -22,15 +22,18 @@ pub struct GpuVertex {
     pub normal: [f32; 3],
     /// Scene `MaterialId` of the triangle.
     pub material: u32,
+    /// Texture coordinates (OBJ's convention, `v` up; [`lustre_geometry::WorldTriangle::uvs`]).
+    pub uv: [f32; 2],
 }
 
 impl GpuVertex {
     /// The vertex buffer layout: `@location(0) vec3f` position, `@location(1) u32` surface,
-    /// `@location(2) vec3f` normal, `@location(3) u32` material.
+    /// `@location(2) vec3f` normal, `@location(3) u32` material, `@location(6) vec2f` uv
+    /// (locations 4 and 5 are left to the passes' own vertex buffers, e.g. the Gouraud pass's radiance).
     pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
         array_stride: size_of::<GpuVertex>() as wgpu::BufferAddress,
         step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32],
+        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32, 6 => Float32x2],
     };
 }
 
@@ -44,6 +47,7 @@ pub fn gpu_vertices(triangles: &[WorldTriangle]) -> Vec<GpuVertex> {
                 surface: t.surface,
                 normal: t.normals[i].to_array(),
                 material: t.material,
+                uv: t.uvs[i].to_array(),
             })
         })
         .collect()

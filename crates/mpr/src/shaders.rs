@@ -80,9 +80,14 @@ pub fn with_materials(pass: &str) -> String {
     format!("{}\n{MATERIAL_STORAGE_WGSL}\n{pass}", material_module())
 }
 
-/// The direct light pass as compiled: [`DIRECT_WGSL`] after [`material_module`].
+/// `pass` (which declares `diffuse_maps` and `diffuse_map_sampler`) after the diffuse map lookups ([`crate::diffuse_map::DIFFUSE_MAP_WGSL`]).
+pub fn with_diffuse_maps(pass: &str) -> String {
+    format!("{}\n{pass}", crate::diffuse_map::DIFFUSE_MAP_WGSL)
+}
+
+/// The direct light pass as compiled: [`DIRECT_WGSL`] after [`VIEW_WGSL`], [`with_diffuse_maps`] and [`with_materials`].
 pub fn direct_wgsl() -> String {
-    with_materials(&with_view(DIRECT_WGSL))
+    with_materials(&with_diffuse_maps(&with_view(DIRECT_WGSL)))
 }
 
 /// Each WGSL file under `src/` (path relative to `src/`) with the complete
@@ -96,6 +101,13 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             format!(
                 "{}\n@group(0) @binding(0) var<storage, read> materials: array<GpuMaterial>;\n{MATERIAL_STORAGE_WGSL}",
                 material_module()
+            ),
+        ),
+        (
+            "shaders/common/diffuse_map.wgsl",
+            with_diffuse_maps(
+                "@group(0) @binding(0) var diffuse_maps: texture_2d_array<f32>;\n\
+                 @group(0) @binding(1) var diffuse_map_sampler: sampler;",
             ),
         ),
         ("shaders/common/view.wgsl", VIEW_WGSL.to_owned()),
@@ -134,7 +146,7 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
         ),
         (
             "passes/diffuse_texture.wgsl",
-            with_view(crate::passes::diffuse_texture::DIFFUSE_TEXTURE_WGSL),
+            crate::passes::diffuse_texture::diffuse_texture_wgsl(),
         ),
         (
             "passes/gouraud.wgsl",

@@ -7,12 +7,16 @@
 
 mod support;
 
+use std::sync::Arc;
+
 use glam::{Affine3A, Vec2, Vec3};
 use lustre_geometry::light::{
     Light, OrientedPointLight, PointLight, SpotLight, jittered_point_lights,
 };
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Rgb, Scene, WorldTriangle, builtin};
+use lustre_geometry::{
+    Bvh, Camera, Material, MaterialModel, Mesh, Object, Rgb, Scene, Texture, WorldTriangle, builtin,
+};
 use lustre_mpr::material::{GlossyModel, scene_materials};
 use lustre_mpr::passes::depth::DepthPass;
 use lustre_mpr::passes::direct::{
@@ -252,13 +256,37 @@ fn compare(
     gpu: &[[f32; 4]],
     ids: &[u32],
 ) -> String {
+    compare_within(
+        name,
+        scene,
+        lights,
+        camera,
+        glossy,
+        gpu,
+        ids,
+        [RELATIVE_TOLERANCE, ABSOLUTE_TOLERANCE],
+    )
+}
+
+/// [`compare`] with `[relative, absolute as a fraction of the largest CPU radiance]` tolerances.
+#[allow(clippy::too_many_arguments)]
+fn compare_within(
+    name: &str,
+    scene: &Scene,
+    lights: &[Light],
+    camera: &Camera,
+    glossy: GlossyModel,
+    gpu: &[[f32; 4]],
+    ids: &[u32],
+    [relative, absolute]: [f32; 2],
+) -> String {
     let bvh = Bvh::build(scene);
     let cpu =
         direct_pixels_cpu_with_lights(scene, lights, &bvh, camera, SIZE, SIZE, glossy).unwrap();
     let edges = edge_distance_image(scene, camera, SIZE);
     let shadow_edges = near_shadow_boundary(&cpu, SIZE);
     let max = cpu.iter().flat_map(|p| p.radiance).fold(0.0f32, f32::max);
-    let floor = ABSOLUTE_TOLERANCE * max;
+    let floor = absolute * max;
     let (mut compared, mut near_edge, mut near_shadow, mut background) = (0, 0, 0, 0);
     let (mut worst_rel, mut worst_abs) = (0.0f32, 0.0f32);
     let mut worst_at = (0, 0);
@@ -290,7 +318,7 @@ fn compare(
             let (g, r) = (gpu[i][k], c.radiance[k]);
             let diff = (g - r).abs();
             assert!(
-                diff <= RELATIVE_TOLERANCE * r + floor,
+                diff <= relative * r + floor,
                 "{name}: pixel ({x}, {y}) channel {k}: GPU {g} vs CPU {r} (surface {}, visible {:b})",
                 c.surface,
                 c.visible
@@ -940,4 +968,126 @@ fn jittered_point_lights_converge_to_the_area_light_in_the_penumbra() {
     // converge at least as K^(-1/2): 16 times the lights, 4 times smaller.
     assert!(errors[4] * 4.0 <= errors[2], "{errors:?}");
     assert!(errors[4] <= 0.05 + 3.0 * noise, "{errors:?}");
+}
+
+/// An 8 × 8 map whose texels all differ (red grows to the right, green down the rows, blue a checker), so that a flipped, mirrored or transposed lookup shows.
+fn asymmetric_map() -> Arc<Texture> {
+    let texels = (0..64)
+        .map(|i| {
+            let (x, y) = ((i % 8) as f32, (i / 8) as f32);
+            Rgb::new(
+                0.1 + 0.8 * x / 7.0,
+                0.1 + 0.8 * y / 7.0,
+                if (i % 8 + i / 8) % 2 == 0 { 0.9 } else { 0.2 },
+            )
+        })
+        .collect();
+    Arc::new(Texture::new("asymmetric", 8, 8, texels).unwrap())
+}
+
+/// A 2 m floor at y = 0 with UVs 0..1 (u along +x, v along -z) of `material`, lit by a point light above, and a camera above it that sees each of the map's texels over several pixels.
+fn textured_floor_scene(material: Material) -> (Scene, Camera) {
+    let mesh = Mesh {
+        name: "floor".into(),
+        positions: vec![
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(-1.0, 0.0, -1.0),
+        ],
+        normals: vec![Vec3::Y; 4],
+        uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+        indices: vec![[0, 1, 2], [2, 3, 0]],
+        material: 0,
+    };
+    let light = Light::Point(PointLight {
+        position: Vec3::new(0.3, 1.2, 0.4),
+        intensity: Rgb::splat(2.0),
+    });
+    let camera =
+        Camera::look_at(Vec3::new(0.2, 2.2, 1.2), Vec3::ZERO, Vec3::Y, 50.0).with_aspect(1.0);
+    let scene = Scene::new(
+        "textured-floor",
+        vec![mesh],
+        vec![material],
+        vec![Object {
+            name: "floor".into(),
+            meshes: vec![0],
+            transform: Affine3A::IDENTITY,
+        }],
+        vec![light],
+        camera,
+    )
+    .unwrap();
+    (scene, camera)
+}
+
+/// Tolerances of a textured surface against the CPU twin: the GPU reads the
+/// map in `Rgba16Float` (relative rounding 2⁻¹¹) and weighs texels with the
+/// sampler's sub-texel precision (Vulkan requires 4 bits, lavapipe and most
+/// GPUs have 8: a weight off by up to 2⁻⁹ of neighbours that differ by at
+/// most 0.7 here), so the tint may differ by about 2⁻¹¹ + 0.7 × 2⁻⁹ ≈ 2e-3
+/// of its value of at least 0.1: relative 2e-2 in all. A tint lost, flipped
+/// or shifted by a texel changes the radiance by 10 % or more.
+const TEXTURED_RELATIVE: f32 = 2e-2;
+
+#[test]
+fn a_textured_floor_matches_the_cpu_twin_and_differs_from_the_untextured_one() {
+    let Some(ctx) =
+        gpu_or_skip("a_textured_floor_matches_the_cpu_twin_and_differs_from_the_untextured_one")
+    else {
+        return;
+    };
+    let map = asymmetric_map();
+    let models = [
+        (
+            "diffuse",
+            MaterialModel::Diffuse {
+                reflectance: Rgb::splat(0.8),
+            },
+        ),
+        (
+            "phong",
+            MaterialModel::Phong {
+                diffuse: Rgb::new(0.6, 0.5, 0.4),
+                specular: Rgb::splat(0.3),
+                exponent: 30.0,
+            },
+        ),
+    ];
+    for (name, model) in models {
+        let plain = Material::new(name, model);
+        let (untextured, camera) = textured_floor_scene(plain.clone());
+        let (scene, _) = textured_floor_scene(plain.with_diffuse_map(map.clone()));
+        let (gpu, ids) = gpu_direct(&ctx, &scene, &camera, GlossyModel::Exact, SIZE);
+        eprintln!(
+            "{}",
+            compare_within(
+                &format!("textured {name}"),
+                &scene,
+                scene.lights(),
+                &camera,
+                GlossyModel::Exact,
+                &gpu,
+                &ids,
+                [TEXTURED_RELATIVE, ABSOLUTE_TOLERANCE],
+            )
+        );
+        // The map really is drawn: most floor pixels differ from the untextured floor by more than the tolerance.
+        let (plain_gpu, _) = gpu_direct(&ctx, &untextured, &camera, GlossyModel::Exact, SIZE);
+        let floor = ids.iter().filter(|&&id| id != NO_SURFACE).count();
+        let differ = gpu
+            .iter()
+            .zip(&plain_gpu)
+            .filter(|(a, b)| (a[0] - b[0]).abs() > 0.1 * b[0])
+            .count();
+        assert!(
+            floor > SIZE as usize * SIZE as usize / 4,
+            "{name}: the floor covers {floor} pixels"
+        );
+        assert!(
+            differ > floor / 2,
+            "{name}: only {differ} of {floor} pixels show the map"
+        );
+    }
 }

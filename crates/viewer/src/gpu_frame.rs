@@ -11,6 +11,7 @@ use lustre_beams::BeamSet;
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::{Bvh, Camera, Light, Scene};
 use lustre_image::Image;
+use lustre_mpr::diffuse_map::DiffuseMaps;
 use lustre_mpr::frame::{AccumulatedSplats, SplatInputs};
 use lustre_mpr::ibr::{IbrReflectors, ReflectedSource};
 use lustre_mpr::material::GlossyModel;
@@ -195,11 +196,13 @@ impl GpuFrame {
             graph = graph.with_gouraud(&ctx, targets.hdr_format(), &scene_buffers)?;
             graph.set_gouraud_radiance(&ctx, corners)?;
         }
+        // The scene's diffuse texture maps, uploaded once for every pass that draws them.
+        let maps = DiffuseMaps::upload(&ctx, scene)?;
         let diffuse_textures = match lighting.atlas {
             Some(atlas) => {
                 graph = graph.with_diffuse_textures(&ctx, targets.hdr_format())?;
                 let pass = graph.diffuse.as_ref().context("diffuse texture pass")?;
-                Some(DiffuseTextures::new(&ctx, pass, atlas)?)
+                Some(DiffuseTextures::with_maps(&ctx, pass, atlas, &maps)?)
             }
             None => None,
         };
@@ -207,8 +210,15 @@ impl GpuFrame {
         let direct = if args.technique.direct_light() {
             graph = graph.with_direct(&ctx, targets.hdr_format())?;
             let pass = graph.direct.as_ref().context("direct pass")?;
-            let lights = DirectLights::jittered(&ctx, pass, scene, glossy, args.light_samples)
-                .with_context(|| format!("scene `{}`", scene.name))?;
+            let lights = DirectLights::jittered_with_maps(
+                &ctx,
+                pass,
+                scene,
+                glossy,
+                args.light_samples,
+                maps.clone(),
+            )
+            .with_context(|| format!("scene `{}`", scene.name))?;
             if shadow_volumes {
                 graph = graph.with_shadow_volumes(
                     &ctx,

@@ -128,6 +128,19 @@ fn info(arg: &str) -> anyhow::Result<()> {
             String::new()
         };
         println!("  {:<14} {}{emits}", m.name, m.model.name());
+        match (&m.diffuse_map, &m.diffuse_texture) {
+            (Some(map), _) => println!(
+                "  {:<14} diffuse map {} ({} × {} texels)",
+                "",
+                map.name(),
+                map.width(),
+                map.height()
+            ),
+            (None, Some(file)) => {
+                println!("  {:<14} diffuse map {} (not decoded)", "", file.display())
+            }
+            (None, None) => {}
+        }
     }
     println!("lights      {}", scene.lights().len());
     for light in scene.lights() {

@@ -319,10 +319,7 @@ impl Loader<'_> {
             .and(reader.read_tex_coords(0))
             {
                 // glTF's v grows downwards from the image's top; the scene model's (OBJ's) upwards.
-                Some(uvs) => uvs
-                    .into_f32()
-                    .map(|[u, v]| Vec2::new(u, 1.0 - v))
-                    .collect(),
+                Some(uvs) => uvs.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect(),
                 None => vec![Vec2::ZERO; positions.len()],
             };
             let mesh = match normals {
@@ -480,10 +477,10 @@ impl Loader<'_> {
         };
         let decoded = bytes
             .and_then(|bytes| {
-                let label = lustre
-                    .diffuse_texture
-                    .as_ref()
-                    .map_or_else(|| format!("{}: {name}", self.file.display()), |f| f.display().to_string());
+                let label = lustre.diffuse_texture.as_ref().map_or_else(
+                    || format!("{}: {name}", self.file.display()),
+                    |f| f.display().to_string(),
+                );
                 Texture::decode(&bytes, &label).map_err(|e| e.to_string())
             })
             .map(Arc::new)

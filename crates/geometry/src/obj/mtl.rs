@@ -447,7 +447,11 @@ fn to_material(path: &Path, m: &RawMaterial, warnings: &mut Vec<String>) -> Resu
     };
     // A diffuse map without `Kd` is the colour itself (`Kd` 1), as other viewers draw it.
     let kd = m.kd.map_or(
-        if m.map_kd.is_some() { Rgb::ONE } else { Rgb::ZERO },
+        if m.map_kd.is_some() {
+            Rgb::ONE
+        } else {
+            Rgb::ZERO
+        },
         |a| a.value,
     );
     let ks = m.ks.map_or(Rgb::ZERO, |a| a.value);

@@ -60,7 +60,10 @@
 //! redrawn with depth test `Equal` against the depth pre-pass (read-only
 //! depth, the `@invariant` position of `depth.wgsl`), each fragment computes
 //! `(u, v)` from its world position and adds the bilinear lookup One/One into
-//! HDR. The splat pass must then leave those surfaces out:
+//! HDR. A material with a diffuse map ([`crate::diffuse_map`]) is stored
+//! with its untextured `ρ` and the lookup is multiplied by the map at the
+//! fragment's texture coordinates (irradiance times albedo, as a light map
+//! is drawn), so the map stays as sharp as it is, not blurred by the kernel. The splat pass must then leave those surfaces out:
 //! [`SplatBuffers::new_excluding`] with [`DiffuseAtlas::textured`].
 //!
 //! A frame: once, [`DiffuseAtlas::build`] and [`DiffuseTextures::new`]; per
@@ -71,13 +74,15 @@
 
 use std::f32::consts::FRAC_1_PI;
 use std::ops::Range;
+use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec2, Vec2, Vec3};
-use lustre_geometry::{Bvh, Camera, Rgb, Scene, SurfaceId};
+use lustre_geometry::{Bvh, Camera, Rgb, Scene, SurfaceId, Texture};
 use lustre_photon::{PlanarFrame, SplatEstimator, SurfaceParam, SurfaceParams};
 use rayon::prelude::*;
 
+use crate::diffuse_map::{DiffuseMaps, WHITE_LAYER, diffuse_map_layers};
 use crate::material::{GlossyModel, GpuMaterial};
 use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::scene_buffers::SceneBuffers;
@@ -206,6 +211,8 @@ pub struct DiffuseSurfaceTexture {
     pub spacing: Vec2,
     /// Atlas texel of sample `(0, 0)` of the front and back layers ([`Side::index`]); `None` where no photon arrived on that side.
     pub layers: [Option<UVec2>; 2],
+    /// The layer of the material's diffuse map ([`crate::diffuse_map::diffuse_map_layers`]; [`WHITE_LAYER`]: none), which scales the stored radiance where it is drawn.
+    pub diffuse_map: u32,
 }
 
 impl DiffuseSurfaceTexture {
@@ -231,6 +238,8 @@ pub struct DiffuseAtlas {
     pub texels: Vec<[f32; 4]>,
     /// Per `SurfaceId`: the texture of a diffuse planar surface, `None` for surfaces left to the splat pass.
     pub surfaces: Vec<Option<DiffuseSurfaceTexture>>,
+    /// The scene's distinct diffuse maps: layer `i + 1` of [`DiffuseSurfaceTexture::diffuse_map`] is map `i`.
+    pub maps: Vec<Arc<Texture>>,
     /// Options used.
     pub options: DiffuseTextureOptions,
 }
@@ -378,6 +387,7 @@ impl DiffuseAtlas {
                     .map(|g| g.diffuse_reflectance())
             })
             .collect();
+        let (map_layers, maps) = diffuse_map_layers(scene);
         let mut surfaces: Vec<Option<DiffuseSurfaceTexture>> = Vec::new();
         for (id, surface) in scene.surfaces().iter().enumerate() {
             let reflectance = reflectances
@@ -404,6 +414,10 @@ impl DiffuseAtlas {
                 spacing: Vec2::new(tu, tv),
                 // Placeholders: a layer per lit side, placed by the packing below.
                 layers: lit[id].map(|l| l.then_some(UVec2::ZERO)),
+                diffuse_map: map_layers
+                    .get(surface.material as usize)
+                    .copied()
+                    .unwrap_or(WHITE_LAYER),
             }));
         }
         let layers = layers_of(&surfaces);
@@ -422,6 +436,7 @@ impl DiffuseAtlas {
             height,
             texels: vec![[0.0f32; 4]; width as usize * height as usize],
             surfaces,
+            maps,
             options,
         })
     }
@@ -516,7 +531,19 @@ impl DiffuseAtlas {
         Vec3::new(t[0], t[1], t[2])
     }
 
-    /// The radiance the GPU pass adds at point `x` of `surface` seen from `eye`: the bilinear lookup of `diffuse_texture.wgsl`; `None` for a surface this pass does not render, zero on a side without a layer.
+    /// [`DiffuseAtlas::radiance`] times the surface's diffuse map at texture coordinates `uv` (irradiance times albedo, as a light map is drawn: the map stays sharp); what the GPU pass adds at a fragment.
+    pub fn radiance_at(&self, surface: SurfaceId, x: Vec3, eye: Vec3, uv: Vec2) -> Option<Rgb> {
+        let l = self.radiance(surface, x, eye)?;
+        let layer = self.surfaces.get(surface as usize)?.as_ref()?.diffuse_map;
+        Some(
+            match layer.checked_sub(1).and_then(|i| self.maps.get(i as usize)) {
+                Some(map) => l * map.sample(uv),
+                None => l,
+            },
+        )
+    }
+
+    /// The radiance stored for point `x` of `surface` seen from `eye` (the untextured `ρ`): the bilinear lookup of `diffuse_texture.wgsl`; `None` for a surface this pass does not render, zero on a side without a layer.
     pub fn radiance(&self, surface: SurfaceId, x: Vec3, eye: Vec3) -> Option<Rgb> {
         let s = self.surfaces.get(surface as usize)?.as_ref()?;
         let Some(corner) = s.layers[Side::seen(&s.frame, x, eye).index()] else {
@@ -555,8 +582,8 @@ pub struct GpuDiffuseSurface {
     pub rows: u32,
     /// Unit plane normal (front side).
     pub normal: [f32; 3],
-    /// Padding.
-    pub pad: u32,
+    /// The layer of the surface's diffuse map ([`WHITE_LAYER`]: none).
+    pub diffuse_map: u32,
     /// `(u, v)` of sample `(0, 0)` in m.
     pub uv_min: [f32; 2],
     /// Sample spacing along u and v in m.
@@ -582,7 +609,7 @@ impl GpuDiffuseSurface {
             v_axis: s.frame.v_axis.to_array(),
             rows: s.size.y,
             normal: s.frame.normal.to_array(),
-            pad: 0,
+            diffuse_map: s.diffuse_map,
             uv_min: s.frame.min.to_array(),
             spacing: s.spacing.to_array(),
             layers: [fx, fy, bx, by],
@@ -602,8 +629,19 @@ pub struct DiffuseTextures {
 }
 
 impl DiffuseTextures {
-    /// Uploads `atlas` for `pass`; an atlas larger than the device's 2D limit is [`MprError::InvalidSize`].
+    /// Uploads `atlas` for `pass` with its diffuse maps ([`DiffuseAtlas::maps`]); an atlas larger than the device's 2D limit is [`MprError::InvalidSize`].
     pub fn new(ctx: &GpuContext, pass: &DiffuseTexturePass, atlas: &DiffuseAtlas) -> Result<Self> {
+        let maps = DiffuseMaps::from_textures(ctx, Vec::new(), &atlas.maps)?;
+        Self::with_maps(ctx, pass, atlas, &maps)
+    }
+
+    /// [`DiffuseTextures::new`] reading the diffuse maps from `maps`, uploaded for the same scene (e.g. [`crate::passes::direct::DirectLights::diffuse_maps`]).
+    pub fn with_maps(
+        ctx: &GpuContext,
+        pass: &DiffuseTexturePass,
+        atlas: &DiffuseAtlas,
+        maps: &DiffuseMaps,
+    ) -> Result<Self> {
         check_size(ctx, "diffuse atlas", atlas.width, atlas.height)?;
         if atlas.texels.len() != atlas.width as usize * atlas.height as usize {
             return Err(MprError::PixelCount {
@@ -664,6 +702,8 @@ impl DiffuseTextures {
                         binding: 1,
                         resource: wgpu::BindingResource::TextureView(&view),
                     },
+                    maps.entries(2)[0].clone(),
+                    maps.entries(2)[1].clone(),
                 ],
             });
             Self {
@@ -699,7 +739,8 @@ impl DiffuseTexturePass {
         }
         ctx.checked("diffuse texture pass creation", || {
             let device = &ctx.device;
-            let module = scene_module(ctx, "diffuse-texture", &with_view(DIFFUSE_TEXTURE_WGSL));
+            let module = scene_module(ctx, "diffuse-texture", &diffuse_texture_wgsl());
+            let maps = DiffuseMaps::layout_entries(2, wgpu::ShaderStages::FRAGMENT);
             let textures_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("diffuse-textures"),
@@ -726,6 +767,8 @@ impl DiffuseTexturePass {
                             },
                             count: None,
                         },
+                        maps[0],
+                        maps[1],
                     ],
                 });
             let pipeline = scene_pipeline(
@@ -793,8 +836,13 @@ fn textured_runs(surface_ranges: &[Range<u32>], textured: &[bool]) -> Vec<Range<
     runs
 }
 
+/// The diffuse texture pass as compiled: its WGSL after the view block and the diffuse map lookups.
+pub fn diffuse_texture_wgsl() -> String {
+    with_view(&crate::shaders::with_diffuse_maps(DIFFUSE_TEXTURE_WGSL))
+}
+
 /// CPU counterpart of [`DiffuseTexturePass`]: through each pixel centre the
-/// closest hit (BVH), then [`DiffuseAtlas::radiance`] towards the camera
+/// closest hit (BVH), then [`DiffuseAtlas::radiance_at`] (at the hit's uv) towards the camera
 /// position; zero where no surface or an untextured one is seen. Row 0 is the top.
 pub fn diffuse_texture_cpu(
     atlas: &DiffuseAtlas,
@@ -810,7 +858,7 @@ pub fn diffuse_texture_cpu(
     bvh.closest_hits(&rays)
         .iter()
         .map(|hit| {
-            hit.and_then(|h| atlas.radiance(h.surface, h.position, camera.position))
+            hit.and_then(|h| atlas.radiance_at(h.surface, h.position, camera.position, h.uv))
                 .map_or([0.0; 3], |l| l.to_array())
         })
         .collect()

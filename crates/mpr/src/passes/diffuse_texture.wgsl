@@ -5,6 +5,9 @@
 // L = rho/pi sum phi K/h^2 in the atlas, bilinearly between the samples
 // around (u, v), on the layer of the viewer's side, and add it One/One into
 // HDR. Fragments of other surfaces (left to the splat pass) are discarded.
+// A surface whose material has a diffuse map stores L with the untextured
+// rho; the lookup is multiplied by the map at the fragment's uv (common/
+// diffuse_map.wgsl), irradiance times albedo, as a light map is drawn.
 //
 // Notation
 // | symbol  | meaning                                                               | unit       |
@@ -18,6 +21,7 @@
 // | t       | sample spacing along u and v; sample (i, j) lies at uv_min + (i, j) t | m          |
 // | s       | (uv - uv_min) / t, clamped to [0, size - 1]: continuous sample index  | 1          |
 // | L       | bilinear mix of the 4 samples around s (textureLoad, no sampler)      | W/(m^2 sr) |
+// | tint    | the material's diffuse map at the vertices' interpolated uv (1: none) | 1          |
 
 // No layer on this side: no photon arrived there, the radiance is zero.
 const NO_LAYER: u32 = 0xffffffffu;
@@ -34,7 +38,8 @@ struct DiffuseSurface {
     // Samples along v.
     rows: u32,
     normal: vec3f,
-    pad: u32,
+    // Layer of the material's diffuse map (0: none).
+    diffuse_map: u32,
     uv_min: vec2f,
     spacing: vec2f,
     // Atlas texel of sample (0, 0): xy front layer, zw back layer (NO_LAYER: none).
@@ -43,6 +48,8 @@ struct DiffuseSurface {
 
 @group(1) @binding(0) var<storage, read> surfaces: array<DiffuseSurface>;
 @group(1) @binding(1) var atlas: texture_2d<f32>;
+@group(1) @binding(2) var diffuse_maps: texture_2d_array<f32>;
+@group(1) @binding(3) var diffuse_map_sampler: sampler;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -50,20 +57,25 @@ struct VertexOutput {
     //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
     @location(0) world: vec3f,
     @location(1) @interpolate(flat) surface: u32,
+    @location(2) uv: vec2f,
 }
 
 @vertex
-fn vs_main(@location(0) position: vec3f, @location(1) surface: u32) -> VertexOutput {
+fn vs_main(@location(0) position: vec3f, @location(1) surface: u32, @location(6) uv: vec2f) -> VertexOutput {
     var out: VertexOutput;
     out.clip = view.view_projection * vec4f(position, 1.0);
     //clip_distances: out.clip_distances[0] = view_clip_distance(position);
     out.world = position;
     out.surface = surface;
+    out.uv = uv;
     return out;
 }
 
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    // Derivatives in uniform control flow, before any discard.
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     let rec = surfaces[in.surface];
     if rec.textured == 0u {
         discard;
@@ -85,5 +97,8 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     let l01 = textureLoad(atlas, base + vec2u(i0.x, i1.y), 0).rgb;
     let l11 = textureLoad(atlas, base + i1, 0).rgb;
     let l = mix(mix(l00, l10, f.x), mix(l01, l11, f.x), f.y);
+    if rec.diffuse_map != 0u {
+        return vec4f(l * diffuse_tint_grad(rec.diffuse_map, in.uv, duv_dx, duv_dy), 0.0);
+    }
     return vec4f(l, 0.0);
 }

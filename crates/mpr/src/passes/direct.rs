@@ -38,6 +38,7 @@ use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistr
 use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
 
+use crate::diffuse_map::{DiffuseMaps, WHITE_LAYER};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
 use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::passes::shadow::{ShadowCube, ShadowPass, ShadowSettings};
@@ -183,6 +184,22 @@ impl GpuLight {
     }
 }
 
+/// Fails when a material's diffuse map layer is not in `maps`.
+fn check_layers(materials: &[GpuMaterial], maps: &DiffuseMaps) -> Result<()> {
+    let layers = maps.layers().iter().copied().max().unwrap_or(WHITE_LAYER);
+    match materials.iter().position(|m| m.diffuse_map[0] > layers) {
+        Some(i) => Err(MprError::InvalidSetting {
+            what: "direct materials",
+            message: format!(
+                "material {i} reads diffuse map layer {}, the maps have {}",
+                materials[i].diffuse_map[0],
+                layers + 1
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// One light's uniform block, shadow cube and bind group.
 #[derive(Debug)]
 struct LightSlot {
@@ -200,6 +217,7 @@ pub struct DirectLights {
     materials: wgpu::Buffer,
     material_count: usize,
     settings: ShadowSettings,
+    maps: DiffuseMaps,
 }
 
 impl DirectLights {
@@ -210,12 +228,13 @@ impl DirectLights {
         scene: &Scene,
         glossy: GlossyModel,
     ) -> Result<Self> {
-        Self::with_settings(
+        Self::with_settings_and_maps(
             ctx,
             pass,
             scene.lights(),
             &scene_materials(scene, glossy)?,
             ShadowSettings::default(),
+            DiffuseMaps::upload(ctx, scene)?,
         )
     }
 
@@ -229,16 +248,36 @@ impl DirectLights {
         glossy: GlossyModel,
         k: u32,
     ) -> Result<Self> {
-        Self::with_settings(
+        Self::jittered_with_maps(
+            ctx,
+            pass,
+            scene,
+            glossy,
+            k,
+            DiffuseMaps::upload(ctx, scene)?,
+        )
+    }
+
+    /// [`DirectLights::jittered`] with the scene's diffuse maps already uploaded ([`DiffuseMaps::upload`] of `scene`), to share them with other passes.
+    pub fn jittered_with_maps(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        scene: &Scene,
+        glossy: GlossyModel,
+        k: u32,
+        maps: DiffuseMaps,
+    ) -> Result<Self> {
+        Self::with_settings_and_maps(
             ctx,
             pass,
             &jittered_point_lights(scene.lights(), k, Vec2::ZERO),
             &scene_materials(scene, glossy)?,
             ShadowSettings::default(),
+            maps,
         )
     }
 
-    /// Explicit point lights, materials (in `MaterialId` order) and shadow settings.
+    /// Explicit point lights, materials (in `MaterialId` order) and shadow settings, without diffuse maps (materials' map layers are ignored).
     pub fn with_settings(
         ctx: &GpuContext,
         pass: &DirectPass,
@@ -246,7 +285,31 @@ impl DirectLights {
         materials: &[GpuMaterial],
         settings: ShadowSettings,
     ) -> Result<Self> {
+        let mut materials = materials.to_vec();
+        for m in &mut materials {
+            m.diffuse_map[0] = WHITE_LAYER;
+        }
+        Self::with_settings_and_maps(
+            ctx,
+            pass,
+            lights,
+            &materials,
+            settings,
+            DiffuseMaps::white(ctx)?,
+        )
+    }
+
+    /// [`DirectLights::with_settings`] with the scene's diffuse maps, which the materials' layers index ([`crate::material::scene_materials`]).
+    pub fn with_settings_and_maps(
+        ctx: &GpuContext,
+        pass: &DirectPass,
+        lights: &[Light],
+        materials: &[GpuMaterial],
+        settings: ShadowSettings,
+        maps: DiffuseMaps,
+    ) -> Result<Self> {
         settings.validate(ctx)?;
+        check_layers(materials, &maps)?;
         let gpu_lights = lights
             .iter()
             .enumerate()
@@ -269,13 +332,14 @@ impl DirectLights {
         })?;
         let slots = gpu_lights
             .into_iter()
-            .map(|light| Self::slot(ctx, pass, &materials_buffer, light, &settings, None))
+            .map(|light| Self::slot(ctx, pass, &materials_buffer, light, &settings, None, &maps))
             .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             slots,
             materials: materials_buffer,
             material_count: materials.len(),
             settings,
+            maps,
         })
     }
 
@@ -299,13 +363,24 @@ impl DirectLights {
         };
         let slots = lights
             .iter()
-            .map(|&light| Self::slot(ctx, pass, &self.materials, light, &settings, windows))
+            .map(|&light| {
+                Self::slot(
+                    ctx,
+                    pass,
+                    &self.materials,
+                    light,
+                    &settings,
+                    windows,
+                    &self.maps,
+                )
+            })
             .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             slots,
             materials: self.materials.clone(),
             material_count: self.material_count,
             settings,
+            maps: self.maps.clone(),
         })
     }
 
@@ -343,6 +418,7 @@ impl DirectLights {
         light: GpuLight,
         settings: &ShadowSettings,
         windows: Option<&wgpu::TextureView>,
+        maps: &DiffuseMaps,
     ) -> Result<LightSlot> {
         let cube = pass.shadow.create_cube(ctx, settings.size)?;
         let (uniforms, bind_group) = ctx.checked("direct light creation", || {
@@ -384,6 +460,8 @@ impl DirectLights {
                         binding: 5,
                         resource: wgpu::BindingResource::Sampler(&pass.window_sampler),
                     },
+                    maps.entries(6)[0].clone(),
+                    maps.entries(6)[1].clone(),
                 ],
             });
             (uniforms, bind_group)
@@ -432,8 +510,14 @@ impl DirectLights {
         Ok(())
     }
 
-    /// Replaces the materials (same count), e.g. with another [`GlossyModel`]'s [`scene_materials`].
+    /// The diffuse maps the materials' layers index.
+    pub fn diffuse_maps(&self) -> &DiffuseMaps {
+        &self.maps
+    }
+
+    /// Replaces the materials (same count), e.g. with another [`GlossyModel`]'s [`scene_materials`]; their map layers must exist in [`DirectLights::diffuse_maps`].
     pub fn set_materials(&self, queue: &wgpu::Queue, materials: &[GpuMaterial]) -> Result<()> {
+        check_layers(materials, &self.maps)?;
         if materials.len() != self.material_count {
             return Err(MprError::InvalidSetting {
                 what: "direct materials",
@@ -542,6 +626,7 @@ impl DirectPass {
             with_and_without_shadow_maps(switched_off(direct_wgsl(), WINDOWS_ON)?)?;
         ctx.checked("direct pass creation", || {
             let device = &ctx.device;
+            let maps = DiffuseMaps::layout_entries(6, wgpu::ShaderStages::FRAGMENT);
             let light_layout =
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("direct-light"),
@@ -602,6 +687,8 @@ impl DirectPass {
                             ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                             count: None,
                         },
+                        maps[0],
+                        maps[1],
                     ],
                 });
             let pipelines = |(under_stencil, shadow_mapped): &(String, String)| {
@@ -958,6 +1045,11 @@ pub fn direct_pixels_cpu_where(
         return Err(area_light_error(i));
     }
     let brdfs = cpu_brdfs(scene, glossy)?;
+    let diffuse_parts: Vec<Rgb> = scene
+        .materials()
+        .iter()
+        .map(|m| crate::diffuse_map::diffuse_part(&m.model))
+        .collect();
     let (rays, hits) = primary_hits(bvh, camera, width, height);
     Ok(rays
         .iter()
@@ -979,6 +1071,11 @@ pub fn direct_pixels_cpu_where(
             let frame = Frame::from_normal(n);
             let wo_local = frame.to_local(wo);
             let brdf = &brdfs[hit.material as usize];
+            let material = &scene.materials()[hit.material as usize];
+            // A diffuse map scales the diffuse part: f + (tint - 1) ρ_d/π above the surface.
+            let tint_term = material.diffuse_map.as_ref().map(|_| {
+                (material.diffuse_tint(hit.uv) - Rgb::ONE) * diffuse_parts[hit.material as usize]
+            });
             let mut radiance = Rgb::ZERO;
             let mut visible = 0u64;
             for (j, light) in lights.iter().enumerate() {
@@ -996,7 +1093,13 @@ pub fn direct_pixels_cpu_where(
                 if j < 64 {
                     visible |= 1 << j;
                 }
-                radiance += brdf.eval(wi_local, wo_local) * sample.weight * factor * wi_local.z;
+                let mut f = brdf.eval(wi_local, wo_local);
+                if let Some(term) = tint_term
+                    && wo_local.z > 0.0
+                {
+                    f += term;
+                }
+                radiance += f * sample.weight * factor * wi_local.z;
             }
             DirectPixel {
                 radiance: radiance.to_array(),

@@ -5,7 +5,9 @@
 // only the visible surface is shaded, and blended One/One into HDR radiance:
 //   L += f_r(wi, wo) I(wi) cos(theta_i) / d^2 V.
 // Needs the BRDF and material modules before it, material_storage.wgsl
-// among them (shaders::with_materials).
+// and diffuse_map.wgsl among them (shaders::with_diffuse_maps). A material
+// with a diffuse map has every lobe's kd scaled by the map at the
+// fragment's interpolated uv (trilinear, from the uv derivatives).
 //
 // Notation
 // | symbol  | meaning                                                           | unit      |
@@ -17,7 +19,7 @@
 // | wo, wi  | unit directions P->E and P->Lp (world; local in the n frame)      | -         |
 // | d       | |Lp - P|                                                          | m         |
 // | I(w)    | intensity towards direction w = -wi, as lustre-geometry's lights  | W/sr      |
-// | f_r     | material BRDF, sum of weighted lobes                              | 1/sr      |
+// | f_r     | material BRDF, sum of weighted lobes, kd times the diffuse map    | 1/sr      |
 // | V       | 1 if d - bias <= the cube map's stored distance along P - Lp     | 1         |
 // | bias    | d (c + k (2/size) min(tan theta_i, t_max)), slope-scaled          | m         |
 // | L       | radiance added to the HDR target                                  | W/(m² sr) |
@@ -77,6 +79,8 @@ struct WindowProjector {
 @group(1) @binding(3) var shadow_sampler: sampler;
 @group(1) @binding(4) var window_textures: texture_2d_array<f32>;
 @group(1) @binding(5) var window_sampler: sampler;
+@group(1) @binding(6) var diffuse_maps: texture_2d_array<f32>;
+@group(1) @binding(7) var diffuse_map_sampler: sampler;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -85,6 +89,7 @@ struct VertexOutput {
     @location(0) world: vec3f,
     @location(1) normal: vec3f,
     @location(2) @interpolate(flat) material: u32,
+    @location(3) uv: vec2f,
 }
 
 @vertex
@@ -92,6 +97,7 @@ fn vs_main(
     @location(0) position: vec3f,
     @location(2) normal: vec3f,
     @location(3) material: u32,
+    @location(6) uv: vec2f,
 ) -> VertexOutput {
     var out: VertexOutput;
     out.clip = view.view_projection * vec4f(position, 1.0);
@@ -99,6 +105,7 @@ fn vs_main(
     out.world = position;
     out.normal = normal;
     out.material = material;
+    out.uv = uv;
     return out;
 }
 
@@ -173,6 +180,9 @@ fn window_transmission(p: vec3f) -> vec3f {
 
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    // Derivatives in uniform control flow, before any early return.
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     let wo_world = normalize(view.eye.xyz - in.world);
     var n = normalize(in.normal);
     if dot(n, wo_world) < 0.0 {
@@ -199,6 +209,14 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
         v = shadow_visibility(-to_light, d, cos_i);
     }
     let basis = material_basis(n);
-    let f = material_brdf_at(in.material, material_to_local(basis, wi_world), material_to_local(basis, wo_world));
+    let wi = material_to_local(basis, wi_world);
+    let wo = material_to_local(basis, wo_world);
+    var f: vec3f;
+    let layer = materials[in.material].diffuse_map.x;
+    if layer != 0u {
+        f = material_brdf_tinted(in.material, wi, wo, diffuse_tint_grad(layer, in.uv, duv_dx, duv_dy));
+    } else {
+        f = material_brdf_at(in.material, wi, wo);
+    }
     return vec4f(f * intensity * (cos_i * v / (d * d)), 0.0);
 }

@@ -34,6 +34,8 @@ struct GpuLobe {
 
 struct GpuMaterial {
     lobes: array<GpuLobe, 4>,
+    // x: layer of the diffuse map in diffuse_maps (0: none, the white layer); yzw unused.
+    diffuse_map: vec4u,
 }
 
 // Cook-Torrance with Beckmann D, Smith G and F = 1 (a rough mirror).
@@ -52,15 +54,20 @@ fn material_cook_torrance_f1(wi: vec3f, wo: vec3f, ks: vec3f, alpha: f32) -> vec
 
 // One lobe's f(wi, wo).
 fn material_lobe(l: GpuLobe, wi: vec3f, wo: vec3f) -> vec3f {
+    return material_lobe_kd(l, l.kd.xyz, wi, wo);
+}
+
+// One lobe's f(wi, wo) with kd in place of its own (kd times a diffuse map's tint).
+fn material_lobe_kd(l: GpuLobe, kd: vec3f, wi: vec3f, wo: vec3f) -> vec3f {
     switch l.kind {
         case LOBE_LAMBERT: {
-            return brdf_lambert(wi, wo, l.kd.xyz);
+            return brdf_lambert(wi, wo, kd);
         }
         case LOBE_MODIFIED_PHONG: {
-            return brdf_modified_phong(wi, wo, l.kd.xyz, l.ks.xyz, l.params.x);
+            return brdf_modified_phong(wi, wo, kd, l.ks.xyz, l.params.x);
         }
         case LOBE_WARD: {
-            return brdf_ward_isotropic(wi, wo, l.kd.xyz, l.ks.xyz, l.params.x);
+            return brdf_ward_isotropic(wi, wo, kd, l.ks.xyz, l.params.x);
         }
         case LOBE_COOK_TORRANCE: {
             return brdf_cook_torrance_beckmann(wi, wo, vec3f(0.0), l.ks.xyz, l.params.x, l.eta.xyz, l.k.xyz);
@@ -69,7 +76,7 @@ fn material_lobe(l: GpuLobe, wi: vec3f, wo: vec3f) -> vec3f {
             return material_cook_torrance_f1(wi, wo, l.ks.xyz, l.params.x);
         }
         case LOBE_DIEFENBACH_PHONG: {
-            return brdf_diefenbach_phong(wi, wo, l.kd.xyz, l.ks.xyz, l.params.x, l.params.y, l.params.z);
+            return brdf_diefenbach_phong(wi, wo, kd, l.ks.xyz, l.params.x, l.params.y, l.params.z);
         }
         default: {
             return vec3f(0.0);

@@ -34,3 +34,21 @@ fn material_brdf_at(mi: u32, wi: vec3f, wo: vec3f) -> vec3f {
     }
     return f;
 }
+
+// f(wi, wo) of materials[mi] with every lobe's kd scaled by tint (its diffuse map's texel, common/diffuse_map.wgsl).
+fn material_brdf_tinted(mi: u32, wi: vec3f, wo: vec3f, tint: vec3f) -> vec3f {
+    var f = vec3f(0.0);
+    if material_slot_active(mi, 0u) {
+        f += materials[mi].lobes[0].weight * material_lobe_kd(materials[mi].lobes[0], materials[mi].lobes[0].kd.xyz * tint, wi, wo);
+    }
+    if material_slot_active(mi, 1u) {
+        f += materials[mi].lobes[1].weight * material_lobe_kd(materials[mi].lobes[1], materials[mi].lobes[1].kd.xyz * tint, wi, wo);
+    }
+    if material_slot_active(mi, 2u) {
+        f += materials[mi].lobes[2].weight * material_lobe_kd(materials[mi].lobes[2], materials[mi].lobes[2].kd.xyz * tint, wi, wo);
+    }
+    if material_slot_active(mi, 3u) {
+        f += materials[mi].lobes[3].weight * material_lobe_kd(materials[mi].lobes[3], materials[mi].lobes[3].kd.xyz * tint, wi, wo);
+    }
+    return f;
+}
