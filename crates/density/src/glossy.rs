@@ -16,7 +16,7 @@
 //! ([`lustre_geometry::MaterialModel::diffuse_reflectance`]), and
 //! [`crate::QuasiStatic::glossy_radiance`] adds `ρ/π E` from the diffuse discs.
 //! A diffuse map changes only the diffuse part (`ρ` becomes `ρ ⊙ t(uv)`, see
-//! [`crate::textured_reflectance`]), so the lobe is the untextured one.
+//! [`lustre_geometry::Material::diffuse_reflectance_at`]), so the lobe is the untextured one.
 //! The rays crossing each disc are found with disc indexing (section 2.7,
 //! [`DiscSet::crossings`]), exactly those [`Disc::is_crossed_by`] accepts.
 //!

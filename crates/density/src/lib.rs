@@ -112,20 +112,7 @@ pub use world::{World, WorldHit};
 /// Irradiance `E` (W/m², RGB) at each vertex of each mesh, indexed `[mesh][vertex]` (section 2.4.1, figure 2.3: one value per vertex).
 pub type VertexIrradiance = Vec<Vec<lustre_geometry::Rgb>>;
 
-/// The Lambertian reflectance `ρ` of equation 2.2 at texture coordinates `uv` of a surface of `material`: its model's diffuse reflectance scaled by its diffuse map, `ρ_d ⊙ t(uv)` ([`lustre_geometry::Material::diffuse_tint`]); `ρ_d` itself without a map.
-pub fn textured_reflectance(
-    material: &lustre_geometry::Material,
-    uv: glam::Vec2,
-) -> lustre_geometry::Rgb {
-    let rho = material.model.diffuse_reflectance();
-    if material.diffuse_map.is_some() {
-        rho * material.diffuse_tint(uv)
-    } else {
-        rho
-    }
-}
-
-/// The Lambertian reflectance of equation 2.2 at every vertex of mesh `mesh`, [`textured_reflectance`] at the vertex's texture coordinates (section 2.4.2: `B = ρ E` per vertex); empty for a mesh that does not exist.
+/// The Lambertian reflectance of equation 2.2 at every vertex of mesh `mesh`, [`lustre_geometry::Material::diffuse_reflectance_at`] the vertex's texture coordinates (section 2.4.2: `B = ρ E` per vertex); empty for a mesh that does not exist.
 pub fn vertex_reflectances(
     scene: &lustre_geometry::Scene,
     mesh: lustre_geometry::MeshId,
@@ -141,7 +128,7 @@ pub fn vertex_reflectances(
     }
     m.uvs
         .iter()
-        .map(|&uv| textured_reflectance(material, uv))
+        .map(|&uv| material.diffuse_reflectance_at(uv))
         .collect()
 }
 

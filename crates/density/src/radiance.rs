@@ -26,10 +26,10 @@
 //! BRDF is evaluated as `f_r(ωi, ωo)` in the vertex's shading frame, the
 //! order non-reciprocal models (Phong) need.
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec3, Vec3};
 use lustre_brdf::{BoxedBrdf, Brdf};
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{Bvh, Material, MeshId, Rgb, Scene, triangle_area};
+use lustre_geometry::{Bvh, MeshId, Rgb, Scene, triangle_area};
 use rayon::prelude::*;
 
 use crate::boundary::{DiscPattern, Surfaces};
@@ -46,7 +46,7 @@ fn world_incident(segment: &RaySegment) -> IncidentRay {
     }
 }
 
-/// One term of equation 2.1 at a vertex with shading frame `frame` and local eye direction `wo`: `f_r(ωi, ωo) φ`, `ωi` the world incident direction; with a diffuse map, `f_r` is the textured `f_r + shift` of [`diffuse_shift`] where the Lambertian part lives (both directions above the surface).
+/// One term of equation 2.1 at a vertex with shading frame `frame` and local eye direction `wo`: `f_r(ωi, ωo) φ`, `ωi` the world incident direction; with a diffuse map, `f_r` is the textured `f_r + shift` of [`lustre_geometry::Material::diffuse_shift`] where the Lambertian part lives (both directions above the surface).
 fn term(
     brdf: &dyn Brdf,
     frame: &Frame,
@@ -63,16 +63,6 @@ fn term(
         }
     }
     (f * power).as_dvec3()
-}
-
-/// The change `(t(uv) − 1) ⊙ ρ_d / π` a diffuse map makes to the BRDF of `material` at texture coordinates `uv` (equation 2.2's `ρ` becomes `ρ_d ⊙ t`, the rest of `f_r` is unchanged); `None` without a map, so untextured vertices evaluate the BRDF alone.
-fn diffuse_shift(material: Option<&Material>, uv: Vec2) -> Option<Rgb> {
-    let material = material.filter(|m| m.diffuse_map.is_some())?;
-    Some(
-        (material.diffuse_tint(uv) - Rgb::ONE)
-            * material.model.diffuse_reflectance()
-            * std::f32::consts::FRAC_1_PI,
-    )
 }
 
 /// The local eye direction at a vertex, `None` for a degenerate normal or an eye on the vertex.
@@ -205,7 +195,7 @@ impl TriangleImpacts {
                         let Some((frame, wo)) = view_frame(n, x, eye) else {
                             return Rgb::ZERO;
                         };
-                        let shift = diffuse_shift(material, uv);
+                        let shift = material.and_then(|m| m.diffuse_shift(uv));
                         let mut sum = DVec3::ZERO;
                         let mut area = 0.0f64;
                         for &t in tris {
@@ -322,7 +312,7 @@ impl ImpactMap {
         self.radiance_shifted(surfaces, brdf, None, x, normal, eye, k)
     }
 
-    /// [`ImpactMap::radiance`] with the BRDF shifted by a diffuse map's `shift` ([`diffuse_shift`]).
+    /// [`ImpactMap::radiance`] with the BRDF shifted by a diffuse map's `shift` ([`lustre_geometry::Material::diffuse_shift`]).
     fn radiance_shifted(
         &self,
         surfaces: Option<&dyn Surfaces>,
@@ -423,7 +413,7 @@ impl ImpactMap {
                     .zip(normals.par_iter())
                     .zip(mesh.uvs.par_iter())
                     .map(|((&x, &n), &uv)| {
-                        let shift = diffuse_shift(material, uv);
+                        let shift = material.and_then(|m| m.diffuse_shift(uv));
                         self.radiance_shifted(surfaces, brdf, shift, x, n, eye, k)
                             .as_vec3()
                     })

@@ -211,6 +211,26 @@ impl Material {
         self.diffuse_map.as_ref().map_or(Rgb::ONE, |t| t.sample(uv))
     }
 
+    /// The Lambertian reflectance `ρ_d ⊙ t(uv)` at texture coordinates `uv`: [`MaterialModel::diffuse_reflectance`] scaled by [`Material::diffuse_tint`]; `ρ_d` itself without a map.
+    pub fn diffuse_reflectance_at(&self, uv: Vec2) -> Rgb {
+        let rho = self.model.diffuse_reflectance();
+        if self.diffuse_map.is_some() {
+            rho * self.diffuse_tint(uv)
+        } else {
+            rho
+        }
+    }
+
+    /// The change `(t(uv) − 1) ⊙ ρ_d / π` the diffuse map makes to the BRDF's smooth part at `uv`, where the Lambertian part lives (both directions above the surface): the textured BRDF is `f + shift`; `None` without a map, so untextured materials evaluate the BRDF alone.
+    pub fn diffuse_shift(&self, uv: Vec2) -> Option<Rgb> {
+        self.diffuse_map.as_ref()?;
+        Some(
+            (self.diffuse_tint(uv) - Rgb::ONE)
+                * self.model.diffuse_reflectance()
+                * std::f32::consts::FRAC_1_PI,
+        )
+    }
+
     /// Whether the material emits light.
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0

@@ -358,11 +358,6 @@ impl DiffuseMaps {
     }
 }
 
-/// The diffuse part `ρ_d / π` of a material model that a diffuse map scales ([`lustre_geometry::MaterialModel::diffuse_reflectance`] over π): the CPU twins add `(tint − 1) ρ_d / π` to the BRDF where both directions are above the surface, as the shaders scale every lobe's `kd`.
-pub fn diffuse_part(model: &lustre_geometry::MaterialModel) -> Rgb {
-    model.diffuse_reflectance() * std::f32::consts::FRAC_1_PI
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

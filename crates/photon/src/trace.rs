@@ -434,17 +434,13 @@ pub fn textured_weight(
     sample: &BrdfSample,
 ) -> glam::Vec3 {
     let (w, pdf, wo) = (sample.weight, sample.pdf, sample.wi);
-    if material.diffuse_map.is_none()
-        || sample.delta
-        || !(wi.z > 0.0 && wo.z > 0.0)
-        || !(pdf > 0.0 && pdf.is_finite())
-    {
+    let Some(shift) = material.diffuse_shift(uv) else {
+        return w;
+    };
+    if sample.delta || !(wi.z > 0.0 && wo.z > 0.0) || !(pdf > 0.0 && pdf.is_finite()) {
         return w;
     }
-    let rho_d = material.model.diffuse_reflectance();
-    let tint = material.diffuse_tint(uv);
-    let correction = (tint - glam::Vec3::ONE) * rho_d * (wo.z * std::f32::consts::FRAC_1_PI / pdf);
-    (w + correction).max(glam::Vec3::ZERO)
+    (w + shift * (wo.z / pdf)).max(glam::Vec3::ZERO)
 }
 
 /// Traces `options.photons` photons through a scene (section 2.1): builds the BRDFs and parameterisations, then runs [`PhotonTracer::trace`] on the current rayon pool.

@@ -1045,11 +1045,6 @@ pub fn direct_pixels_cpu_where(
         return Err(area_light_error(i));
     }
     let brdfs = cpu_brdfs(scene, glossy)?;
-    let diffuse_parts: Vec<Rgb> = scene
-        .materials()
-        .iter()
-        .map(|m| crate::diffuse_map::diffuse_part(&m.model))
-        .collect();
     let (rays, hits) = primary_hits(bvh, camera, width, height);
     Ok(rays
         .iter()
@@ -1071,11 +1066,8 @@ pub fn direct_pixels_cpu_where(
             let frame = Frame::from_normal(n);
             let wo_local = frame.to_local(wo);
             let brdf = &brdfs[hit.material as usize];
-            let material = &scene.materials()[hit.material as usize];
             // A diffuse map scales the diffuse part: f + (tint - 1) ρ_d/π above the surface.
-            let tint_term = material.diffuse_map.as_ref().map(|_| {
-                (material.diffuse_tint(hit.uv) - Rgb::ONE) * diffuse_parts[hit.material as usize]
-            });
+            let tint_term = scene.materials()[hit.material as usize].diffuse_shift(hit.uv);
             let mut radiance = Rgb::ZERO;
             let mut visible = 0u64;
             for (j, light) in lights.iter().enumerate() {
