@@ -13,23 +13,9 @@ use lustre_geometry::texture::srgb_to_linear;
 use lustre_geometry::{Bvh, Ray, Rgb, load_obj};
 use serde_json::json;
 
-/// A scratch directory removed on drop.
-struct Dir(PathBuf);
+mod support;
 
-impl Dir {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("lustre-maps-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-}
-
-impl Drop for Dir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+use support::{Dir, glb};
 
 /// A 2 × 2 PNG: top row red (255, 0, 0) and green (0, 255, 0), bottom row blue (0, 0, 255) and grey (128, 128, 128).
 fn quadrants_png() -> Vec<u8> {
@@ -300,9 +286,9 @@ fn gltf_base_colour_textures_from_files_data_uris_and_buffer_views() {
     check_gltf_floor(&data);
     // A buffer view of a GLB's BIN chunk.
     let (doc, bin) = gltf_document(None, json!({"bufferView": 4, "mimeType": "image/png"}));
-    let glb = dir.0.join("view.glb");
-    std::fs::write(&glb, glb_bytes(&doc, &bin)).unwrap();
-    check_gltf_floor(&glb);
+    let view = dir.0.join("view.glb");
+    std::fs::write(&view, glb(&doc, &bin)).unwrap();
+    check_gltf_floor(&view);
 }
 
 #[test]
@@ -331,28 +317,4 @@ fn a_broken_gltf_image_is_a_warning_and_the_v_flip_survives_export() {
     export_gltf(&loaded.scene, &out).unwrap();
     let back = load_gltf(&out).unwrap();
     assert_eq!(&back.scene.meshes()[0].uvs, uvs);
-}
-
-/// A GLB container: the JSON chunk padded with spaces and the BIN chunk with zeros (glTF 2.0, section 4.4).
-fn glb_bytes(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).unwrap();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
 }
