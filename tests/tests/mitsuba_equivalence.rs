@@ -17,6 +17,7 @@ use std::process::{Command, Stdio};
 use glam::{Affine3A, Vec3};
 use lustre_geometry::mitsuba::{self, ExportOptions, ReconstructionFilter};
 use lustre_geometry::{Material, Scene, builtin};
+use lustre_tests::{mitsuba_python, root};
 
 /// Image size of the comparison renders.
 const SIZE: u32 = 64;
@@ -28,60 +29,8 @@ const BLOCK: usize = 8;
 const ALPHA: f64 = 1e-4;
 /// Largest relative difference of the image means, per channel.
 const MEAN_TOLERANCE: f64 = 0.01;
-/// The Mitsuba release the references were rendered with (`tests/references/*.json`; `cargo xtask reference` installs it).
-const MITSUBA_VERSION: &str = "3.9.1";
 /// Mitsuba's variant for the test: the scalar one needs nothing beyond the wheel.
 const VARIANT: &str = "scalar_rgb";
-
-/// The workspace root.
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
-/// The venv's Python when it imports Mitsuba; otherwise skips (or fails under `CI`).
-fn mitsuba_python() -> Option<PathBuf> {
-    let python = root().join(".mitsuba-venv").join("bin").join("python");
-    let why = if !python.exists() {
-        Some(format!("{} does not exist", python.display()))
-    } else {
-        let output = Command::new(&python)
-            .args(["-c", "import mitsuba, numpy; print(mitsuba.__version__)"])
-            .stderr(Stdio::null())
-            .output();
-        match output {
-            Ok(out) if out.status.success() => {
-                let version = String::from_utf8_lossy(&out.stdout).trim().to_owned();
-                (version != MITSUBA_VERSION).then(|| {
-                    format!(
-                        "{} has Mitsuba {version}, not the references' {MITSUBA_VERSION}",
-                        python.display()
-                    )
-                })
-            }
-            _ => Some(format!(
-                "{} cannot import mitsuba and numpy",
-                python.display()
-            )),
-        }
-    };
-    match why {
-        None => Some(python),
-        Some(why) if std::env::var_os("CI").is_some() => {
-            panic!(
-                "Mitsuba is required under CI: {why}; run `cargo xtask reference --install-only`"
-            )
-        }
-        Some(why) => {
-            eprintln!(
-                "skipping the Mitsuba equivalence test: {why} (run `cargo xtask reference --install-only`)"
-            );
-            None
-        }
-    }
-}
 
 /// A scratch folder removed on drop.
 struct TempDir(PathBuf);
@@ -371,7 +320,7 @@ fn normal_quantile_is_right() {
 
 #[test]
 fn cornell_matches_mitsuba_cornell_box() {
-    let Some(python) = mitsuba_python() else {
+    let Some(python) = mitsuba_python("equivalence") else {
         return;
     };
     let dir = TempDir::new("mitsuba-equivalence");
@@ -431,7 +380,7 @@ fn perturbed(change: impl FnOnce(&mut Vec<Material>)) -> Scene {
 #[test]
 #[ignore = "slow (about a minute): shows the equivalence test has the power to fail"]
 fn perturbed_cornell_differs_from_mitsuba_cornell_box() {
-    let Some(python) = mitsuba_python() else {
+    let Some(python) = mitsuba_python("equivalence") else {
         return;
     };
     let dir = TempDir::new("mitsuba-perturbed");

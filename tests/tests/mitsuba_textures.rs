@@ -9,7 +9,7 @@
 //! --install-only` creates it). Without it the test prints why and passes,
 //! unless the environment variable `CI` is set: then it fails.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::Arc;
 
@@ -17,9 +17,8 @@ use glam::{Affine3A, Vec2, Vec3};
 use lustre_geometry::light::PointLight;
 use lustre_geometry::mitsuba::{self, ExportOptions, ReconstructionFilter};
 use lustre_geometry::{Camera, Light, Material, Mesh, Object, Rgb, Scene, Texture};
+use lustre_tests::{mitsuba_python, root};
 
-/// The Mitsuba release the tests use (`tests/references/*.json`).
-const MITSUBA_VERSION: &str = "3.9.1";
 /// Image side in pixels.
 const SIZE: u32 = 64;
 /// The camera's distance from the quad (the light sits at the camera).
@@ -34,48 +33,6 @@ const KD: f32 = 0.8;
 const TOP: Rgb = Rgb::new(0.9, 0.2, 0.1);
 /// The texels of the bottom half (rows 2 and 3).
 const BOTTOM: Rgb = Rgb::new(0.1, 0.2, 0.9);
-
-/// The workspace root.
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
-/// The venv's Python when it imports Mitsuba; otherwise skips (or fails under `CI`).
-fn mitsuba_python() -> Option<PathBuf> {
-    let python = root().join(".mitsuba-venv").join("bin").join("python");
-    let output = Command::new(&python)
-        .args(["-c", "import mitsuba, numpy; print(mitsuba.__version__)"])
-        .stderr(Stdio::null())
-        .output();
-    let why = match output {
-        Ok(out) if out.status.success() => {
-            let version = String::from_utf8_lossy(&out.stdout).trim().to_owned();
-            (version != MITSUBA_VERSION)
-                .then(|| format!("Mitsuba {version}, not {MITSUBA_VERSION}"))
-        }
-        _ => Some(format!(
-            "{} cannot import mitsuba and numpy",
-            python.display()
-        )),
-    };
-    match why {
-        None => Some(python),
-        Some(why) if std::env::var_os("CI").is_some() => {
-            panic!(
-                "Mitsuba is required under CI: {why}; run `cargo xtask reference --install-only`"
-            )
-        }
-        Some(why) => {
-            eprintln!(
-                "skipping the Mitsuba texture test: {why} (run `cargo xtask reference --install-only`)"
-            );
-            None
-        }
-    }
-}
 
 /// The quad [-1, 1]² in the plane z = 0 facing +z, UVs `(x + 1)/2, (y + 1)/2` (v up), with a 1 × 4 map: two rows of [`TOP`] over two of [`BOTTOM`]; the camera and an isotropic point light at `(0, 0, DISTANCE)`.
 fn textured_quad() -> Scene {
@@ -141,7 +98,7 @@ fn expected_at(column: usize, row: usize) -> (Rgb, f32) {
 
 #[test]
 fn textured_quad_renders_the_right_way_up_in_mitsuba() {
-    let Some(python) = mitsuba_python() else {
+    let Some(python) = mitsuba_python("texture") else {
         return;
     };
     let dir = std::env::temp_dir().join(format!("lustre-mitsuba-textures-{}", std::process::id()));
