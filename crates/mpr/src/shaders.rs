@@ -116,10 +116,7 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             "passes/accumulate.wgsl",
             crate::passes::accumulate::ACCUMULATE_WGSL.to_owned(),
         ),
-        (
-            "passes/splat.wgsl",
-            with_materials(&with_view(crate::passes::splat::SPLAT_WGSL)),
-        ),
+        ("passes/splat.wgsl", crate::passes::splat::splat_wgsl()),
         (
             "passes/splat_lowres.wgsl",
             crate::passes::splat_lowres::SPLAT_LOWRES_WGSL.to_owned(),

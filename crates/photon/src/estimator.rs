@@ -41,14 +41,14 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 use lustre_brdf::BoxedBrdf;
 use lustre_geometry::sampling::Frame;
-use lustre_geometry::{Hit, Rgb, Scene, SurfaceId};
+use lustre_geometry::{Hit, Material, Rgb, Scene, SurfaceId};
 
 use crate::edge::KernelMass;
 use crate::error::{PhotonError, Result};
 use crate::grid::PointGrid;
 use crate::hit_record::{HitRecord, PhotonMap};
 use crate::kernel::{Kernel, kernel_support, kernel_support_silverman};
-use crate::parameterisation::{SurfaceParam, SurfaceParams};
+use crate::parameterisation::{SurfaceParam, SurfaceParams, UvMap};
 use crate::tally::SplatTally;
 use crate::trace::scene_brdfs;
 
@@ -142,6 +142,10 @@ struct SurfaceSplats {
     points: Vec<Vec3>,
     /// Unit surface normals (winding side) at the photons.
     normals: Vec<Vec3>,
+    /// On a surface whose material has a diffuse map, the triangle (within the surface) each photon hit; empty on the others.
+    triangles: Vec<u32>,
+    /// On a surface with a diffuse map, each triangle's texture mapping (by triangle within the surface; `None` where degenerate); empty on the others.
+    uv_maps: Vec<Option<UvMap>>,
 }
 
 /// One photon as a splat (sections 2.2 and 3.2): a kernel of support `h` on the plane through `position` with normal `normal`, carrying `power` that arrived from `incoming`.
@@ -159,6 +163,8 @@ pub struct Splat {
     pub power: Rgb,
     /// Kernel support `h` of the surface (equation 3).
     pub h: f32,
+    /// On a surface with a diffuse map, the texture mapping of the triangle the photon hit, by which the splat reads the map at each point it covers; `None` on the others.
+    pub uv_map: Option<UvMap>,
 }
 
 /// Equation 2 on the CPU, with a spatial index per surface (section 2.2).
@@ -172,6 +178,8 @@ pub struct SplatEstimator {
     materials: Arc<Vec<u32>>,
     /// One BRDF per material (shared by [`SplatEstimator::with_photons`]).
     brdfs: Arc<Vec<BoxedBrdf>>,
+    /// The materials with a diffuse map, by material (`None` for the others): each photon's BRDF reads the map at the photon.
+    textured: Arc<Vec<Option<Material>>>,
     /// Photons per surface.
     surfaces: Vec<SurfaceSplats>,
     /// The kernel's mass on each planar surface, with [`Edges::Normalised`] (shared by [`SplatEstimator::with_photons`]).
@@ -240,7 +248,15 @@ impl SplatEstimator {
             _ => {}
         }
         let params = SurfaceParams::new(scene);
-        let mut surfaces = Self::selected_photons(&params, map, options.selection)?;
+        let materials: Vec<u32> = scene.surfaces().iter().map(|s| s.material).collect();
+        let textured: Vec<Option<Material>> = scene
+            .materials()
+            .iter()
+            .map(|m| m.diffuse_map.is_some().then(|| m.clone()))
+            .collect();
+        let textured_surface = textured_surfaces(&materials, &textured);
+        let mut surfaces =
+            Self::selected_photons(&params, map, options.selection, &textured_surface)?;
         for (id, s) in surfaces.iter_mut().enumerate() {
             let n = counts.map_or(s.points.len(), |c| c[id]);
             s.h = match options.support {
@@ -271,8 +287,9 @@ impl SplatEstimator {
         });
         Ok(Self {
             options,
-            materials: Arc::new(scene.surfaces().iter().map(|s| s.material).collect()),
+            materials: Arc::new(materials),
             brdfs: Arc::new(scene_brdfs(scene)?),
+            textured: Arc::new(textured),
             params: Arc::new(params),
             surfaces,
             mass,
@@ -281,7 +298,9 @@ impl SplatEstimator {
 
     /// The estimator of other photons of the same map (one batch of a file read in batches, section 2.1): this estimator's options, supports, kernel mass and BRDFs, shared rather than built again, over `map`'s selected photons. With supports from a [`SplatTally`] of the whole map ([`SplatEstimator::build_tallied`]), the batches' estimates add up to the whole map's.
     pub fn with_photons(&self, map: &PhotonMap) -> Result<Self> {
-        let mut surfaces = Self::selected_photons(&self.params, map, self.options.selection)?;
+        let textured_surface = textured_surfaces(&self.materials, &self.textured);
+        let mut surfaces =
+            Self::selected_photons(&self.params, map, self.options.selection, &textured_surface)?;
         for (s, template) in surfaces.iter_mut().zip(&self.surfaces) {
             s.h = template.h;
             s.grid = PointGrid::build(&s.points, s.h);
@@ -291,19 +310,30 @@ impl SplatEstimator {
             params: Arc::clone(&self.params),
             materials: Arc::clone(&self.materials),
             brdfs: Arc::clone(&self.brdfs),
+            textured: Arc::clone(&self.textured),
             surfaces,
             mass: self.mass.clone(),
         })
     }
 
-    /// The selected photons of `map` per surface of `params`, without supports or grids.
+    /// The selected photons of `map` per surface of `params`, without supports or grids, with their texture coordinates on the surfaces where `textured` is true.
     fn selected_photons(
         params: &SurfaceParams,
         map: &PhotonMap,
         selection: BounceSelection,
+        textured: &[bool],
     ) -> Result<Vec<SurfaceSplats>> {
-        let mut surfaces: Vec<SurfaceSplats> = (0..params.len())
-            .map(|_| SurfaceSplats::default())
+        let mut surfaces: Vec<SurfaceSplats> = (0..params.len() as SurfaceId)
+            .map(|id| SurfaceSplats {
+                uv_maps: if textured.get(id as usize).copied().unwrap_or(false) {
+                    (0..params.triangle_count(id) as u32)
+                        .map(|t| params.texture_map(id, t))
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                ..SurfaceSplats::default()
+            })
             .collect();
         for (index, r) in map.records().iter().enumerate() {
             if !selection.selects(r) {
@@ -333,6 +363,15 @@ impl SplatEstimator {
                         (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Z)
                     }),
             };
+            if textured.get(r.surface as usize).copied().unwrap_or(false) {
+                if r.triangle as usize >= params.triangle_count(r.surface) {
+                    return Err(PhotonError::InvalidRecord {
+                        index,
+                        message: format!("surface {} has no triangle {}", r.surface, r.triangle),
+                    });
+                }
+                s.triangles.push(r.triangle);
+            }
             s.points.push(point);
             s.normals.push(normal);
             s.directions.push(r.direction);
@@ -411,13 +450,14 @@ impl SplatEstimator {
             return Rgb::ZERO;
         }
         let wo_local = frame.to_local(wo.normalize_or_zero());
+        let material = self.textured_material(surface);
         let mut sum = Rgb::ZERO;
         let kernel = self.options.kernel;
         s.grid.for_each_within(q, s.h, |i, d2| {
             let k = kernel.scaled(d2, s.h);
             if k > 0.0 {
                 let wi = frame.to_local(s.directions[i]);
-                sum += brdf.eval(wi, wo_local) * s.powers[i] * k;
+                sum += photon_brdf(brdf, material, s, i, x, wi, wo_local) * s.powers[i] * k;
             }
         });
         sum / self.mass_at(surface, q)
@@ -436,6 +476,7 @@ impl SplatEstimator {
                     incoming: s.directions[i],
                     power: s.powers[i],
                     h: s.h,
+                    uv_map: s.uv_map(i),
                 });
             }
         }
@@ -469,6 +510,7 @@ impl SplatEstimator {
         if !(s.h > 0.0) || !eye.is_finite() {
             return Rgb::ZERO;
         }
+        let material = self.textured_material(surface);
         let mut sum = Rgb::ZERO;
         let kernel = self.options.kernel;
         s.grid.for_each_within(q, s.h, |i, d2| {
@@ -482,9 +524,8 @@ impl SplatEstimator {
                     -s.normals[i]
                 };
                 let frame = Frame::from_normal(n);
-                sum += brdf.eval(frame.to_local(s.directions[i]), frame.to_local(wo))
-                    * s.powers[i]
-                    * k;
+                let (wi, wo) = (frame.to_local(s.directions[i]), frame.to_local(wo));
+                sum += photon_brdf(brdf, material, s, i, x, wi, wo) * s.powers[i] * k;
             }
         });
         sum / self.mass_at(surface, q)
@@ -505,6 +546,7 @@ impl SplatEstimator {
             return Rgb::ZERO;
         };
         let wo_local = frame.to_local(wo.normalize_or_zero());
+        let material = self.textured_material(surface);
         let mut sum = Rgb::ZERO;
         for i in 0..s.points.len() {
             let k = self
@@ -512,7 +554,8 @@ impl SplatEstimator {
                 .kernel
                 .scaled((s.points[i] - q).length_squared(), s.h);
             if k > 0.0 {
-                sum += brdf.eval(frame.to_local(s.directions[i]), wo_local) * s.powers[i] * k;
+                let wi = frame.to_local(s.directions[i]);
+                sum += photon_brdf(brdf, material, s, i, x, wi, wo_local) * s.powers[i] * k;
             }
         }
         sum / self.mass_at(surface, q)
@@ -541,11 +584,62 @@ impl SplatEstimator {
             .get(*self.materials.get(surface as usize)? as usize)
     }
 
+    /// The material of a surface when it has a diffuse map.
+    fn textured_material(&self, surface: SurfaceId) -> Option<&Material> {
+        self.textured
+            .get(*self.materials.get(surface as usize)? as usize)?
+            .as_ref()
+    }
+
     /// The `(u, v)` of a world point on a planar surface (for callers that build query grids).
     pub fn planar_uv(&self, surface: SurfaceId, x: Vec3) -> Option<Vec2> {
         match self.params.get(surface)? {
             SurfaceParam::Planar(frame) => Some(frame.to_uv(x)),
             SurfaceParam::Curved => None,
         }
+    }
+}
+
+/// Whether each surface's material (`materials`, by surface) has a diffuse map (`textured`, by material).
+fn textured_surfaces(materials: &[u32], textured: &[Option<Material>]) -> Vec<bool> {
+    materials
+        .iter()
+        .map(|&m| textured.get(m as usize).is_some_and(Option::is_some))
+        .collect()
+}
+
+impl SurfaceSplats {
+    /// The texture mapping of the triangle photon `i` hit, on a surface with a diffuse map.
+    fn uv_map(&self, i: usize) -> Option<UvMap> {
+        *self.uv_maps.get(*self.triangles.get(i)? as usize)?
+    }
+}
+
+/// The BRDF of photon `i` of `s` at the point `x` between the local
+/// directions `wi` and `wo`: `brdf` itself, plus on a textured `material`
+/// the diffuse map's change `(t(uv(x)) − 1) ⊙ ρ_d / π` where the Lambertian
+/// part lives (both directions above the surface). The map is read at `x`,
+/// not at the photon: the kernel estimates the light arriving around `x`
+/// and the surface at `x` reflects it, so the map stays as sharp as the
+/// pixels that show it while the rest of the BRDF is the photon's, once per
+/// splat (section 2.2). `uv(x)` is the photon's triangle's mapping
+/// extended over its plane ([`UvMap`]): exact across the triangle and the
+/// neighbours that share its affine mapping, within a kernel support `h`
+/// of the true coordinates on curved meshes and across UV seams.
+fn photon_brdf(
+    brdf: &BoxedBrdf,
+    material: Option<&Material>,
+    s: &SurfaceSplats,
+    i: usize,
+    x: Vec3,
+    wi: Vec3,
+    wo: Vec3,
+) -> Rgb {
+    let f = brdf.eval(wi, wo);
+    match (material, s.uv_map(i)) {
+        (Some(material), Some(map)) if wi.z > 0.0 && wo.z > 0.0 => material
+            .diffuse_shift(map.at(x))
+            .map_or(f, |shift| (f + shift).max(Rgb::ZERO)),
+        _ => f,
     }
 }

@@ -64,7 +64,7 @@ pub use file::{
 pub use grid::PointGrid;
 pub use hit_record::{HitRecord, LightEmission, PhotonMap};
 pub use kernel::{Kernel, kernel_support, kernel_support_silverman, splat_triangle};
-pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams};
+pub use parameterisation::{PlanarFrame, SurfaceParam, SurfaceParams, UvMap};
 pub use progress::{NoProgress, Progress};
 pub use quantise::RECORD_BYTES;
 pub use stream::{PhotonBatches, PhotonFileReader, PhotonFileWriter, merge_photon_files};

@@ -86,6 +86,8 @@ pub struct SurfaceParams {
     local_index: Vec<u32>,
     /// World corners of every scene-wide triangle.
     corners: Vec<[Vec3; 3]>,
+    /// Texture coordinates of the corners of every scene-wide triangle.
+    uvs: Vec<[Vec2; 3]>,
     /// Surface areas in m².
     areas: Vec<f32>,
 }
@@ -126,6 +128,7 @@ impl SurfaceParams {
     pub fn new(scene: &Scene) -> Self {
         let world = scene.world_triangles();
         let corners: Vec<[Vec3; 3]> = world.iter().map(|t| t.positions).collect();
+        let uvs: Vec<[Vec2; 3]> = world.iter().map(|t| t.uvs).collect();
         let mut local_index = vec![0u32; corners.len()];
         let mut triangle_ids = Vec::with_capacity(scene.surfaces().len());
         let mut params = Vec::with_capacity(scene.surfaces().len());
@@ -152,6 +155,7 @@ impl SurfaceParams {
             triangle_ids,
             local_index,
             corners,
+            uvs,
             areas: scene.surfaces().iter().map(|s: &Surface| s.area).collect(),
         }
     }
@@ -211,6 +215,15 @@ impl SurfaceParams {
         }
     }
 
+    /// The affine texture mapping of triangle `triangle` (within the surface), extended over its plane; `None` for a surface or triangle that does not exist, or a degenerate triangle.
+    pub fn texture_map(&self, surface: SurfaceId, triangle: u32) -> Option<UvMap> {
+        let id = *self
+            .triangle_ids
+            .get(surface as usize)?
+            .get(triangle as usize)?;
+        UvMap::new(*self.corners.get(id as usize)?, *self.uvs.get(id as usize)?)
+    }
+
     /// The world point of a recorded position; `None` for a surface or triangle that does not exist.
     pub fn world_position(&self, surface: SurfaceId, triangle: u32, uv: Vec2) -> Option<Vec3> {
         match self.get(surface)? {
@@ -220,5 +233,46 @@ impl SurfaceParams {
                 Some(a + uv.x * (b - a) + uv.y * (c - a))
             }
         }
+    }
+}
+
+/// A triangle's texture mapping extended over its plane: `uv(x) = uv + (du · (x − origin), dv · (x − origin))`, exact on the triangle, and on the neighbours that share its affine mapping (a quad's two halves); the mapping the splats of its photons read their diffuse map by.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UvMap {
+    /// The triangle's corner 0.
+    pub origin: Vec3,
+    /// Texture coordinates at `origin`.
+    pub uv: Vec2,
+    /// Gradient of `u` in the plane (per m).
+    pub du: Vec3,
+    /// Gradient of `v` in the plane (per m).
+    pub dv: Vec3,
+}
+
+impl UvMap {
+    /// The mapping of the triangle with world corners `p` and texture coordinates `t`; `None` when it is degenerate.
+    pub fn new(p: [Vec3; 3], t: [Vec2; 3]) -> Option<Self> {
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        if !(det.abs() > f32::EPSILON * d11 * d22) {
+            return None;
+        }
+        // Gradients of the barycentrics b1 and b2 in the plane.
+        let g1 = (d22 * e1 - d12 * e2) / det;
+        let g2 = (d11 * e2 - d12 * e1) / det;
+        let (t1, t2) = (t[1] - t[0], t[2] - t[0]);
+        Some(Self {
+            origin: p[0],
+            uv: t[0],
+            du: g1 * t1.x + g2 * t2.x,
+            dv: g1 * t1.y + g2 * t2.y,
+        })
+    }
+
+    /// The texture coordinates at a world point (projected onto the plane).
+    pub fn at(&self, x: Vec3) -> Vec2 {
+        let d = x - self.origin;
+        self.uv + Vec2::new(self.du.dot(d), self.dv.dot(d))
     }
 }

@@ -15,20 +15,28 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec2;
 use lustre_geometry::{Bvh, Camera, Scene, SurfaceId};
-use lustre_photon::{Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, SurfaceParams};
+use lustre_photon::{
+    Kernel, KernelMass, Splat, SplatEstimator, SurfaceParam, SurfaceParams, UvMap,
+};
 
+use crate::diffuse_map::DiffuseMaps;
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
 use crate::passes::redraw::{scene_module, view_stencil};
 use crate::passes::splat_lowres::{LowResTargets, SplatLowRes, SplatResolution};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
-use crate::shaders::{DEPTH_WGSL, with_materials, with_view};
+use crate::shaders::{DEPTH_WGSL, with_diffuse_maps, with_materials, with_view};
 use crate::target::RenderTargets;
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
 
 /// The splat WGSL (`src/passes/splat.wgsl`), without the material prefix.
 pub const SPLAT_WGSL: &str = include_str!("splat.wgsl");
+
+/// The splat pass as compiled: [`SPLAT_WGSL`] after the view, the diffuse maps and the materials.
+pub fn splat_wgsl() -> String {
+    with_materials(&with_diffuse_maps(&with_view(SPLAT_WGSL)))
+}
 
 /// How each splat is limited to the visible part of its own surface (section 2.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -64,12 +72,47 @@ pub struct GpuSplat {
     pub h: f32,
     /// Photon power `φ` in W (equation 1).
     pub power: [f32; 3],
-    /// Padding.
-    pub pad0: f32,
+    /// Index of the texture mapping of the photon's triangle in [`SplatBuffers`]' table ([`GpuUvMap`]), by which the splat reads its surface's diffuse map; [`NO_UV_MAP`] on a surface without one.
+    pub uv_map: u32,
     /// Unit surface normal at `x_p` (winding side; flipped to the eye in the shader).
     pub normal: [f32; 3],
     /// Padding.
-    pub pad1: f32,
+    pub pad: f32,
+}
+
+/// Marks a splat without a texture mapping in [`GpuSplat::uv_map`].
+pub const NO_UV_MAP: u32 = u32::MAX;
+
+/// A triangle's texture mapping over its plane (lustre-photon's [`UvMap`]), as `splat.wgsl` reads it (`UvMap`): `uv(x) = (u0, v0) + (du · (x − origin), dv · (x − origin))`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuUvMap {
+    /// The triangle's corner 0 in m.
+    pub origin: [f32; 3],
+    /// `u` at `origin`.
+    pub u0: f32,
+    /// Gradient of `u` (per m).
+    pub du: [f32; 3],
+    /// `v` at `origin`.
+    pub v0: f32,
+    /// Gradient of `v` (per m).
+    pub dv: [f32; 3],
+    /// Padding.
+    pub pad: f32,
+}
+
+impl GpuUvMap {
+    /// The GPU form of a mapping.
+    pub fn new(m: &UvMap) -> Self {
+        Self {
+            origin: m.origin.to_array(),
+            u0: m.uv.x,
+            du: m.du.to_array(),
+            v0: m.uv.y,
+            dv: m.dv.to_array(),
+            pad: 0.0,
+        }
+    }
 }
 
 /// A vertex attribute at a byte offset (the padded fields of [`GpuSplat`] rule out `vertex_attr_array!`).
@@ -86,7 +129,7 @@ const fn attribute(
 }
 
 impl GpuSplat {
-    /// Instance layout: locations 0-5 (position, surface, incoming, h, power, normal) at the struct's offsets.
+    /// Instance layout: locations 0-6 (position, surface, incoming, h, power, normal, uv_map) at the struct's offsets.
     pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
         array_stride: size_of::<GpuSplat>() as wgpu::BufferAddress,
         step_mode: wgpu::VertexStepMode::Instance,
@@ -97,20 +140,21 @@ impl GpuSplat {
             attribute(wgpu::VertexFormat::Float32, 28, 3),
             attribute(wgpu::VertexFormat::Float32x3, 32, 4),
             attribute(wgpu::VertexFormat::Float32x3, 48, 5),
+            attribute(wgpu::VertexFormat::Uint32, 44, 6),
         ],
     };
 
-    /// The GPU form of a splat.
-    pub fn new(s: &Splat) -> Self {
+    /// The GPU form of a splat, its texture mapping at `uv_map` ([`NO_UV_MAP`] for none).
+    pub fn new(s: &Splat, uv_map: u32) -> Self {
         Self {
             position: s.position.to_array(),
             surface: s.surface,
             incoming: s.incoming.to_array(),
             h: s.h,
             power: s.power.to_array(),
-            pad0: 0.0,
+            uv_map,
             normal: s.normal.to_array(),
-            pad1: 0.0,
+            pad: 0.0,
         }
     }
 }
@@ -203,6 +247,10 @@ pub struct SplatBuffers {
     mass_grids: wgpu::Buffer,
     /// The grids' values, concatenated.
     mass_values: wgpu::Buffer,
+    /// The scene's diffuse maps, read where each splat lands (only the white layer for an untextured scene).
+    maps: DiffuseMaps,
+    /// The splats' texture mappings ([`GpuUvMap`], each distinct one once; one unused record when none).
+    uv_maps: wgpu::Buffer,
     /// Number of splats.
     pub count: u32,
     /// Each uploaded splat's centre and support `h`, `[x, y, z, h]`, for choosing the splat resolution ([`SplatResolution::auto`]).
@@ -351,6 +399,10 @@ impl SplatBuffers {
             .collect();
         let surfaces = scene.surfaces().len();
         let mut by_surface: Vec<Vec<GpuSplat>> = vec![Vec::new(); surfaces];
+        // Each distinct texture mapping once (a triangle's photons share its mapping).
+        let mut uv_maps: Vec<GpuUvMap> = Vec::new();
+        let mut uv_map_index: std::collections::HashMap<[u32; 12], u32> =
+            std::collections::HashMap::new();
         for s in splats {
             let list =
                 by_surface
@@ -360,7 +412,16 @@ impl SplatBuffers {
                         message: format!("surface {} is not in scene `{}`", s.surface, scene.name),
                     })?;
             if s.h > 0.0 && s.power.is_finite() && !excluded[s.surface as usize] {
-                list.push(GpuSplat::new(s));
+                let uv_map = s.uv_map.map_or(NO_UV_MAP, |m| {
+                    let record = GpuUvMap::new(&m);
+                    *uv_map_index
+                        .entry(bytemuck::cast(record))
+                        .or_insert_with(|| {
+                            uv_maps.push(record);
+                            (uv_maps.len() - 1) as u32
+                        })
+                });
+                list.push(GpuSplat::new(s, uv_map));
             }
         }
         let mut instances = Vec::with_capacity(splats.len());
@@ -398,6 +459,9 @@ impl SplatBuffers {
         }
         if surface_materials.is_empty() {
             surface_materials.push(0);
+        }
+        if uv_maps.is_empty() {
+            uv_maps.push(GpuUvMap::zeroed());
         }
         use wgpu::util::DeviceExt;
         let buffer = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
@@ -448,6 +512,12 @@ impl SplatBuffers {
             mass_values: buffer(
                 "splat-mass-values",
                 bytemuck::cast_slice(&mass_values),
+                wgpu::BufferUsages::STORAGE,
+            )?,
+            maps: DiffuseMaps::upload(ctx, scene)?,
+            uv_maps: buffer(
+                "splat-uv-maps",
+                bytemuck::cast_slice(&uv_maps),
                 wgpu::BufferUsages::STORAGE,
             )?,
             surface_ranges,
@@ -534,7 +604,7 @@ impl SplatPass {
         let lowres = SplatLowRes::new(ctx, hdr_format)?;
         ctx.checked("splat pass creation", || {
             let device = &ctx.device;
-            let source = with_materials(&with_view(SPLAT_WGSL));
+            let source = splat_wgsl();
             let module = scene_module(ctx, "splat", &source);
             // The depth pre-pass's shader for the per-surface stencil masks, under the same view.
             let depth_module = scene_module(ctx, "splat-mask-depth", &with_view(DEPTH_WGSL));
@@ -562,6 +632,8 @@ impl SplatPass {
                 },
                 count: None,
             };
+            let [maps_array, maps_sampler] =
+                DiffuseMaps::layout_entries(8, wgpu::ShaderStages::FRAGMENT);
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("splat"),
                 entries: &[
@@ -596,6 +668,9 @@ impl SplatPass {
                     },
                     fragment_storage(6),
                     fragment_storage(7),
+                    maps_array,
+                    maps_sampler,
+                    storage(10),
                 ],
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -886,6 +961,18 @@ impl SplatPass {
                 wgpu::BindGroupEntry {
                     binding: 7,
                     resource: splats.mass_values.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: wgpu::BindingResource::TextureView(splats.maps.view()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 9,
+                    resource: wgpu::BindingResource::Sampler(splats.maps.sampler()),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 10,
+                    resource: splats.uv_maps.as_entire_binding(),
                 },
             ],
         })

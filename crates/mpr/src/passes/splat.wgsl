@@ -6,8 +6,12 @@
 // added into the HDR target. Each splat is restricted to the visible part of
 // its own surface either by the surface-id target (fs_splat_id*) or by the
 // per-surface stencil mask of section 2.2 (fs_mask, then fs_splat_stencil*).
-// Prepended: lustre-brdf's BRDF twins, common/material.wgsl and
-// common/material_storage.wgsl (shaders::with_materials).
+// On a material with a diffuse map the splat's Lambertian part is scaled by
+// the map where the splat lands (the photon's triangle's texture mapping over
+// its plane, trilinear with the fragment's derivatives), the rest of its BRDF
+// once per splat (lustre-photon's photon_brdf). Prepended: lustre-brdf's BRDF twins, common/material.wgsl,
+// common/material_storage.wgsl (shaders::with_materials) and
+// common/diffuse_map.wgsl (shaders::with_diffuse_maps).
 //
 // Notation
 // | symbol | meaning                                                          | unit       |
@@ -64,6 +68,24 @@ struct MassGrid {
 
 @group(1) @binding(6) var<storage, read> mass_grids: array<MassGrid>;
 @group(1) @binding(7) var<storage, read> mass_values: array<f32>;
+// The scene's diffuse maps (crates/mpr/src/diffuse_map.rs), read at each photon.
+@group(1) @binding(8) var diffuse_maps: texture_2d_array<f32>;
+@group(1) @binding(9) var diffuse_map_sampler: sampler;
+
+// A triangle's texture mapping over its plane (GpuUvMap in splat.rs):
+// uv(x) = (u0, v0) + (du . (x - origin), dv . (x - origin)).
+struct UvMap {
+    origin: vec3f,
+    u0: f32,
+    du: vec3f,
+    v0: f32,
+    dv: vec3f,
+    pad: f32,
+}
+
+@group(1) @binding(10) var<storage, read> uv_maps: array<UvMap>;
+
+const NO_UV_MAP: u32 = 0xffffffffu;
 
 const NO_MASS_GRID: u32 = 0xffffffffu;
 // lustre-photon's MIN_MASS.
@@ -83,6 +105,12 @@ struct VertexOutput {
     @location(2) @interpolate(flat) surface: u32,
     // World position of the fragment on the surface's plane.
     @location(3) world: vec3f,
+    // The colour's part linear in kd, scaled by the diffuse map (splat_colour).
+    @location(4) @interpolate(flat) diffuse: vec3f,
+    // Texture coordinates where the fragment lands (the photon's triangle's mapping).
+    @location(5) uv: vec2f,
+    // The diffuse map's layer; 0 without one (colour alone).
+    @location(6) @interpolate(flat) layer: u32,
     //clip_distances: @builtin(clip_distances) clip_distances: array<f32, 1>,
 }
 
@@ -95,8 +123,9 @@ fn vs_splat(
     @location(3) h: f32,
     @location(4) power: vec3f,
     @location(5) normal: vec3f,
+    @location(6) uv_map: u32,
 ) -> VertexOutput {
-    return splat_vertex(corner, position, surface, incoming, h, power, normal);
+    return splat_vertex(corner, position, surface, incoming, h, power, normal, uv_map);
 }
 
 // One corner of a splat's triangle (vs_splat and vs_splat_low).
@@ -108,6 +137,7 @@ fn splat_vertex(
     h: f32,
     power: vec3f,
     normal: vec3f,
+    uv_map: u32,
 ) -> VertexOutput {
     var out: VertexOutput;
     let to_eye = view.eye.xyz - position;
@@ -120,8 +150,24 @@ fn splat_vertex(
     //clip_distances: out.clip_distances[0] = view_clip_distance(world);
     out.kernel = k;
     out.world = world;
-    let f = material_brdf_at(surface_materials[surface], material_to_local(basis, incoming), material_to_local(basis, wo));
+    let mi = surface_materials[surface];
+    let wi_local = material_to_local(basis, incoming);
+    let wo_local = material_to_local(basis, wo);
+    let f = material_brdf_at(mi, wi_local, wo_local);
     out.colour = power * f / (h * h);
+    let layer = materials[mi].diffuse_map.x;
+    out.layer = 0u;
+    if layer != 0u && uv_map != NO_UV_MAP {
+        // The part of the colour linear in kd (the Lambertian part), which
+        // the fragment scales by the map at its texture coordinates.
+        let kd_part = material_brdf_tinted(mi, wi_local, wo_local, vec3f(1.0))
+            - material_brdf_tinted(mi, wi_local, wo_local, vec3f(0.0));
+        out.diffuse = power * kd_part / (h * h);
+        let m = uv_maps[uv_map];
+        let d = world - m.origin;
+        out.uv = vec2f(m.u0 + dot(m.du, d), m.v0 + dot(m.dv, d));
+        out.layer = layer;
+    }
     out.surface = surface;
     return out;
 }
@@ -138,8 +184,9 @@ fn vs_splat_low(
     @location(3) h: f32,
     @location(4) power: vec3f,
     @location(5) normal: vec3f,
+    @location(6) uv_map: u32,
 ) -> VertexOutput {
-    var out = splat_vertex(corner, position, surface, incoming, h, power, normal);
+    var out = splat_vertex(corner, position, surface, incoming, h, power, normal, uv_map);
     out.clip = vec4f(out.clip.xy + uniforms.low_res_offset.xy * out.clip.w, out.clip.zw);
     return out;
 }
@@ -207,6 +254,19 @@ fn splat_mass(surface: u32, world: vec3f) -> f32 {
     return max(m, MIN_MASS);
 }
 
+// The splat's colour at the fragment: its Lambertian part scaled by the diffuse
+// map at the fragment's texture coordinates (derivatives taken in uniform
+// control flow by the caller), never below zero (lustre-photon's photon_brdf).
+// (The fragment's inputs as arguments: the entry points' struct is renamed
+// when clip distances are compiled in, shaders::specialise.)
+fn splat_colour(colour: vec3f, diffuse: vec3f, uv: vec2f, layer: u32, duv_dx: vec2f, duv_dy: vec2f) -> vec3f {
+    if layer == 0u {
+        return colour;
+    }
+    let tint = diffuse_tint_grad(layer, uv, duv_dx, duv_dy);
+    return max(colour + diffuse * (tint - vec3f(1.0)), vec3f(0.0));
+}
+
 // The four fragment stages are the two restrictions times the two
 // filterings (SplatPass builds a pipeline for each): the filtering is chosen
 // per pipeline, not by a uniform, because llvmpipe runs both sides of a
@@ -219,39 +279,47 @@ fn splat_mass(surface: u32, world: vec3f) -> f32 {
 // where its own surface is visible.
 @fragment
 fn fs_splat_id(in: VertexOutput) -> @location(0) vec4f {
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     let visible = textureLoad(surface_ids, vec2i(in.clip.xy), 0).r;
     if visible != in.surface || !splat_inside(in.kernel) {
         discard;
     }
-    return vec4f(in.colour * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
+    return vec4f(splat_colour(in.colour, in.diffuse, in.uv, in.layer, duv_dx, duv_dy) * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
 // Surface-id restriction, the kernel mip-mapped: sampled in uniform control
 // flow (implicit derivatives), before the restriction discards.
 @fragment
 fn fs_splat_id_mip(in: VertexOutput) -> @location(0) vec4f {
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     let visible = textureLoad(surface_ids, vec2i(in.clip.xy), 0).r;
     let value = splat_kernel_filtered(in.kernel);
     if visible != in.surface {
         discard;
     }
-    return vec4f(in.colour * value / splat_mass(in.surface, in.world), 0.0);
+    return vec4f(splat_colour(in.colour, in.diffuse, in.uv, in.layer, duv_dx, duv_dy) * value / splat_mass(in.surface, in.world), 0.0);
 }
 
 // Stencil restriction, the kernel at the pixel centre: the stencil test has
 // already limited the splat to its surface's mask.
 @fragment
 fn fs_splat_stencil(in: VertexOutput) -> @location(0) vec4f {
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
     if !splat_inside(in.kernel) {
         discard;
     }
-    return vec4f(in.colour * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
+    return vec4f(splat_colour(in.colour, in.diffuse, in.uv, in.layer, duv_dx, duv_dy) * splat_kernel_centre(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
 // Stencil restriction, the kernel mip-mapped.
 @fragment
 fn fs_splat_stencil_mip(in: VertexOutput) -> @location(0) vec4f {
-    return vec4f(in.colour * splat_kernel_filtered(in.kernel) / splat_mass(in.surface, in.world), 0.0);
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
+    return vec4f(splat_colour(in.colour, in.diffuse, in.uv, in.layer, duv_dx, duv_dy) * splat_kernel_filtered(in.kernel) / splat_mass(in.surface, in.world), 0.0);
 }
 
 // The per-surface stencil mask: the surface's triangles drawn with an equal-depth
