@@ -6,12 +6,11 @@
 
 mod support;
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec2;
 
-use lustre_geometry::{Bvh, Mesh, Rgb, Scene, Texture, builtin};
+use lustre_geometry::{Bvh, Mesh, Scene, builtin};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::depth::{DepthPass, depth_pass_cpu};
 use lustre_mpr::passes::diffuse_texture::{
@@ -338,26 +337,7 @@ fn diffuse_texture_gpu_matches_cpu_glosbox() {
 
 /// `cornell` with a 4 × 4 diffuse map on every material, its texels all different (red grows to the right, green downwards, blue a checker), so that a flipped or transposed lookup shows; each texel spans several pixels at 96², so the GPU reads level 0 as the CPU does.
 fn cornell_with_diffuse_maps() -> Scene {
-    let scene = builtin("cornell").unwrap();
-    let texels = (0..16)
-        .map(|i| {
-            let (x, y) = ((i % 4) as f32, (i / 4) as f32);
-            Rgb::new(
-                0.2 + 0.8 * x / 3.0,
-                0.2 + 0.8 * y / 3.0,
-                if (i % 4 + i / 4) % 2 == 0 { 1.0 } else { 0.3 },
-            )
-        })
-        .collect();
-    let map = Arc::new(Texture::new("asymmetric", 4, 4, texels).unwrap());
-    let materials = scene
-        .materials()
-        .iter()
-        .map(|m| m.clone().with_diffuse_map(map.clone()))
-        .collect();
-    let mut scene = scene.with_materials(materials).unwrap();
-    scene.name = "cornell-mapped".into();
-    scene
+    support::with_asymmetric_maps(builtin("cornell").unwrap(), "cornell-mapped")
 }
 
 #[test]

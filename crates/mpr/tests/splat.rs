@@ -5,10 +5,7 @@
 
 mod support;
 
-use std::sync::Arc;
-
-use lustre_geometry::texture::Texture;
-use lustre_geometry::{Bvh, Rgb, Scene, builtin};
+use lustre_geometry::{Bvh, Scene, builtin};
 use lustre_mpr::material::GlossyModel;
 use lustre_mpr::passes::depth::{DepthPass, depth_pass_cpu};
 use lustre_mpr::passes::splat::{
@@ -397,26 +394,7 @@ fn chunked_instance_buffers_render_the_same_image() {
 
 /// `glosbox` with a 4 × 4 diffuse map on every material, its texels all different (red grows to the right, green downwards, blue a checker), so that a flipped or transposed lookup shows.
 fn glosbox_with_diffuse_maps() -> Scene {
-    let scene = builtin("glosbox").unwrap();
-    let texels = (0..16)
-        .map(|i| {
-            let (x, y) = ((i % 4) as f32, (i / 4) as f32);
-            Rgb::new(
-                0.2 + 0.8 * x / 3.0,
-                0.2 + 0.8 * y / 3.0,
-                if (i % 4 + i / 4) % 2 == 0 { 1.0 } else { 0.3 },
-            )
-        })
-        .collect();
-    let map = Arc::new(Texture::new("asymmetric", 4, 4, texels).unwrap());
-    let materials = scene
-        .materials()
-        .iter()
-        .map(|m| m.clone().with_diffuse_map(map.clone()))
-        .collect();
-    let mut scene = scene.with_materials(materials).unwrap();
-    scene.name = "glosbox-mapped".into();
-    scene
+    support::with_asymmetric_maps(builtin("glosbox").unwrap(), "glosbox-mapped")
 }
 
 #[test]

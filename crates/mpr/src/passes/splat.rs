@@ -247,7 +247,7 @@ pub struct SplatBuffers {
     mass_grids: wgpu::Buffer,
     /// The grids' values, concatenated.
     mass_values: wgpu::Buffer,
-    /// The scene's diffuse maps, read where each splat lands (only the white layer for an untextured scene).
+    /// The scene's diffuse maps, read where each splat lands (only the white layer when no splat reads them).
     maps: DiffuseMaps,
     /// The splats' texture mappings ([`GpuUvMap`], each distinct one once; one unused record when none).
     uv_maps: wgpu::Buffer,
@@ -460,9 +460,13 @@ impl SplatBuffers {
         if surface_materials.is_empty() {
             surface_materials.push(0);
         }
-        if uv_maps.is_empty() {
+        // The maps only where a splat reads them (a textured scene's batches whose splats all lie on untextured surfaces bind the white layer alone).
+        let maps = if uv_maps.is_empty() {
             uv_maps.push(GpuUvMap::zeroed());
-        }
+            DiffuseMaps::white(ctx)?
+        } else {
+            DiffuseMaps::upload(ctx, scene)?
+        };
         use wgpu::util::DeviceExt;
         let buffer = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             ctx.checked("splat upload", || {
@@ -514,7 +518,7 @@ impl SplatBuffers {
                 bytemuck::cast_slice(&mass_values),
                 wgpu::BufferUsages::STORAGE,
             )?,
-            maps: DiffuseMaps::upload(ctx, scene)?,
+            maps,
             uv_maps: buffer(
                 "splat-uv-maps",
                 bytemuck::cast_slice(&uv_maps),

@@ -9,9 +9,10 @@
 // On a material with a diffuse map the splat's Lambertian part is scaled by
 // the map where the splat lands (the photon's triangle's texture mapping over
 // its plane, trilinear with the fragment's derivatives), the rest of its BRDF
-// once per splat (lustre-photon's photon_brdf). Prepended: lustre-brdf's BRDF twins, common/material.wgsl,
-// common/material_storage.wgsl (shaders::with_materials) and
-// common/diffuse_map.wgsl (shaders::with_diffuse_maps).
+// once per splat (lustre-photon's photon_brdf). Prepended: lustre-brdf's
+// BRDF twins, common/material.wgsl, common/material_storage.wgsl
+// (shaders::with_materials) and common/diffuse_map.wgsl
+// (shaders::with_diffuse_maps).
 //
 // Notation
 // | symbol | meaning                                                          | unit       |
@@ -68,7 +69,7 @@ struct MassGrid {
 
 @group(1) @binding(6) var<storage, read> mass_grids: array<MassGrid>;
 @group(1) @binding(7) var<storage, read> mass_values: array<f32>;
-// The scene's diffuse maps (crates/mpr/src/diffuse_map.rs), read at each photon.
+// The scene's diffuse maps (crates/mpr/src/diffuse_map.rs), read where each splat lands.
 @group(1) @binding(8) var diffuse_maps: texture_2d_array<f32>;
 @group(1) @binding(9) var diffuse_map_sampler: sampler;
 

@@ -106,3 +106,28 @@ pub fn render_frame(
         lustre_mpr::readback::read_u32(ctx, &targets.surface_id.texture).unwrap(),
     )
 }
+
+/// `scene` renamed `name` with a 4 × 4 diffuse map on every material, its texels all different (red grows to the right, green downwards, blue a checker), so that a flipped or transposed lookup shows.
+#[allow(dead_code)]
+pub fn with_asymmetric_maps(scene: lustre_geometry::Scene, name: &str) -> lustre_geometry::Scene {
+    use lustre_geometry::{Rgb, Texture};
+    let texels = (0..16)
+        .map(|i| {
+            let (x, y) = ((i % 4) as f32, (i / 4) as f32);
+            Rgb::new(
+                0.2 + 0.8 * x / 3.0,
+                0.2 + 0.8 * y / 3.0,
+                if (i % 4 + i / 4) % 2 == 0 { 1.0 } else { 0.3 },
+            )
+        })
+        .collect();
+    let map = std::sync::Arc::new(Texture::new("asymmetric", 4, 4, texels).unwrap());
+    let materials = scene
+        .materials()
+        .iter()
+        .map(|m| m.clone().with_diffuse_map(map.clone()))
+        .collect();
+    let mut scene = scene.with_materials(materials).unwrap();
+    scene.name = name.into();
+    scene
+}
