@@ -245,9 +245,14 @@ impl WideBvh {
         Some(c.out)
     }
 
-    /// The closest Möller-Trumbore hit with `t` in `[t_min, t_max]` and its triangle's scene-wide id; `direction` as the triangle test takes it.
+    /// The closest Möller-Trumbore hit with `t` in `[t_min, t_max]` and its triangle's scene-wide id; `direction` as the triangle test takes it. `on_best` gets the id of each hit that becomes the closest so far, as it is found.
     #[inline]
-    pub(crate) fn closest_hit(&self, ray: &Ray, direction: Vec3A) -> Option<(u32, TriangleHit)> {
+    pub(crate) fn closest_hit(
+        &self,
+        ray: &Ray,
+        direction: Vec3A,
+        mut on_best: impl FnMut(u32),
+    ) -> Option<(u32, TriangleHit)> {
         let mut best: Option<((usize, usize), TriangleHit)> = None;
         self.traverse::<true>(ray, direction, |block, mask, t, u, v, t_max| {
             // Lane by lane, as one triangle after the other would.
@@ -257,6 +262,7 @@ impl WideBvh {
                 mask &= mask - 1;
                 if t[k] <= *t_max {
                     *t_max = t[k];
+                    on_best(self.leaves[block].ids[k]);
                     best = Some((
                         (block, k),
                         TriangleHit {
@@ -587,7 +593,7 @@ mod tests {
                 .filter_map(|(i, &t)| intersect_triangle(&ray, t).map(|h| (i as u32, h.t)))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             let got = wide
-                .closest_hit(&ray, Vec3A::from(direction))
+                .closest_hit(&ray, Vec3A::from(direction), |_| {})
                 .map(|(id, h)| (id, h.t));
             assert_eq!(got, expected, "{ray:?}");
         }
