@@ -18,6 +18,7 @@ use std::sync::Mutex;
 use lustre_geometry::Camera;
 use lustre_geometry::light::hammersley_centred;
 
+use crate::diffuse_map::DiffuseMaps;
 use crate::passes::accumulate::AccumulatePass;
 use crate::passes::beams::{BeamPass, Traversal};
 
@@ -378,6 +379,22 @@ impl FrameGraph {
             });
         };
         gouraud.set_radiance(&ctx.queue, radiance)
+    }
+
+    /// Scales the Gouraud pass's fragments by `maps` at their UVs, per corner layer ([`GouraudPass::set_diffuse_maps`], [`crate::passes::gouraud::corner_layers`]).
+    pub fn set_gouraud_diffuse_maps(
+        &mut self,
+        ctx: &GpuContext,
+        maps: &DiffuseMaps,
+        layers: &[u32],
+    ) -> Result<()> {
+        let Some(gouraud) = &mut self.gouraud else {
+            return Err(crate::MprError::InvalidSetting {
+                what: "frame",
+                message: "diffuse maps need the Gouraud pass (FrameGraph::with_gouraud)".into(),
+            });
+        };
+        gouraud.set_diffuse_maps(ctx, maps, layers)
     }
 
     /// Adds the direct light pass for HDR targets of `hdr_format`.

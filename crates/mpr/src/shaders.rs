@@ -90,6 +90,11 @@ pub fn direct_wgsl() -> String {
     with_materials(&with_diffuse_maps(&with_view(DIRECT_WGSL)))
 }
 
+/// The Gouraud pass as compiled: [`crate::passes::gouraud::GOURAUD_WGSL`] after [`VIEW_WGSL`] and [`with_diffuse_maps`].
+pub fn gouraud_wgsl() -> String {
+    with_diffuse_maps(&with_view(crate::passes::gouraud::GOURAUD_WGSL))
+}
+
 /// Each WGSL file under `src/` (path relative to `src/`) with the complete
 /// module it is validated in: shared modules alone, passes as compiled.
 pub fn all_wgsl() -> Vec<(&'static str, String)> {
@@ -145,10 +150,7 @@ pub fn all_wgsl() -> Vec<(&'static str, String)> {
             "passes/diffuse_texture.wgsl",
             crate::passes::diffuse_texture::diffuse_texture_wgsl(),
         ),
-        (
-            "passes/gouraud.wgsl",
-            with_view(crate::passes::gouraud::GOURAUD_WGSL),
-        ),
+        ("passes/gouraud.wgsl", gouraud_wgsl()),
         (
             "passes/glossy_image.wgsl",
             with_view(crate::passes::glossy_image::GLOSSY_IMAGE_WGSL),

@@ -10,9 +10,12 @@ use glam::Vec3;
 use lustre_density::{RaySetOptions, impact_count, trace_ray_set};
 use lustre_geometry::meshing::subdivide;
 use lustre_geometry::{Bvh, Camera, Scene, builtin};
+use lustre_mpr::diffuse_map::DiffuseMaps;
 use lustre_mpr::passes::depth::{DepthPass, depth_pass_cpu};
 use lustre_mpr::passes::emission::emission_pass_cpu;
-use lustre_mpr::passes::gouraud::{GouraudPass, corner_radiance, gouraud_pass_cpu};
+use lustre_mpr::passes::gouraud::{
+    GouraudPass, corner_layers, corner_radiance, gouraud_pass_cpu, gouraud_pass_cpu_tinted,
+};
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::readback::{read_rgba_f32, read_u32};
 use lustre_mpr::{FrameGraph, FrameInputs, GpuContext, NO_SURFACE, RenderTargets, SceneBuffers};
@@ -46,12 +49,26 @@ fn render(
     camera: &Camera,
     corners: &[[f32; 3]],
 ) -> (Vec<[f32; 4]>, Vec<u32>) {
+    render_with_maps(ctx, scene, camera, corners, None)
+}
+
+/// [`render`] with the pass reading `maps` at the corners' `layers`.
+fn render_with_maps(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    corners: &[[f32; 3]],
+    maps: Option<(&DiffuseMaps, &[u32])>,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let depth = DepthPass::new(ctx).unwrap();
-    let pass = GouraudPass::new(ctx, targets.hdr_format(), &buffers).unwrap();
+    let mut pass = GouraudPass::new(ctx, targets.hdr_format(), &buffers).unwrap();
     assert_eq!(pass.corners() as usize, corners.len());
     pass.set_radiance(&ctx.queue, corners).unwrap();
+    if let Some((maps, layers)) = maps {
+        pass.set_diffuse_maps(ctx, maps, layers).unwrap();
+    }
     let (views, slot) = lustre_mpr::ViewBuffer::for_camera(ctx, camera).unwrap();
     let mut encoder = ctx
         .device
@@ -133,6 +150,111 @@ fn gpu_gouraud_matches_cpu_on_cornell_lit_by_impact_count() {
         err <= 1e-4 + format_tolerance(&ctx),
         "max relative error {err}"
     );
+}
+
+#[test]
+fn gpu_gouraud_reads_diffuse_maps_per_fragment_as_the_cpu_does() {
+    let Some(ctx) = gpu_or_skip("gpu_gouraud_reads_diffuse_maps_per_fragment") else {
+        return;
+    };
+    // The 4 × 4 asymmetric map on every material, magnified over each wall
+    // (level 0 on the GPU). The corners hold the untextured ρ/π E; both sides
+    // scale the interpolated value by the map at the pixel's uv, the CPU with
+    // Texture::sample in f32, the GPU from Rgba16Float with the sampler's
+    // sub-texel weights a GPU may keep to 8 bits (the diffuse-texture test's
+    // 2e-2; lavapipe here: 2.5e-4), while the map flipped or left out errs by
+    // 0.2 or more.
+    let scene = support::with_asymmetric_maps(fine_cornell(), "cornell-mapped");
+    let bvh = Bvh::build(&scene);
+    let camera = scene.camera().with_aspect(1.0);
+    let rays = trace_ray_set(
+        &scene,
+        &bvh,
+        &RaySetOptions {
+            photons: 20_000,
+            seed: 3,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let corners = corner_radiance(&scene, &impact_count(&scene, &rays)).unwrap();
+    let maps = DiffuseMaps::upload(&ctx, &scene).unwrap();
+    let layers = corner_layers(&scene, &maps, &[]);
+    assert!(
+        layers.iter().all(|&l| l == 1),
+        "one map, layer 1 on every corner"
+    );
+    let (gpu, gpu_ids) = render_with_maps(&ctx, &scene, &camera, &corners, Some((&maps, &layers)));
+    let tint = |h: &lustre_geometry::Hit| scene.materials()[h.material as usize].diffuse_tint(h.uv);
+    let cpu = gouraud_pass_cpu_tinted(&bvh, &camera, SIZE, SIZE, &corners, tint);
+    let untinted = gouraud_pass_cpu(&bvh, &camera, SIZE, SIZE, &corners);
+    let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
+    // Where the map is magnified (a pixel's step in uv spans at most one of
+    // the map's 4 texels), so that the GPU's trilinear read is level 0 too;
+    // on the ceiling and floor seen at a grazing angle it is not (a tenth of
+    // the tint off on 54 pixels, the next mip level's blur).
+    let rays: Vec<_> = (0..SIZE * SIZE)
+        .map(|i| {
+            camera.primary_ray(Camera::pixel_ndc(
+                i % SIZE,
+                i / SIZE,
+                SIZE,
+                SIZE,
+                glam::Vec2::splat(0.5),
+            ))
+        })
+        .collect();
+    let uvs: Vec<_> = bvh
+        .closest_hits(&rays)
+        .iter()
+        .map(|h| h.map(|h| h.uv))
+        .collect();
+    let s = SIZE as usize;
+    let magnified = |i: usize| {
+        [i + 1, i + s]
+            .iter()
+            .all(|&j| match (uvs[i], uvs.get(j).copied().flatten()) {
+                (Some(a), Some(b)) => ((b - a) * 4.0).abs().max_element() <= 1.0,
+                _ => false,
+            })
+    };
+    let pixels: Vec<usize> = interior(&gpu_ids, &cpu_ids)
+        .into_iter()
+        .filter(|&i| magnified(i))
+        .collect();
+    assert!(
+        pixels.len() * 10 >= (SIZE * SIZE) as usize * 5,
+        "{} pixels",
+        pixels.len()
+    );
+    let peak = corners.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+    let err = max_relative(&gpu, &cpu, &pixels, 0.01 * peak);
+    let err_untinted = max_relative(&gpu, &untinted, &pixels, 0.01 * peak);
+    eprintln!(
+        "gouraud with diffuse maps, GPU vs CPU on {} pixels: max relative error {err:.3e}; against the map left out {err_untinted:.3e}",
+        pixels.len()
+    );
+    assert!(err <= 2e-2, "max relative error {err}");
+    assert!(
+        err_untinted >= 0.2,
+        "the map changes the image: {err_untinted}"
+    );
+
+    // Corners of meshes whose radiance holds the map already take the white layer.
+    let all: Vec<u32> = (0..scene.meshes().len() as u32).collect();
+    assert!(corner_layers(&scene, &maps, &all).iter().all(|&l| l == 0));
+    // Refused: a layer count other than the corners', a layer the maps lack.
+    let targets = RenderTargets::new(&ctx, 4, 4).unwrap();
+    let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
+    let mut pass = GouraudPass::new(&ctx, targets.hdr_format(), &buffers).unwrap();
+    assert!(pass.set_diffuse_maps(&ctx, &maps, &layers[1..]).is_err());
+    let mut beyond = layers.clone();
+    beyond[5] = 2;
+    let err = pass
+        .set_diffuse_maps(&ctx, &maps, &beyond)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("layer 2"), "{err}");
 }
 
 #[test]

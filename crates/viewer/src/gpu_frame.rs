@@ -19,6 +19,7 @@ use lustre_mpr::pass_timing::PassTimes;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{GlossySettings, imaged_surfaces};
+use lustre_mpr::passes::gouraud::corner_layers;
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::splat_lowres::SplatResolution;
@@ -31,6 +32,7 @@ use crate::render::{
     FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg, Technique,
     TermArg, ibr_settings,
 };
+use crate::render_density::tinted_at_vertices;
 
 /// The format of the tone-mapped output every frame is drawn into.
 pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -192,12 +194,17 @@ impl GpuFrame {
         if lighting.splatting {
             graph = graph.with_splats(&ctx, targets.hdr_format(), lighting.kernel)?;
         }
+        // The scene's diffuse texture maps, uploaded once for every pass that draws them.
+        let maps = DiffuseMaps::upload(&ctx, scene)?;
         if let Some(corners) = lighting.corners {
             graph = graph.with_gouraud(&ctx, targets.hdr_format(), &scene_buffers)?;
             graph.set_gouraud_radiance(&ctx, corners)?;
+            if maps.is_textured() {
+                let tinted = tinted_at_vertices(scene, args.glossy_estimate);
+                let layers = corner_layers(scene, &maps, &tinted);
+                graph.set_gouraud_diffuse_maps(&ctx, &maps, &layers)?;
+            }
         }
-        // The scene's diffuse texture maps, uploaded once for every pass that draws them.
-        let maps = DiffuseMaps::upload(&ctx, scene)?;
         let diffuse_textures = match lighting.atlas {
             Some(atlas) => {
                 graph = graph.with_diffuse_textures(&ctx, targets.hdr_format())?;

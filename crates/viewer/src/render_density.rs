@@ -207,6 +207,15 @@ pub fn corners_towards(sim: &QuasiStatic, eye: glam::Vec3) -> anyhow::Result<Vec
     Ok(corners)
 }
 
+/// The meshes whose Gouraud corner radiance already holds their diffuse map, which the pass must not apply again: the glossy meshes under a glossy estimate ([`corners_towards`]; their view-dependent radiance folds `ρ_d t(uv)` in at each vertex). Every other mesh's corners carry the untextured `ρ_d/π E`, scaled by the map per fragment ([`lustre_mpr::passes::gouraud::corner_layers`]).
+pub fn tinted_at_vertices(scene: &Scene, glossy: GlossyEstimate) -> Vec<lustre_geometry::MeshId> {
+    if glossy.mode().is_some() {
+        lustre_density::glossy::glossy_meshes(scene)
+    } else {
+        Vec::new()
+    }
+}
+
 /// How `lustre render` finds the rays crossing each DETP disc (García et al. sections 2.6–2.7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum DetpAcceleration {

@@ -7,7 +7,9 @@ use anyhow::{Context, bail};
 use lustre_density::{Estimator, FrameStats, QuasiStatic};
 use lustre_geometry::{ObjectId, Scene};
 use lustre_image::Image;
+use lustre_mpr::diffuse_map::DiffuseMaps;
 use lustre_mpr::frame::AccumulatedSplats;
+use lustre_mpr::passes::gouraud::corner_layers;
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::{
     AdapterPreference, FrameGraph, FrameInputs, GpuContext, RenderTargets, SceneBuffers,
@@ -16,7 +18,7 @@ use serde_json::json;
 
 use crate::gpu_frame::{OUTPUT_FORMAT, output_texture};
 use crate::render::{RenderArgs, sidecar_path, write_image};
-use crate::render_density::{DensityLengths, corners};
+use crate::render_density::{DensityLengths, corners, tinted_at_vertices};
 
 /// The path of frame `index` of `out`: `render.png` becomes `render-0003.png`.
 pub fn frame_path(out: &Path, index: usize) -> PathBuf {
@@ -70,6 +72,11 @@ impl Gpu {
         let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)?
             .with_emission(&ctx, targets.hdr_format(), scene)?
             .with_gouraud(&ctx, targets.hdr_format(), &buffers)?;
+        let maps = DiffuseMaps::upload(&ctx, scene)?;
+        if maps.is_textured() {
+            let tinted = tinted_at_vertices(scene, args.glossy_estimate);
+            graph.set_gouraud_diffuse_maps(&ctx, &maps, &corner_layers(scene, &maps, &tinted))?;
+        }
         if args.aa > 1 {
             graph = graph.with_accumulation(&ctx, targets.hdr_format())?;
         }
