@@ -109,6 +109,7 @@ fn beams(c: &mut Criterion) {
         });
         let set = BeamSet::from_scene(&scene, &options).unwrap();
         let buffers = SceneBuffers::upload(&ctx, &scene).unwrap();
+        let maps = lustre_mpr::diffuse_map::DiffuseMaps::upload(&ctx, &scene).unwrap();
         let camera = *scene.camera();
         for traversal in [Traversal::Linear, Traversal::Hierarchy] {
             if software && traversal == Traversal::Linear && label == "cardioid-800" {
@@ -122,6 +123,7 @@ fn beams(c: &mut Criterion) {
                     targets.hdr_format(),
                     &scene,
                     GlossyModel::Exact,
+                    &maps,
                     &set,
                     traversal,
                 )

@@ -332,18 +332,19 @@ impl FrameGraph {
         Ok(self)
     }
 
-    /// Adds the beam pass (Duvenhage et al. 2010, sections 3.1, 4.3): the light of `beams` added on every surface under every view, with `scene`'s materials flattened with `glossy`, each fragment finding its beams by `traversal`.
+    /// Adds the beam pass (Duvenhage et al. 2010, sections 3.1, 4.3): the light of `beams` added on every surface under every view, with `scene`'s materials flattened with `glossy` and its diffuse `maps` ([`DiffuseMaps::upload`], or [`DiffuseMaps::white`] for none), each fragment finding its beams by `traversal`.
     pub fn with_beams(
         mut self,
         ctx: &GpuContext,
         hdr_format: wgpu::TextureFormat,
         scene: &lustre_geometry::Scene,
         glossy: crate::material::GlossyModel,
+        maps: &DiffuseMaps,
         beams: &lustre_beams::BeamSet,
         traversal: Traversal,
     ) -> Result<Self> {
         self.beams = Some(BeamPass::new(
-            ctx, hdr_format, scene, glossy, beams, traversal,
+            ctx, hdr_format, scene, glossy, maps, beams, traversal,
         )?);
         Ok(self)
     }

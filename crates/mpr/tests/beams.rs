@@ -29,6 +29,7 @@ fn gpu_frame(
 ) -> (Vec<[f32; 3]>, Vec<u32>) {
     let targets = lustre_mpr::RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = lustre_mpr::SceneBuffers::upload(ctx, scene).unwrap();
+    let maps = lustre_mpr::diffuse_map::DiffuseMaps::upload(ctx, scene).unwrap();
     let graph = FrameGraph::new(ctx, wgpu::TextureFormat::Rgba8Unorm)
         .unwrap()
         .with_beams(
@@ -36,6 +37,7 @@ fn gpu_frame(
             targets.hdr_format(),
             scene,
             GlossyModel::Exact,
+            &maps,
             beams,
             traversal,
         )
@@ -203,6 +205,51 @@ fn refracted_beams_under_the_pool_water_match_the_cpu() {
         60.0,
     );
     check("pool", &scene, &camera, &beams, 0.99, 1500);
+}
+
+#[test]
+fn caustics_on_mapped_receivers_match_the_cpu() {
+    // The pool with the 4 × 4 asymmetric map on every material: the beams'
+    // light on the floor scaled by the map at each pixel's uv on both sides
+    // (the CPU adds Material::diffuse_shift to f_r).
+    let plain = builtin::pool();
+    let scene = support::with_asymmetric_maps(plain.clone(), "pool-mapped");
+    let beams = BeamSet::from_scene(&scene, &BuildOptions::default()).unwrap();
+    let camera = Camera::look_at(
+        Vec3::new(-0.6, 0.4, 0.7),
+        Vec3::new(0.1, 0.0, -0.1),
+        Vec3::Y,
+        60.0,
+    );
+    // The map changes the beams' light, so the comparison below can fail.
+    let bvh = Bvh::build(&scene);
+    let sum = |s: &Scene| -> f64 {
+        beam_pixels_cpu(
+            s,
+            &bvh,
+            &camera,
+            SIZE,
+            SIZE,
+            GlossyModel::Exact,
+            &beams,
+            Traversal::Hierarchy,
+        )
+        .unwrap()
+        .iter()
+        .flatten()
+        .map(|&x| f64::from(x))
+        .sum()
+    };
+    let (mapped, unmapped) = (sum(&scene), sum(&plain));
+    eprintln!(
+        "pool beams' light, mapped over unmapped: {:.3}",
+        mapped / unmapped
+    );
+    assert!(
+        (mapped / unmapped - 1.0).abs() > 0.1,
+        "{mapped} against {unmapped}"
+    );
+    check("pool-mapped", &scene, &camera, &beams, 0.99, 1500);
 }
 
 #[test]

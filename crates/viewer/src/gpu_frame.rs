@@ -109,6 +109,8 @@ pub struct GpuFrame {
     pub scene_buffers: SceneBuffers,
     /// The splats of photons traced into memory.
     pub splats: Option<SplatBuffers>,
+    /// The scene's diffuse maps, uploaded once and shared by every pass that reads them (and each batch of streamed splats).
+    pub maps: DiffuseMaps,
     /// The direct pass's point lights.
     pub direct: Option<DirectLights>,
     /// The diffuse textures.
@@ -178,11 +180,13 @@ impl GpuFrame {
                 imaged[i] |= reflector;
             }
         }
+        // The scene's diffuse texture maps, uploaded once for every pass that draws them.
+        let maps = DiffuseMaps::upload(&ctx, scene)?;
         // Streamed photons are splatted batch by batch after the frame.
         let splats = match lighting.splats {
             Some(estimator) => Some(
                 SplatBuffers::new_excluding_imaged(
-                    &ctx, scene, estimator, glossy, &exclude, &imaged,
+                    &ctx, scene, estimator, glossy, &exclude, &imaged, &maps,
                 )
                 .with_context(|| format!("scene `{}`", scene.name))?,
             ),
@@ -194,8 +198,6 @@ impl GpuFrame {
         if lighting.splatting {
             graph = graph.with_splats(&ctx, targets.hdr_format(), lighting.kernel)?;
         }
-        // The scene's diffuse texture maps, uploaded once for every pass that draws them.
-        let maps = DiffuseMaps::upload(&ctx, scene)?;
         if let Some(corners) = lighting.corners {
             graph = graph.with_gouraud(&ctx, targets.hdr_format(), &scene_buffers)?;
             graph.set_gouraud_radiance(&ctx, corners)?;
@@ -257,6 +259,7 @@ impl GpuFrame {
                 targets.hdr_format(),
                 scene,
                 glossy,
+                &maps,
                 set,
                 args.beam_traversal.into(),
             )?;
@@ -300,6 +303,7 @@ impl GpuFrame {
             targets,
             scene_buffers,
             splats,
+            maps,
             direct,
             diffuse_textures,
             output,

@@ -1183,6 +1183,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     gpu.glossy,
                     &gpu.exclude,
                     &gpu.imaged,
+                    &gpu.maps,
                 )
                 .with_context(|| format!("scene `{}`", scene.name))?;
                 let resolution = *splat_resolution.get_or_insert_with(|| {

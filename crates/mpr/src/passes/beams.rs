@@ -29,11 +29,12 @@ use lustre_geometry::sampling::Frame;
 use lustre_geometry::{Bvh, Camera, Rgb, Scene};
 use wgpu::util::DeviceExt;
 
+use crate::diffuse_map::{DiffuseMaps, WHITE_LAYER};
 use crate::material::{GlossyModel, scene_materials};
-use crate::passes::direct::{cpu_brdfs, primary_hits};
+use crate::passes::direct::{check_layers, cpu_brdfs, primary_hits};
 use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::scene_buffers::SceneBuffers;
-use crate::shaders::{with_materials, with_view};
+use crate::shaders::{with_diffuse_maps, with_materials, with_view};
 use crate::target::RenderTargets;
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
@@ -41,9 +42,9 @@ use crate::{GpuContext, MprError, Result};
 /// The beam pass's own WGSL (`src/passes/beams.wgsl`); compiled after the material and view modules ([`beams_wgsl`]).
 pub const BEAMS_WGSL: &str = include_str!("beams.wgsl");
 
-/// The beam pass as compiled: [`BEAMS_WGSL`] after the view block and the material module.
+/// The beam pass as compiled: [`BEAMS_WGSL`] after the view block, the diffuse map lookups and the material module.
 pub fn beams_wgsl() -> String {
-    with_materials(&with_view(BEAMS_WGSL))
+    with_materials(&with_diffuse_maps(&with_view(BEAMS_WGSL)))
 }
 
 /// How a fragment finds the beams that may hold it.
@@ -251,6 +252,8 @@ pub struct BeamPass {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     materials: wgpu::Buffer,
+    /// The receivers' diffuse maps (bindings 5 and 6).
+    maps: DiffuseMaps,
     bind_group: wgpu::BindGroup,
     beam_count: usize,
     byte_size: usize,
@@ -258,12 +261,13 @@ pub struct BeamPass {
 }
 
 impl BeamPass {
-    /// Builds the pipeline for HDR targets of `hdr_format` (blendable) and uploads `beams` with `scene`'s materials (flattened with `glossy`), drawn with `traversal`.
+    /// Builds the pipeline for HDR targets of `hdr_format` (blendable) and uploads `beams` with `scene`'s materials (flattened with `glossy`) and diffuse `maps` ([`DiffuseMaps::upload`] of `scene`, or [`DiffuseMaps::white`]), drawn with `traversal`.
     pub fn new(
         ctx: &GpuContext,
         hdr_format: wgpu::TextureFormat,
         scene: &Scene,
         glossy: GlossyModel,
+        maps: &DiffuseMaps,
         beams: &BeamSet,
         traversal: Traversal,
     ) -> Result<Self> {
@@ -274,7 +278,14 @@ impl BeamPass {
             });
         }
         // `storage` binds one zeroed material for a scene without any.
-        let materials = scene_materials(scene, glossy)?;
+        // Each material's map layer is the scene's; white maps read none.
+        let mut materials = scene_materials(scene, glossy)?;
+        if !maps.is_textured() {
+            for m in &mut materials {
+                m.diffuse_map[0] = WHITE_LAYER;
+            }
+        }
+        check_layers(&materials, maps)?;
         let (pipeline, layout, materials) = ctx.checked("beam pass creation", || {
             let device = &ctx.device;
             let module = scene_module(ctx, "beams", &beams_wgsl());
@@ -288,6 +299,7 @@ impl BeamPass {
                 },
                 count: None,
             };
+            let maps_entries = DiffuseMaps::layout_entries(5, wgpu::ShaderStages::FRAGMENT);
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("beams"),
                 entries: &[
@@ -296,6 +308,8 @@ impl BeamPass {
                     read_only(2),
                     read_only(3),
                     read_only(4),
+                    maps_entries[0],
+                    maps_entries[1],
                 ],
             });
             let pipeline = scene_pipeline(
@@ -313,11 +327,13 @@ impl BeamPass {
             let materials = storage(ctx, "beam-materials", &materials);
             (pipeline, layout, materials)
         })?;
-        let (bind_group, byte_size) = Self::upload(ctx, &layout, &materials, beams, traversal)?;
+        let (bind_group, byte_size) =
+            Self::upload(ctx, &layout, &materials, maps, beams, traversal)?;
         Ok(Self {
             pipeline,
             layout,
             materials,
+            maps: maps.clone(),
             bind_group,
             beam_count: beams.beams().len(),
             byte_size,
@@ -329,6 +345,7 @@ impl BeamPass {
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
         materials: &wgpu::Buffer,
+        maps: &DiffuseMaps,
         beams: &BeamSet,
         traversal: Traversal,
     ) -> Result<(wgpu::BindGroup, usize)> {
@@ -359,6 +376,7 @@ impl BeamPass {
                         contents: bytemuck::bytes_of(&settings),
                         usage: wgpu::BufferUsages::STORAGE,
                     });
+            let [map_view, map_sampler] = maps.entries(5);
             let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("beams"),
                 layout,
@@ -383,6 +401,8 @@ impl BeamPass {
                         binding: 4,
                         resource: settings_buffer.as_entire_binding(),
                     },
+                    map_view,
+                    map_sampler,
                 ],
             });
             (bind_group, flat.byte_size())
@@ -391,8 +411,14 @@ impl BeamPass {
 
     /// Replaces the beams (the scatterers or lights moved: beams are rebuilt on the CPU every frame, section 4.3), keeping the traversal.
     pub fn set_beams(&mut self, ctx: &GpuContext, beams: &BeamSet) -> Result<()> {
-        let (bind_group, byte_size) =
-            Self::upload(ctx, &self.layout, &self.materials, beams, self.traversal)?;
+        let (bind_group, byte_size) = Self::upload(
+            ctx,
+            &self.layout,
+            &self.materials,
+            &self.maps,
+            beams,
+            self.traversal,
+        )?;
         self.bind_group = bind_group;
         self.byte_size = byte_size;
         self.beam_count = beams.beams().len();
@@ -437,10 +463,11 @@ impl BeamPass {
     }
 }
 
-/// The radiance the beams add at a surface point: `Σ f_r(-d, wo) E` over the beams that light it ([`BeamSet::for_each_arrival`]), in the frame of the shading normal `n` flipped to the viewer's side.
+/// The radiance the beams add at a surface point: `Σ f_r(-d, wo) E` over the beams that light it ([`BeamSet::for_each_arrival`]), in the frame of the shading normal `n` flipped to the viewer's side; `shift` is the receiver's diffuse map at the point ([`lustre_geometry::Material::diffuse_shift`]), added to `f_r` where both directions lie above the surface.
 pub fn beam_radiance_cpu(
     beams: &BeamSet,
     brdf: &dyn lustre_brdf::Brdf,
+    shift: Option<Rgb>,
     p: glam::Vec3,
     n: glam::Vec3,
     wo: glam::Vec3,
@@ -450,7 +477,15 @@ pub fn beam_radiance_cpu(
     let wo_local = frame.to_local(wo);
     let mut radiance = Rgb::ZERO;
     beams.for_each_arrival(p, n, traversal == Traversal::Hierarchy, |_, e, d| {
-        radiance += brdf.eval(frame.to_local(-d), wo_local) * e;
+        let wi_local = frame.to_local(-d);
+        let mut f = brdf.eval(wi_local, wo_local);
+        if let Some(shift) = shift
+            && wi_local.z > 0.0
+            && wo_local.z > 0.0
+        {
+            f += shift;
+        }
+        radiance += f * e;
     });
     radiance
 }
@@ -484,6 +519,7 @@ pub fn beam_pixels_cpu(
             beam_radiance_cpu(
                 beams,
                 brdfs[hit.material as usize].as_ref(),
+                scene.materials()[hit.material as usize].diffuse_shift(hit.uv),
                 hit.position,
                 n,
                 wo,

@@ -8,8 +8,9 @@
 // E = Phi_s / A_perp cos(theta) min(P_E, 1) for a glossy one (figures 11, 12),
 // negative for shadow beams. The CPU twin is lustre-beams' Beam::arrival
 // (passes/beams.rs: beam_pixels_cpu); every function below mirrors the one of
-// lustre-beams named beside it. Needs the BRDF and material modules before it
-// (shaders::with_materials).
+// lustre-beams named beside it. A receiver's diffuse map scales its kd at the
+// fragment's uv (common/diffuse_map.wgsl). Needs the BRDF, material and
+// diffuse map modules before it (beams.rs: beams_wgsl).
 //
 // Notation
 // | symbol     | meaning                                                          | unit      |
@@ -104,6 +105,8 @@ struct BeamSettings {
 // A storage buffer, not a uniform block: lavapipe recompiles a fragment
 // shader whose branches read uniforms at every bind group change (beams.rs).
 @group(1) @binding(4) var<storage, read> settings: BeamSettings;
+@group(1) @binding(5) var diffuse_maps: texture_2d_array<f32>;
+@group(1) @binding(6) var diffuse_map_sampler: sampler;
 
 struct VertexOutput {
     // Invariant, computed exactly as depth.wgsl's vs_main: the equal-depth test needs bit-identical depth.
@@ -112,6 +115,7 @@ struct VertexOutput {
     @location(0) world: vec3f,
     @location(1) normal: vec3f,
     @location(2) @interpolate(flat) material: u32,
+    @location(3) uv: vec2f,
 }
 
 @vertex
@@ -119,6 +123,7 @@ fn vs_main(
     @location(0) position: vec3f,
     @location(2) normal: vec3f,
     @location(3) material: u32,
+    @location(6) uv: vec2f,
 ) -> VertexOutput {
     var out: VertexOutput;
     out.clip = view.view_projection * vec4f(position, 1.0);
@@ -126,6 +131,7 @@ fn vs_main(
     out.world = position;
     out.normal = normal;
     out.material = material;
+    out.uv = uv;
     return out;
 }
 
@@ -458,13 +464,14 @@ fn beam_arrival(bi: u32, p: vec3f, normal: vec3f) -> Arrival {
     return out;
 }
 
-// One beam's radiance towards the eye: f_r(-d, wo) E.
-fn beam_radiance(bi: u32, p: vec3f, n: vec3f, basis: mat3x3f, wo_local: vec3f, mi: u32) -> vec3f {
+// One beam's radiance towards the eye: f_r(-d, wo) E, every lobe's kd scaled
+// by the receiver's diffuse map tint (1 without a map: f_r exactly).
+fn beam_radiance(bi: u32, p: vec3f, n: vec3f, basis: mat3x3f, wo_local: vec3f, mi: u32, tint: vec3f) -> vec3f {
     let a = beam_arrival(bi, p, n);
     if !a.ok {
         return vec3f(0.0);
     }
-    return material_brdf_at(mi, material_to_local(basis, -a.d), wo_local) * a.e;
+    return material_brdf_tinted(mi, material_to_local(basis, -a.d), wo_local, tint) * a.e;
 }
 
 fn in_bounds(p: vec3f) -> bool {
@@ -473,6 +480,10 @@ fn in_bounds(p: vec3f) -> bool {
 
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4f {
+    // The map once per fragment, its derivatives in uniform control flow.
+    let duv_dx = dpdx(in.uv);
+    let duv_dy = dpdy(in.uv);
+    let tint = diffuse_tint_grad(materials[in.material].diffuse_map.x, in.uv, duv_dx, duv_dy);
     let wo_world = normalize(view.eye.xyz - in.world);
     var n = normalize(in.normal);
     if dot(n, wo_world) < 0.0 {
@@ -536,7 +547,7 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
         if !found {
             break;
         }
-        l += beam_radiance(bi, p, n, basis, wo_local, in.material);
+        l += beam_radiance(bi, p, n, basis, wo_local, in.material, tint);
     }
     return vec4f(l, 0.0);
 }

@@ -185,7 +185,7 @@ impl GpuLight {
 }
 
 /// Fails when a material's diffuse map layer is not in `maps`.
-fn check_layers(materials: &[GpuMaterial], maps: &DiffuseMaps) -> Result<()> {
+pub(crate) fn check_layers(materials: &[GpuMaterial], maps: &DiffuseMaps) -> Result<()> {
     let layers = maps.layers().iter().copied().max().unwrap_or(WHITE_LAYER);
     match materials.iter().position(|m| m.diffuse_map[0] > layers) {
         Some(i) => Err(MprError::InvalidSetting {

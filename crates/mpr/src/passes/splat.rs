@@ -22,6 +22,7 @@ use lustre_photon::{
 use crate::diffuse_map::DiffuseMaps;
 use crate::kernel_texture::{KERNEL_TEXTURE_SIZE, kernel_texture};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
+use crate::passes::direct::check_layers;
 use crate::passes::redraw::{scene_module, view_stencil};
 use crate::passes::splat_lowres::{LowResTargets, SplatLowRes, SplatResolution};
 use crate::scene_buffers::{GpuVertex, SceneBuffers};
@@ -280,6 +281,7 @@ impl SplatBuffers {
             1 << 27,
             &[],
             Some(estimator),
+            None,
         )
     }
 
@@ -300,6 +302,7 @@ impl SplatBuffers {
             1 << 27,
             textured,
             Some(estimator),
+            None,
         )
     }
 
@@ -308,6 +311,9 @@ impl SplatBuffers {
     /// image carries (Diefenbach & Badler 1997, section 3;
     /// [`crate::passes::glossy_image`]). Their Lambertian lobe must be in
     /// `textured`: an imaged surface with a Lambertian lobe outside it is an error.
+    /// `maps` are the scene's diffuse maps as another pass uploaded them
+    /// ([`DiffuseMaps::upload`] of `scene`), shared instead of uploaded again
+    /// (once per batch of a streamed photon file).
     pub fn new_excluding_imaged(
         ctx: &GpuContext,
         scene: &Scene,
@@ -315,6 +321,7 @@ impl SplatBuffers {
         glossy: GlossyModel,
         textured: &[bool],
         imaged: &[bool],
+        maps: &DiffuseMaps,
     ) -> Result<Self> {
         let is = |flags: &[bool], s: u32| flags.get(s as usize).copied().unwrap_or(false);
         for (id, surface) in scene.surfaces().iter().enumerate() {
@@ -347,6 +354,7 @@ impl SplatBuffers {
             1 << 27,
             textured,
             Some(estimator),
+            Some(maps),
         )
     }
 
@@ -368,10 +376,10 @@ impl SplatBuffers {
         glossy: GlossyModel,
         max_chunk_bytes: u64,
     ) -> Result<Self> {
-        Self::upload(ctx, scene, splats, glossy, max_chunk_bytes, &[], None)
+        Self::upload(ctx, scene, splats, glossy, max_chunk_bytes, &[], None, None)
     }
 
-    /// [`SplatBuffers::from_splats_chunked`] for the surfaces whose Lambertian lobes another pass renders where `textured` is true ([`SplatBuffers::new_excluding`]), with the kernel-mass grids of `estimator` (none without one).
+    /// [`SplatBuffers::from_splats_chunked`] for the surfaces whose Lambertian lobes another pass renders where `textured` is true ([`SplatBuffers::new_excluding`]), with the kernel-mass grids of `estimator` (none without one), reading the scene's diffuse maps from `maps` where given (uploaded here where a splat needs them otherwise).
     fn upload(
         ctx: &GpuContext,
         scene: &Scene,
@@ -380,6 +388,7 @@ impl SplatBuffers {
         max_chunk_bytes: u64,
         textured: &[bool],
         estimator: Option<&SplatEstimator>,
+        maps: Option<&DiffuseMaps>,
     ) -> Result<Self> {
         let mut materials = scene_materials(scene, glossy)?;
         // A textured surface whose every lobe is Lambertian gets no splats; any other textured one is shaded without its Lambertian lobes.
@@ -464,6 +473,9 @@ impl SplatBuffers {
         let maps = if uv_maps.is_empty() {
             uv_maps.push(GpuUvMap::zeroed());
             DiffuseMaps::white(ctx)?
+        } else if let Some(maps) = maps {
+            check_layers(&materials, maps)?;
+            maps.clone()
         } else {
             DiffuseMaps::upload(ctx, scene)?
         };
