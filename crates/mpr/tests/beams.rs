@@ -193,17 +193,21 @@ fn glossy_beams_of_a_rough_conductor_match_the_cpu_for_every_split_point_and_vol
     }
 }
 
-#[test]
-fn refracted_beams_under_the_pool_water_match_the_cpu() {
-    let scene = builtin::pool();
-    let beams = BeamSet::from_scene(&scene, &BuildOptions::default()).unwrap();
-    // Under the water (mean level 0.5 m), looking down at the floor.
-    let camera = Camera::look_at(
+/// A camera under `pool`'s water (mean level 0.5 m), looking down at the floor.
+fn under_the_pool_water() -> Camera {
+    Camera::look_at(
         Vec3::new(-0.6, 0.4, 0.7),
         Vec3::new(0.1, 0.0, -0.1),
         Vec3::Y,
         60.0,
-    );
+    )
+}
+
+#[test]
+fn refracted_beams_under_the_pool_water_match_the_cpu() {
+    let scene = builtin::pool();
+    let beams = BeamSet::from_scene(&scene, &BuildOptions::default()).unwrap();
+    let camera = under_the_pool_water();
     check("pool", &scene, &camera, &beams, 0.99, 1500);
 }
 
@@ -215,12 +219,7 @@ fn caustics_on_mapped_receivers_match_the_cpu() {
     let plain = builtin::pool();
     let scene = support::with_asymmetric_maps(plain.clone(), "pool-mapped");
     let beams = BeamSet::from_scene(&scene, &BuildOptions::default()).unwrap();
-    let camera = Camera::look_at(
-        Vec3::new(-0.6, 0.4, 0.7),
-        Vec3::new(0.1, 0.0, -0.1),
-        Vec3::Y,
-        60.0,
-    );
+    let camera = under_the_pool_water();
     // The map changes the beams' light, so the comparison below can fail.
     let bvh = Bvh::build(&scene);
     let sum = |s: &Scene| -> f64 {

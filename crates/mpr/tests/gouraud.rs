@@ -84,6 +84,36 @@ fn render_with_maps(
     )
 }
 
+/// The primary ray through each pixel centre of the `SIZE`² frame, row 0 at the top.
+fn centre_rays(camera: &Camera) -> Vec<lustre_geometry::Ray> {
+    (0..SIZE * SIZE)
+        .map(|i| {
+            camera.primary_ray(Camera::pixel_ndc(
+                i % SIZE,
+                i / SIZE,
+                SIZE,
+                SIZE,
+                glam::Vec2::splat(0.5),
+            ))
+        })
+        .collect()
+}
+
+/// Per-corner radiance `ρ/π E` of `scene` lit by Impact Count over 20,000 photons.
+fn impact_count_corners(scene: &Scene, bvh: &Bvh) -> Vec<[f32; 3]> {
+    let rays = trace_ray_set(
+        scene,
+        bvh,
+        &RaySetOptions {
+            photons: 20_000,
+            seed: 3,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    corner_radiance(scene, &impact_count(scene, &rays)).unwrap()
+}
+
 /// Pixels whose surface id agrees between GPU and CPU at the pixel and its four neighbours: away from silhouettes and surface boundaries.
 fn interior(gpu_ids: &[u32], cpu_ids: &[u32]) -> Vec<usize> {
     let s = SIZE as usize;
@@ -118,17 +148,7 @@ fn gpu_gouraud_matches_cpu_on_cornell_lit_by_impact_count() {
     let scene = fine_cornell();
     let bvh = Bvh::build(&scene);
     let camera = scene.camera().with_aspect(1.0);
-    let rays = trace_ray_set(
-        &scene,
-        &bvh,
-        &RaySetOptions {
-            photons: 20_000,
-            seed: 3,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let corners = corner_radiance(&scene, &impact_count(&scene, &rays)).unwrap();
+    let corners = impact_count_corners(&scene, &bvh);
     let (gpu, gpu_ids) = render(&ctx, &scene, &camera, &corners);
     let cpu = gouraud_pass_cpu(&bvh, &camera, SIZE, SIZE, &corners);
     let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
@@ -167,17 +187,7 @@ fn gpu_gouraud_reads_diffuse_maps_per_fragment_as_the_cpu_does() {
     let scene = support::with_asymmetric_maps(fine_cornell(), "cornell-mapped");
     let bvh = Bvh::build(&scene);
     let camera = scene.camera().with_aspect(1.0);
-    let rays = trace_ray_set(
-        &scene,
-        &bvh,
-        &RaySetOptions {
-            photons: 20_000,
-            seed: 3,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let corners = corner_radiance(&scene, &impact_count(&scene, &rays)).unwrap();
+    let corners = impact_count_corners(&scene, &bvh);
     let maps = DiffuseMaps::upload(&ctx, &scene).unwrap();
     let layers = corner_layers(&scene, &maps, &[]);
     assert!(
@@ -193,17 +203,7 @@ fn gpu_gouraud_reads_diffuse_maps_per_fragment_as_the_cpu_does() {
     // the map's 4 texels), so that the GPU's trilinear read is level 0 too;
     // on the ceiling and floor seen at a grazing angle it is not (a tenth of
     // the tint off on 54 pixels, the next mip level's blur).
-    let rays: Vec<_> = (0..SIZE * SIZE)
-        .map(|i| {
-            camera.primary_ray(Camera::pixel_ndc(
-                i % SIZE,
-                i / SIZE,
-                SIZE,
-                SIZE,
-                glam::Vec2::splat(0.5),
-            ))
-        })
-        .collect();
+    let rays = centre_rays(&camera);
     let uvs: Vec<_> = bvh
         .closest_hits(&rays)
         .iter()
@@ -271,17 +271,7 @@ fn constant_and_affine_corner_radiance_are_reproduced_exactly() {
         .flat_map(|t| t.positions)
         .collect();
     let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
-    let rays: Vec<_> = (0..SIZE * SIZE)
-        .map(|i| {
-            camera.primary_ray(Camera::pixel_ndc(
-                i % SIZE,
-                i / SIZE,
-                SIZE,
-                SIZE,
-                glam::Vec2::splat(0.5),
-            ))
-        })
-        .collect();
+    let rays = centre_rays(&camera);
     let hits = bvh.closest_hits(&rays);
 
     // Constant: L = (0.25, 1, 4) at every corner gives exactly that on every covered pixel.

@@ -182,6 +182,49 @@ fn compare(gpu: &[[f32; 3]], cpu: &[[f32; 3]], mask: &[bool]) -> (usize, f32, f3
     )
 }
 
+/// The splat pass at pixel centres under the surface-id restriction against
+/// its CPU twin over the interior pixels (more than half the frame).
+fn gpu_against_cpu(
+    ctx: &GpuContext,
+    test: &str,
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &lustre_geometry::Camera,
+    est: &SplatEstimator,
+) -> Compared {
+    let cpu = splat_pass_cpu(est, bvh, camera, SIZE, SIZE);
+    let cpu_ids = depth_pass_cpu(bvh, camera, SIZE, SIZE).surface;
+    let (gpu, gpu_ids) = gpu_splats(
+        ctx,
+        scene,
+        est,
+        Restriction::SurfaceId,
+        KernelFiltering::PixelCentre,
+    );
+    let mask = interior(&gpu_ids, &cpu_ids);
+    let (compared, worst, sum_error) = compare(&gpu, &cpu, &mask);
+    eprintln!(
+        "{test}: {compared} interior pixels, worst relative error {worst:.4}, image-sum error {sum_error:.5}"
+    );
+    assert!(compared > SIZE as usize * SIZE as usize / 2);
+    Compared {
+        cpu,
+        gpu,
+        mask,
+        worst,
+        sum_error,
+    }
+}
+
+/// What [`gpu_against_cpu`] compared and found.
+struct Compared {
+    cpu: Vec<[f32; 3]>,
+    gpu: Vec<[f32; 3]>,
+    mask: Vec<bool>,
+    worst: f32,
+    sum_error: f32,
+}
+
 fn check_scene(
     name: &str,
     selection: BounceSelection,
@@ -198,21 +241,13 @@ fn check_scene(
     let bvh = Bvh::build(&scene);
     let camera = scene.camera().with_aspect(1.0);
     let est = estimator_with(&scene, 20_000, 8.0, selection, kernel, edges);
-    let cpu = splat_pass_cpu(&est, &bvh, &camera, SIZE, SIZE);
-    let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
-    let (gpu, gpu_ids) = gpu_splats(
-        &ctx,
-        &scene,
-        &est,
-        Restriction::SurfaceId,
-        KernelFiltering::PixelCentre,
-    );
-    let mask = interior(&gpu_ids, &cpu_ids);
-    let (compared, worst, sum_error) = compare(&gpu, &cpu, &mask);
-    eprintln!(
-        "{test}: {compared} interior pixels, worst relative error {worst:.4}, image-sum error {sum_error:.5}"
-    );
-    assert!(compared > SIZE as usize * SIZE as usize / 2);
+    let Compared {
+        cpu,
+        gpu,
+        mask,
+        worst,
+        sum_error,
+    } = gpu_against_cpu(&ctx, &test, &scene, &bvh, &camera, &est);
     // Both evaluate K by its formula at the pixel centre; what remains is f32
     // arithmetic in the BRDF and the kernel offset (per-scene tolerance at the
     // call); summed over the image the two agree to 1e-3.
@@ -407,23 +442,15 @@ fn gpu_splats_match_cpu_with_diffuse_maps() {
     let bvh = Bvh::build(&scene);
     let camera = scene.camera().with_aspect(1.0);
     let est = estimator(&scene, 20_000, 8.0, BounceSelection::All);
-    // Each splat's BRDF reads the map at its photon on both sides
-    // (lustre-photon's photon_brdf; the GPU's level 0 of the map array).
-    let cpu = splat_pass_cpu(&est, &bvh, &camera, SIZE, SIZE);
-    let cpu_ids = depth_pass_cpu(&bvh, &camera, SIZE, SIZE).surface;
-    let (gpu, gpu_ids) = gpu_splats(
-        &ctx,
-        &scene,
-        &est,
-        Restriction::SurfaceId,
-        KernelFiltering::PixelCentre,
-    );
-    let mask = interior(&gpu_ids, &cpu_ids);
-    let (compared, worst, sum_error) = compare(&gpu, &cpu, &mask);
-    eprintln!(
-        "{test}: {compared} interior pixels, worst relative error {worst:.4}, image-sum error {sum_error:.5}"
-    );
-    assert!(compared > SIZE as usize * SIZE as usize / 2);
+    // Each splat reads the map where it lands on both sides (lustre-photon's
+    // photon_brdf at the pixel's point; the GPU's level 0 of the map array).
+    let Compared {
+        cpu,
+        mask,
+        worst,
+        sum_error,
+        ..
+    } = gpu_against_cpu(&ctx, test, &scene, &bvh, &camera, &est);
     // Measured 2e-4 on llvmpipe, as untextured: the map is Rgba16Float on the
     // GPU (texels to 2^-11), and hardware samplers may round their bilinear
     // weights to 1/256, hence 2e-3.
