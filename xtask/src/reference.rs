@@ -15,6 +15,7 @@ use anyhow::{Context, Result, bail, ensure};
 use clap::ValueEnum;
 use lustre_geometry::builtin::{BUILTIN_SCENES, builtin};
 use lustre_geometry::mitsuba::{self, ExportOptions, Integrator, ReconstructionFilter};
+use lustre_geometry::{Scene, load_scene_file};
 
 /// The spp a committed reference aims for.
 const TARGET_SPP: u32 = 4096;
@@ -22,7 +23,8 @@ const TARGET_SPP: u32 = 4096;
 /// Options of `cargo xtask reference`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Render only this built-in scene (default: all of them).
+    /// Render only this scene: a built-in name, or an OBJ or glTF 2.0 file
+    /// (written as `<file stem>.exr` and `.json`; default: every built-in scene).
     #[arg(long)]
     scene: Option<String>,
     /// Samples per pixel.
@@ -178,12 +180,12 @@ pub fn run(args: Args) -> Result<()> {
             "--point-light-radius must be a positive, finite radius in metres, not {r}"
         );
     }
-    let scenes: Vec<&str> = match &args.scene {
-        Some(name) => {
-            builtin(name)?;
-            vec![name.as_str()]
-        }
-        None => BUILTIN_SCENES.to_vec(),
+    let scenes: Vec<(String, Scene)> = match &args.scene {
+        Some(arg) => vec![reference_scene(arg)?],
+        None => BUILTIN_SCENES
+            .iter()
+            .map(|name| Ok(((*name).to_owned(), builtin(name)?)))
+            .collect::<Result<_>>()?,
     };
     let out_dir = args
         .out_dir
@@ -191,23 +193,48 @@ pub fn run(args: Args) -> Result<()> {
         .unwrap_or_else(|| root.join("tests").join("references"));
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let work = std::env::temp_dir().join(format!("lustre-reference-{}", std::process::id()));
-    let result = scenes
-        .iter()
-        .try_for_each(|name| render_scene(name, &args, &python, &root, &out_dir, &work));
+    let result = scenes.iter().try_for_each(|(name, scene)| {
+        render_scene(name, scene, &args, &python, &root, &out_dir, &work)
+    });
     let _ = std::fs::remove_dir_all(&work);
     result
 }
 
-/// Exports one built-in scene, renders it and writes its EXR and sidecar.
+/// The scene `--scene` names and the name its files take: a built-in scene
+/// by its name, else a scene file ([`load_scene_file`], named by its stem;
+/// the loader's warnings on stderr). Fails on a name that is neither.
+fn reference_scene(arg: &str) -> Result<(String, Scene)> {
+    if BUILTIN_SCENES.contains(&arg) {
+        return Ok((arg.to_owned(), builtin(arg)?));
+    }
+    let path = Path::new(arg);
+    ensure!(
+        path.is_file(),
+        "--scene `{arg}` is neither a built-in scene ({}) nor a scene file",
+        BUILTIN_SCENES.join(", ")
+    );
+    let loaded = load_scene_file(path).with_context(|| format!("cannot load `{arg}`"))?;
+    for warning in &loaded.warnings {
+        eprintln!("reference: {arg}: warning: {warning}");
+    }
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .with_context(|| format!("`{arg}` has no UTF-8 file name"))?
+        .to_owned();
+    Ok((name, loaded.scene))
+}
+
+/// Exports one scene, renders it and writes its EXR and sidecar.
 fn render_scene(
     name: &str,
+    scene: &Scene,
     args: &Args,
     python: &Path,
     root: &Path,
     out_dir: &Path,
     work: &Path,
 ) -> Result<()> {
-    let scene = builtin(name)?;
     let xml = work.join(name).join("scene.xml");
     let filter = match args.filter {
         Filter::Box => ReconstructionFilter::Box,
@@ -232,7 +259,7 @@ fn render_scene(
         point_light_radius: point_light_radius.map(|r| r as f32),
         ..ExportOptions::default()
     };
-    let report = mitsuba::export(&scene, &xml, &options)
+    let report = mitsuba::export(scene, &xml, &options)
         .with_context(|| format!("exporting `{name}` to Mitsuba"))?;
     for warning in &report.warnings {
         eprintln!("reference: {name}: warning: {warning}");
@@ -307,7 +334,8 @@ fn render_scene(
         "export_warnings": report.warnings,
         "note": note,
         "command": format!(
-            "cargo xtask reference --scene {name} --spp {} --spp-per-pass {} --size {} --variant {} --integrator {} --max-depth {} --filter {} --seed {}{}",
+            "cargo xtask reference --scene {} --spp {} --spp-per-pass {} --size {} --variant {} --integrator {} --max-depth {} --filter {} --seed {}{}",
+            args.scene.as_deref().unwrap_or(name),
             args.spp,
             args.spp_per_pass,
             args.size,
@@ -555,6 +583,25 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_scene_is_a_builtin_name_or_a_scene_file_named_by_its_stem() {
+        let (name, scene) = reference_scene("cornell").unwrap();
+        assert_eq!(name, "cornell");
+        assert_eq!(scene.name, builtin("cornell").unwrap().name);
+        let file = workspace_root().join("tests/scenes/textured-cornell/textured-cornell.obj");
+        let (name, scene) = reference_scene(file.to_str().unwrap()).unwrap();
+        assert_eq!(name, "textured-cornell");
+        // The file's checker map is loaded, as the export bakes it into the reference.
+        assert!(scene.materials().iter().any(|m| m.diffuse_map.is_some()));
+        let error = reference_scene("no-such-scene.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("neither a built-in scene (cornell, ") && error.contains("scene file"),
+            "{error}"
+        );
+    }
 
     #[test]
     fn references_are_rendered_again_as_their_sidecars_say() {

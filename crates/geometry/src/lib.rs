@@ -41,6 +41,7 @@ mod plane;
 mod ray;
 pub mod sampling;
 mod scene;
+mod scene_file;
 pub mod shadow_volume;
 pub mod slab;
 pub mod texture;
@@ -61,6 +62,7 @@ pub use ray::{Hit, LeanHit, Ray, TriangleHit, intersect_triangle};
 pub use scene::{
     Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,
 };
+pub use scene_file::{is_gltf, load_scene_file};
 pub use texture::Texture;
 
 /// Linear Rec.709 RGB.

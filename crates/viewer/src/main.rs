@@ -196,9 +196,8 @@ fn info(arg: &str) -> anyhow::Result<()> {
 
 /// `lustre export-gltf`: the scene as glTF 2.0, each approximation a warning on stderr.
 fn export_gltf(arg: &str, out: &std::path::Path) -> anyhow::Result<()> {
-    let extension = out.extension().and_then(|e| e.to_str()).unwrap_or_default();
     anyhow::ensure!(
-        extension.eq_ignore_ascii_case("glb") || extension.eq_ignore_ascii_case("gltf"),
+        lustre_geometry::is_gltf(out),
         "{}: the glTF file must end in .glb or .gltf",
         out.display()
     );

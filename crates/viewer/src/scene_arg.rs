@@ -4,8 +4,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use lustre_geometry::builtin::BUILTIN_SCENES;
-use lustre_geometry::gltf::load_gltf;
-use lustre_geometry::obj::{LoadedScene, load_obj};
+use lustre_geometry::obj::LoadedScene;
 
 /// Loads a built-in scene by name, or an OBJ or glTF file by path (by its extension: `.gltf` and `.glb` are glTF, anything else OBJ).
 pub fn load(arg: &str) -> anyhow::Result<LoadedScene> {
@@ -24,14 +23,5 @@ pub fn load(arg: &str) -> anyhow::Result<LoadedScene> {
             BUILTIN_SCENES.join(", ")
         );
     }
-    let gltf = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
-    if gltf {
-        load_gltf(path)
-    } else {
-        load_obj(path)
-    }
-    .with_context(|| format!("cannot load `{arg}`"))
+    lustre_geometry::load_scene_file(path).with_context(|| format!("cannot load `{arg}`"))
 }
