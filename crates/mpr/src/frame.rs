@@ -470,6 +470,23 @@ impl FrameGraph {
         }
     }
 
+    /// Stores shadow volumes for every light position of `sets` (the point
+    /// lights of each accumulation sample) and draws each light with its
+    /// own position's volumes from now on (section 4.4's stored jittered
+    /// volumes, [`ShadowVolumes::store_jittered`]); returns the number of
+    /// volumes built, 0 without shadow volumes.
+    pub fn store_jittered_volumes(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &lustre_geometry::Scene,
+        sets: &[Vec<lustre_geometry::Light>],
+    ) -> Result<usize> {
+        match &mut self.shadow_volumes {
+            Some(volumes) => volumes.store_jittered(ctx, scene, sets),
+            None => Ok(0),
+        }
+    }
+
     /// Writes the direct lights' positions for the shadow volumes, before a submission.
     fn prepare_shadow_volumes(&self, ctx: &GpuContext, passes: &ResolvedPasses<'_>) -> Result<()> {
         match (&self.shadow_volumes, passes.direct) {

@@ -7,6 +7,7 @@
 //! every frame through the same calls.
 
 use anyhow::Context;
+use glam::Vec2;
 use lustre_beams::BeamSet;
 use lustre_geometry::light::{jittered_point_lights, paired_rotation, pivot_point_lights};
 use lustre_geometry::{Bvh, Camera, Light, Scene};
@@ -20,6 +21,7 @@ use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextures};
 use lustre_mpr::passes::direct::DirectLights;
 use lustre_mpr::passes::glossy_image::{GlossySettings, imaged_surfaces};
 use lustre_mpr::passes::gouraud::corner_layers;
+use lustre_mpr::passes::shadowed_direct::{ShadowVolumes, VolumeJitter};
 use lustre_mpr::passes::specular::{SpecularSettings, mean_radiance};
 use lustre_mpr::passes::splat::{KernelFiltering, Restriction, SplatBuffers};
 use lustre_mpr::passes::splat_lowres::SplatResolution;
@@ -30,7 +32,7 @@ use lustre_photon::{Kernel, SplatEstimator};
 
 use crate::render::{
     FilterArg, GlossyArg, RenderArgs, RestrictionArg, ShadowArg, SplatResolutionArg, Technique,
-    TermArg, ibr_settings,
+    TermArg, VolumeJitterArg, ibr_settings,
 };
 use crate::render_density::tinted_at_vertices;
 
@@ -216,6 +218,11 @@ impl GpuFrame {
             None => None,
         };
         let shadow_volumes = args.technique.multipass() && args.shadows == ShadowArg::Volumes;
+        // Paired light jitter: a different set of light positions per accumulation sample.
+        let paired = args.aa > 1
+            && args.light_samples > 1
+            && args.paired_lights
+            && scene.lights().iter().any(|l| !l.is_delta());
         let direct = if args.technique.direct_light() {
             graph = graph.with_direct(&ctx, targets.hdr_format())?;
             let pass = graph.direct.as_ref().context("direct pass")?;
@@ -245,6 +252,18 @@ impl GpuFrame {
                             panes: args.pane_light(),
                         },
                     )?;
+                }
+                let sets = sample_light_sets(scene.lights(), args.light_samples, args.aa, paired);
+                let store = match args.jittered_volumes {
+                    VolumeJitterArg::Pivot => false,
+                    VolumeJitterArg::Stored => true,
+                    VolumeJitterArg::Auto => graph
+                        .shadow_volumes
+                        .as_ref()
+                        .is_some_and(|v| stored_volume_bytes(v, &sets) <= STORED_VOLUME_BUDGET),
+                };
+                if store {
+                    graph.store_jittered_volumes(&ctx, scene, &sets)?;
                 }
             } else {
                 graph.update_shadows(&ctx, &scene_buffers, &lights)?;
@@ -292,11 +311,6 @@ impl GpuFrame {
         let splat_resolution = splats
             .as_ref()
             .map(|b| resolve_resolution(args, restriction, &b.supports, camera, height));
-        // Paired light jitter: a different set of light positions per accumulation sample.
-        let paired = args.aa > 1
-            && args.light_samples > 1
-            && args.paired_lights
-            && scene.lights().iter().any(|l| !l.is_delta());
         Self {
             ctx,
             graph,
@@ -458,6 +472,25 @@ impl GpuFrame {
         }
     }
 
+    /// Under `--jittered-volumes stored`, stores the shadow volumes of every
+    /// jittered light position that `aa` samples draw (Diefenbach & Badler
+    /// 1997, section 4.4; built once per sample count), so that
+    /// [`GpuFrame::draw`] with `aa` finds them; nothing otherwise.
+    pub fn store_jittered_volumes(&mut self, scene: &Scene, aa: u32) -> anyhow::Result<()> {
+        let stored = self
+            .graph
+            .shadow_volumes
+            .as_ref()
+            .is_some_and(|v| v.jitter() == VolumeJitter::Stored);
+        if stored {
+            let sets = sample_light_sets(&self.lights, self.light_samples, aa, self.paired);
+            self.graph
+                .store_jittered_volumes(&self.ctx, scene, &sets)
+                .context("storing the jittered shadow volumes")?;
+        }
+        Ok(())
+    }
+
     /// Draws `camera` with `aa` jittered samples into the HDR target and the output, and waits for the GPU (Diefenbach & Badler section 7's accumulation).
     pub fn draw(&self, camera: &Camera, aa: u32) -> anyhow::Result<()> {
         let ctx = &self.ctx;
@@ -548,6 +581,34 @@ impl GpuFrame {
             .as_ref()
             .map(|b| resolve_resolution(args, restriction, &b.supports, camera, height));
     }
+}
+
+/// The most bytes of shadow volumes (with their virtual lights' volumes)
+/// that `--jittered-volumes auto` stores for the jittered lights of section
+/// 4.4 (64 MiB); beyond it the jittered lights pivot about the volumes of
+/// their area light's centre.
+pub const STORED_VOLUME_BUDGET: usize = 64 << 20;
+
+/// The bytes of shadow volumes storing every light position of `sets` would
+/// take, from the bytes per position of `volumes` (an upper bound: positions
+/// shared by several sets are counted once per set).
+fn stored_volume_bytes(volumes: &ShadowVolumes, sets: &[Vec<Light>]) -> usize {
+    let bytes = volumes.set().byte_size() + volumes.virtual_lights().map_or(0, |v| v.byte_size());
+    let positions = volumes.positions().0.len().max(1);
+    let stored: usize = sets.iter().map(Vec::len).sum();
+    bytes.div_ceil(positions) * stored
+}
+
+/// The point lights `aa` accumulation samples draw for `lights` with `k`
+/// jittered lights per area light (Diefenbach & Badler 1997, section 4.4):
+/// the unrotated set every frame starts from and, with paired light jitter,
+/// each sample's rotated set ([`GpuFrame::draw`]'s order).
+fn sample_light_sets(lights: &[Light], k: u32, aa: u32, paired: bool) -> Vec<Vec<Light>> {
+    let mut sets = vec![jittered_point_lights(lights, k, Vec2::ZERO)];
+    if paired && aa > 1 {
+        sets.extend((0..aa).map(|s| jittered_point_lights(lights, k, paired_rotation(s, aa, k))));
+    }
+    sets
 }
 
 /// `--splat-resolution`, with `auto` chosen from the splats' projected size through `camera`.

@@ -15,7 +15,15 @@
 //! positions as the points the far vertices are extruded from: equal to the
 //! built positions, the volumes are exact; moved by a jitter (the paired
 //! light jitter of section 4.4 between accumulation samples), they follow
-//! the pivot approximation without a rebuild.
+//! the pivot approximation without a rebuild ([`VolumeJitter::Pivot`]).
+//! Section 4.4 names the two exact alternatives it turns down for speed:
+//! recomputing the volumes at each jitter iteration, or storing the entire
+//! set of jittered volumes at the start. [`ShadowVolumes::store_jittered`]
+//! is the second ([`VolumeJitter::Stored`]): volumes for every jittered
+//! position the frames draw, each light then drawn with its own position's
+//! volumes, so a face that one jittered light sees and another does not
+//! (cornell's large box's front face, whose plane passes through the area
+//! light) shadows each light as it should.
 
 use std::sync::Mutex;
 
@@ -34,6 +42,21 @@ use crate::view::{ViewBuffer, ViewSlot};
 use crate::virtual_light::VirtualLightSettings;
 use crate::{GpuContext, MprError, Result};
 
+/// How the volumes follow the jittered point lights that stand for an area
+/// light (Diefenbach & Badler 1997, section 4.4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum VolumeJitter {
+    /// Each light keeps the volumes it was built for, and only their far
+    /// vertices follow its jittered position (figure 7's jitter
+    /// approximation: the silhouette of the built position is the pivot).
+    #[default]
+    Pivot,
+    /// Volumes for every jittered position drawn, stored at the start (the
+    /// paper's "initial storage of the entire set of jittered faces"), each
+    /// light drawn with the volumes of its own position: exact.
+    Stored,
+}
+
 /// The shadow volumes of a scene for a list of point lights, on the GPU
 /// (sections 4.1 and 4.3), with the pass that counts them.
 #[derive(Debug)]
@@ -45,6 +68,12 @@ pub struct ShadowVolumes {
     /// Per light, the index of its volumes in `buffers`: the jittered lights
     /// of one area light share the volumes of its centre (section 4.4).
     volume_of: Vec<usize>,
+    /// How the volumes follow jittered lights.
+    jitter: VolumeJitter,
+    /// Per light, the volumes [`ShadowVolumes::prepare`] chose for this
+    /// frame: `volume_of` under [`VolumeJitter::Pivot`], the volumes of each
+    /// light's own position under [`VolumeJitter::Stored`].
+    drawn: Mutex<Vec<usize>>,
     /// The positions the far vertices are extruded from, written per frame.
     lights: Mutex<VolumeLights>,
     /// The distinct light positions the volumes were built for.
@@ -57,21 +86,21 @@ pub struct ShadowVolumes {
     surface_boxes: Vec<[Vec3; 2]>,
 }
 
-/// The distinct positions of `positions` in first-seen order and, per
-/// position, the index of its distinct one.
-fn distinct(positions: &[Vec3]) -> (Vec<Vec3>, Vec<usize>) {
-    let mut unique: Vec<Vec3> = Vec::new();
+/// `stored` followed by the positions of `positions` it lacks (distinct, in
+/// first-seen order), and per position of `positions` its index there.
+fn including(stored: &[Vec3], positions: &[Vec3]) -> (Vec<Vec3>, Vec<usize>) {
+    let mut all = stored.to_vec();
     let index = positions
         .iter()
-        .map(|p| match unique.iter().position(|u| u == p) {
+        .map(|p| match all.iter().position(|u| u == p) {
             Some(i) => i,
             None => {
-                unique.push(*p);
-                unique.len() - 1
+                all.push(*p);
+                all.len() - 1
             }
         })
         .collect();
-    (unique, index)
+    (all, index)
 }
 
 fn geometry_error(e: lustre_geometry::GeometryError) -> MprError {
@@ -94,7 +123,7 @@ impl ShadowVolumes {
     ) -> Result<Self> {
         let pass = ShadowVolumePass::new(ctx, hdr_format)?;
         let positions: Vec<Vec3> = lights.iter().map(light_position).collect();
-        let (unique, volume_of) = distinct(&positions);
+        let (unique, volume_of) = including(&[], &positions);
         let set = ShadowVolumeSet::new(scene, &unique).map_err(geometry_error)?;
         let buffers = (0..unique.len())
             .map(|i| ShadowVolumeBuffers::upload(ctx, set.volumes_for_light(i)))
@@ -105,7 +134,9 @@ impl ShadowVolumes {
             pass,
             set,
             buffers,
+            drawn: Mutex::new(volume_of.clone()),
             volume_of,
+            jitter: VolumeJitter::Pivot,
             lights: Mutex::new(volume_lights),
             positions: unique,
             virtual_lights: None,
@@ -172,8 +203,63 @@ impl ShadowVolumes {
     /// the number of volumes rebuilt.
     pub fn refresh(&mut self, ctx: &GpuContext, scene: &Scene, lights: &[Light]) -> Result<usize> {
         let all_positions: Vec<Vec3> = lights.iter().map(light_position).collect();
-        let (positions, volume_of) = distinct(&all_positions);
+        let (positions, volume_of) = match self.jitter {
+            VolumeJitter::Pivot => including(&[], &all_positions),
+            // The stored jittered positions stay, with the lights' own added.
+            VolumeJitter::Stored => including(&self.positions, &all_positions),
+        };
         self.volume_of = volume_of;
+        self.rebuild(ctx, scene, positions)
+    }
+
+    /// Stores volumes for every light position of `sets` beside those built
+    /// already, and draws each light from now on with the volumes of its own
+    /// position ([`VolumeJitter::Stored`], section 4.4's initial storage of
+    /// the jittered volumes): `sets` are the point lights of the frame's
+    /// accumulation samples (the direct lights of each, in their order), and
+    /// a later [`ShadowVolumes::prepare`] fails for a light whose position is
+    /// in none of the sets stored. Returns the number of volumes built (0
+    /// when every position was stored already). Fails when the sets differ
+    /// in length from the lights the volumes were made for, or on a light
+    /// position that is not finite.
+    pub fn store_jittered(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        sets: &[Vec<Light>],
+    ) -> Result<usize> {
+        if let Some(set) = sets.iter().find(|set| set.len() != self.volume_of.len()) {
+            return Err(MprError::InvalidSetting {
+                what: "shadow volumes",
+                message: format!(
+                    "a jittered set of {} lights for volumes of {} lights",
+                    set.len(),
+                    self.volume_of.len()
+                ),
+            });
+        }
+        let all_positions: Vec<Vec3> = sets.iter().flatten().map(light_position).collect();
+        let stored = match self.jitter {
+            VolumeJitter::Pivot => &[][..],
+            VolumeJitter::Stored => &self.positions[..],
+        };
+        let (positions, _) = including(stored, &all_positions);
+        self.jitter = VolumeJitter::Stored;
+        if positions == self.positions {
+            return Ok(0);
+        }
+        self.rebuild(ctx, scene, positions)
+    }
+
+    /// How the volumes follow jittered lights.
+    pub fn jitter(&self) -> VolumeJitter {
+        self.jitter
+    }
+
+    /// Rebuilds and re-uploads the volumes for `positions` (the distinct
+    /// light positions, in the order of `buffers`): only those of moved
+    /// objects and lights when the count is unchanged (section 4.3).
+    fn rebuild(&mut self, ctx: &GpuContext, scene: &Scene, positions: Vec<Vec3>) -> Result<usize> {
         let old = self.set.lights().to_vec();
         let rebuilt = self
             .set
@@ -235,19 +321,37 @@ impl ShadowVolumes {
             });
         }
         let positions: Vec<Vec3> = direct.lights().map(|l| l.position()).collect();
+        let drawn = match self.jitter {
+            VolumeJitter::Pivot => self.volume_of.clone(),
+            VolumeJitter::Stored => positions
+                .iter()
+                .map(|p| {
+                    self.positions.iter().position(|q| q == p).ok_or_else(|| {
+                        MprError::InvalidSetting {
+                            what: "shadow volumes",
+                            message: format!(
+                                "no stored volumes for the light at {p} \
+                                 (ShadowVolumes::store_jittered with this frame's jittered lights)"
+                            ),
+                        }
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?,
+        };
         let mut lights = self.lights.lock().unwrap_or_else(|e| e.into_inner());
         lights.write(ctx, &self.pass, &positions)?;
-        match &self.virtual_lights {
-            Some(v) => v.prepare(
+        if let Some(v) = &self.virtual_lights {
+            v.prepare(
                 ctx,
                 &self.pass,
                 direct_pass,
                 direct,
-                &self.volume_of,
+                &drawn,
                 &self.surface_boxes,
-            ),
-            None => Ok(()),
+            )?;
         }
+        *self.drawn.lock().unwrap_or_else(|e| e.into_inner()) = drawn;
+        Ok(())
     }
 
     /// The volumes on the CPU.
@@ -312,7 +416,8 @@ impl ShadowVolumes {
             width,
             height,
         );
-        for (i, &volume) in self.volume_of.iter().enumerate() {
+        let drawn = self.drawn.lock().unwrap_or_else(|e| e.into_inner());
+        for (i, &volume) in drawn.iter().enumerate() {
             let buffers = &self.buffers[volume];
             self.pass
                 .record_begin(&mut render, slot.stencil_reference)?;

@@ -619,6 +619,7 @@ impl App {
             };
             if let Some(samples) = samples {
                 let start = Instant::now();
+                gpu.store_jittered_volumes(&self.prepared.scene, samples)?;
                 gpu.draw(&camera, samples)?;
                 drew = Some(start.elapsed());
                 self.camera_drawn = Some((camera, size, settings));
