@@ -193,7 +193,7 @@ impl Beam {
         self.generator_normal.dot(p) - self.generator_offset > 0.0
     }
 
-    /// The flux triangle of the beam's rays at the flux plane through `p` (section 3.1, figure 5); `None` where it degenerates (a focus).
+    /// The flux triangle of the beam's rays at the flux plane through `p` (section 3.1, figure 5); `None` where it degenerates (a focus), and where the plane lies upstream of every scatterer vertex (`n · p < n · o_i` for all three: the rays, each moving along the wavefront normal `n`, never reach it, and the triangle extrapolated behind the scatterer shrinks to the beam's apex).
     pub fn flux_triangle(&self, p: Vec3) -> Option<FluxTriangle> {
         flux_triangle(&self.vertices, &self.directions, self.wavefront_normal, p)
     }
@@ -463,10 +463,13 @@ fn flux_triangle(
     n: Vec3,
     p: Vec3,
 ) -> Option<FluxTriangle> {
-    let x: [Vec3; 3] = std::array::from_fn(|i| {
-        let t = (p - origins[i]).dot(n) / directions[i].dot(n);
-        origins[i] + t * directions[i]
-    });
+    let t: [f32; 3] = std::array::from_fn(|i| (p - origins[i]).dot(n) / directions[i].dot(n));
+    // Upstream of every vertex no ray of the beam reaches the plane (each
+    // moves along n); the extrapolated triangle shrinks to the apex there.
+    if !t.iter().any(|&t| t > 0.0) {
+        return None;
+    }
+    let x: [Vec3; 3] = std::array::from_fn(|i| origins[i] + t[i] * directions[i]);
     let total = (x[1] - x[0]).cross(x[2] - x[0]).dot(n);
     if total == 0.0 || !total.is_finite() {
         return None;

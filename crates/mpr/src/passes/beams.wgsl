@@ -171,6 +171,8 @@ struct FluxTriangle {
 fn flux_triangle(bi: u32, support: bool, p: vec3f) -> FluxTriangle {
     var ft: FluxTriangle;
     let n = beams[bi].wavefront.xyz;
+    // Upstream of every vertex no ray reaches the plane (Beam::flux_triangle).
+    var ahead = false;
     for (var i = 0u; i < 3u; i++) {
         let o = beams[bi].vertices[i].xyz;
         var d = beams[bi].directions[i].xyz;
@@ -178,10 +180,11 @@ fn flux_triangle(bi: u32, support: bool, p: vec3f) -> FluxTriangle {
             d = beams[bi].support[i].xyz;
         }
         let t = dot(p - o, n) / dot(d, n);
+        ahead = ahead || t > 0.0;
         ft.x[i] = o + t * d;
     }
     let total = dot(cross(ft.x[1] - ft.x[0], ft.x[2] - ft.x[0]), n);
-    ft.ok = total != 0.0 && is_finite(total);
+    ft.ok = ahead && total != 0.0 && is_finite(total);
     if !ft.ok {
         return ft;
     }
