@@ -1797,18 +1797,22 @@ pub fn light(
             .with_context(|| format!("cannot build the beams of `{}`", scene.name))?;
         timings.insert("beams".into(), json!(ms(start)));
         if input.scatterers.is_empty() {
+            // `composed` draws whatever caustics the scene has: none is no mistake.
+            if args.technique == Technique::Beams {
+                eprintln!(
+                    "warning: scene `{}` has no mirror, conductor or glass triangle: no beams",
+                    scene.name
+                );
+            }
+        } else {
             eprintln!(
-                "warning: scene `{}` has no mirror, conductor or glass triangle: no beams",
-                scene.name
+                "beams: {} scattered from {} scatterer triangles and {} point lights in {:.0} ms",
+                set.stats().scattered,
+                input.scatterers.len(),
+                input.lights.len(),
+                ms(start)
             );
         }
-        eprintln!(
-            "beams: {} scattered from {} scatterer triangles and {} point lights in {:.0} ms",
-            set.stats().scattered,
-            input.scatterers.len(),
-            input.lights.len(),
-            ms(start)
-        );
         (Some(set), input.scatterers.len())
     } else {
         (None, 0)

@@ -8,8 +8,16 @@ use std::process::Command;
 /// The lines `lustre render` writes about a render: what it traced, what it renders on, what it wrote.
 const RENDER_LINES: &[&str] = &["traced ", "rendering ", "wrote "];
 
+/// The default technique, and `composed` on a scene without a mirror,
+/// conductor or glass triangle (no beams to build, and nothing to warn of).
 #[test]
 fn headless_render_writes_only_lines_about_the_render() {
+    for technique in [&[][..], &["--technique", "composed"][..]] {
+        render_writes_only_lines_about_the_render(technique);
+    }
+}
+
+fn render_writes_only_lines_about_the_render(technique: &[&str]) {
     let dir = std::env::temp_dir().join(format!("lustre-headless-stderr-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -25,6 +33,7 @@ fn headless_render_writes_only_lines_about_the_render() {
             "--out",
         ])
         .arg(&out)
+        .args(technique)
         .env_remove("XDG_RUNTIME_DIR")
         .env_remove("WAYLAND_DISPLAY")
         .output()
