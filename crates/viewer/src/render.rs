@@ -556,7 +556,7 @@ pub struct RenderArgs {
     /// A built-in scene (cornell, glosbox, tree, mirrors, bathroom, cardioid, pool, stained-glass, pyramid, house), or an OBJ or glTF 2.0 file (`.gltf`, `.glb`).
     pub scene: String,
     /// Rendering technique.
-    #[arg(long, value_enum, default_value_t = Technique::SplatDirect)]
+    #[arg(long, value_enum, default_value_t = Technique::Composed)]
     pub technique: Technique,
     /// Photons to emit over all lights.
     #[arg(long, default_value_t = 1_000_000)]
@@ -1044,12 +1044,22 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.photons_file.is_some() {
         if !matches!(
             args.technique,
-            Technique::Splat | Technique::SplatDirect | Technique::Mpr
+            Technique::Splat
+                | Technique::SplatDirect
+                | Technique::Mpr
+                | Technique::Beams
+                | Technique::Composed
         ) {
             bail!(
-                "--photons-file: only the splatting techniques (splat, splat-direct, mpr) read \
-                 photons in batches; --technique {:?} needs them all in memory",
+                "--photons-file: only the splatting techniques (splat, splat-direct, mpr, beams, \
+                 composed) read photons in batches; --technique {:?} needs them all in memory",
                 args.technique
+            );
+        }
+        if args.draws_radiance_maps() {
+            bail!(
+                "--photons-file: radiance maps capture the frame with all its splats, which a \
+                 file read in batches adds only after the frame; use --reflectors images or splats"
             );
         }
         if args.aa_splats {
@@ -1983,6 +1993,7 @@ fn splat_setup(
             &options,
             virtual_depth,
             args.pane_light(),
+            beams.then(|| scatterer_surfaces(scene)).transpose()?,
         )?;
         timings.insert("tally".into(), json!(ms(start)));
         eprintln!(
@@ -1994,7 +2005,7 @@ fn splat_setup(
             args.batch_records
         );
         return Ok(Splatting {
-            beam_hits: None,
+            beam_hits: beams.then_some(streamed.beam_records),
             emitted: streamed.emitted(),
             hit_records: streamed.kept_records,
             emission: streamed.emission(),

@@ -59,10 +59,12 @@ pub struct StreamedPhotons {
     params: SurfaceParams,
     /// Equation 3's counts and the lit sides over the whole file.
     tally: SplatTally,
-    /// The specular faces and depth of the virtual lights whose photons the splats leave out (Diefenbach & Badler 1997, sections 4.2, 6), if any.
-    virtual_lights: Option<(PassedFaces, u32)>,
-    /// Hit records kept after the virtual lights' filter.
+    /// What the splats leave out of every batch.
+    left_out: LeftOut,
+    /// Hit records kept after the beams' and the virtual lights' filters.
     pub kept_records: u64,
+    /// Hit records left out because the beams draw their light.
+    pub beam_records: u64,
     /// Indirect records kept.
     pub indirect_records: u64,
 }
@@ -77,6 +79,7 @@ impl StreamedPhotons {
         options: &EstimatorOptions,
         virtual_depth: Option<u32>,
         panes: PaneLight,
+        beams: Option<Vec<BeamSurface>>,
     ) -> anyhow::Result<Self> {
         let params = SurfaceParams::new(scene);
         let reader = PhotonFileReader::open_for(path, &params).with_context(|| {
@@ -117,17 +120,20 @@ impl StreamedPhotons {
                 scene.name
             );
         }
-        let virtual_lights = match virtual_depth.filter(|&d| d > 0) {
-            Some(d) => Some((PassedFaces::new(scene, panes)?, d)),
-            None => None,
+        let left_out = LeftOut {
+            beams,
+            virtual_lights: match virtual_depth.filter(|&d| d > 0) {
+                Some(d) => Some((PassedFaces::new(scene, panes)?, d)),
+                None => None,
+            },
         };
         let bar = PhotonBar::new("reading photons", reader.header().records)?;
         let mut tally = SplatTally::new(&params, options.selection);
         let (mut kept, mut indirect) = (0u64, 0u64);
-        read_batches(
+        let beam_records = read_batches(
             &reader,
             batch_records,
-            virtual_lights.as_ref(),
+            &left_out,
             &mut |batch| {
                 tally.add(&params, batch.records())?;
                 kept += batch.len() as u64;
@@ -141,8 +147,9 @@ impl StreamedPhotons {
             batch_records,
             params,
             tally,
-            virtual_lights,
+            left_out,
             kept_records: kept,
+            beam_records,
             indirect_records: indirect,
         })
     }
@@ -160,19 +167,13 @@ impl StreamedPhotons {
         self.reader.header().emitted()
     }
 
-    /// Calls `f` with each batch of the file, the virtual lights' photons left out; `bar` counts records.
+    /// Calls `f` with each batch of the file, the beams' and the virtual lights' photons left out; `bar` counts records.
     pub fn for_each_batch(
         &self,
         f: &mut dyn FnMut(&PhotonMap) -> anyhow::Result<()>,
         bar: &PhotonBar,
     ) -> anyhow::Result<()> {
-        read_batches(
-            &self.reader,
-            self.batch_records,
-            self.virtual_lights.as_ref(),
-            f,
-            bar,
-        )
+        read_batches(&self.reader, self.batch_records, &self.left_out, f, bar).map(|_| ())
     }
 
     /// The estimator without photons whose supports (equation 3, from the whole file's counts), kernel mass and BRDFs every batch's estimator shares ([`SplatEstimator::with_photons`]).
@@ -213,24 +214,35 @@ impl StreamedPhotons {
     }
 }
 
-/// Calls `f` with each batch of `reader`, the photons of `virtual_lights` (faces and depth) left out; `bar` counts records.
+/// The photons the splats of a streamed file leave out, as a render in memory leaves them out: light the beams draw (per surface, [`BeamSurface`]), then light the virtual lights draw (their faces and depth). Every batch holds whole photon paths, as both filters need.
+struct LeftOut {
+    beams: Option<Vec<BeamSurface>>,
+    virtual_lights: Option<(PassedFaces, u32)>,
+}
+
+/// Calls `f` with each batch of `reader`, what `left_out` names left out; `bar` counts records. Returns the number of records the beams' filter left out.
 fn read_batches(
     reader: &PhotonFileReader,
     batch_records: usize,
-    virtual_lights: Option<&(PassedFaces, u32)>,
+    left_out: &LeftOut,
     f: &mut dyn FnMut(&PhotonMap) -> anyhow::Result<()>,
     bar: &PhotonBar,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<u64> {
     bar.0.set_position(0);
+    let mut beam_records = 0u64;
     for batch in reader.batches(batch_records)? {
-        let batch = batch?;
+        let mut batch = batch?;
         bar.0.inc(batch.len() as u64);
-        let batch = match virtual_lights {
-            Some((faces, depth)) => without_virtual_light_photons(batch, faces, *depth)?,
-            None => batch,
-        };
+        if let Some(surfaces) = &left_out.beams {
+            let before = batch.len();
+            batch = without_beam_photons(batch, surfaces)?;
+            beam_records += (before - batch.len()) as u64;
+        }
+        if let Some((faces, depth)) = &left_out.virtual_lights {
+            batch = without_virtual_light_photons(batch, faces, *depth)?;
+        }
         f(&batch)?;
     }
     bar.0.finish_and_clear();
-    Ok(())
+    Ok(beam_records)
 }

@@ -275,7 +275,16 @@ fn render_refuses_bad_options_before_writing_anything() {
             "--aa 0",
         ),
         (
-            vec!["render", "glosbox", "--beam-roughness", "0.1", "--out", out],
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "splat-direct",
+                "--beam-roughness",
+                "0.1",
+                "--out",
+                out,
+            ],
             "--beam-roughness: only --technique beams and composed",
         ),
         (
@@ -291,7 +300,16 @@ fn render_refuses_bad_options_before_writing_anything() {
             "--beam-roughness -1: must be finite and not negative",
         ),
         (
-            vec!["render", "mirrors", "--shadow-depth", "1", "--out", out],
+            vec![
+                "render",
+                "mirrors",
+                "--technique",
+                "splat-direct",
+                "--shadow-depth",
+                "1",
+                "--out",
+                out,
+            ],
             "virtual lights belong to --technique mpr",
         ),
         (
@@ -334,7 +352,16 @@ fn render_refuses_bad_options_before_writing_anything() {
             "--shadow-depth 9: at most 8",
         ),
         (
-            vec!["render", "glosbox", "--glossy-images", "4", "--out", out],
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "splat-direct",
+                "--glossy-images",
+                "4",
+                "--out",
+                out,
+            ],
             "only --technique mpr",
         ),
         (
@@ -474,11 +501,29 @@ fn render_refuses_bad_options_before_writing_anything() {
             "does not exist",
         ),
         (
-            vec!["render", "glosbox", "--reflectors", "images", "--out", out],
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "splat-direct",
+                "--reflectors",
+                "images",
+                "--out",
+                out,
+            ],
             "--reflectors: only --technique composed",
         ),
         (
-            vec!["render", "glosbox", "--caustics", "splats", "--out", out],
+            vec![
+                "render",
+                "glosbox",
+                "--technique",
+                "splat-direct",
+                "--caustics",
+                "splats",
+                "--out",
+                out,
+            ],
             "--caustics: only --technique composed",
         ),
         (

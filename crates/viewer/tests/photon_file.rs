@@ -215,11 +215,14 @@ fn streamed_renders_equal_one_batch_and_the_in_memory_render() {
             "mirrors",
             &["--technique", "mpr", "--shadow-depth", "1"][..],
         ),
+        // Beams: each batch leaves out the light the gold box's beams draw,
+        // whole paths at a time, as the in-memory render does.
+        ("glosbox", &["--technique", "composed"][..]),
     ] {
-        let file = dir.join(format!("{scene}.lph"));
+        let file = dir.join(format!("{scene}-{}.lph", extra.len()));
         ok(&["trace", scene, "--photons", "40000", "--out", s(&file)]);
         let render = |name: &str, source: &[&str]| -> Option<PathBuf> {
-            let out = dir.join(format!("{scene}-{name}.exr"));
+            let out = dir.join(format!("{scene}-{}-{name}.exr", extra.len()));
             let mut args = vec!["render", scene, "--size", "64x64", "--out", s(&out)];
             args.extend_from_slice(source);
             args.extend_from_slice(extra);
@@ -245,6 +248,12 @@ fn streamed_renders_equal_one_batch_and_the_in_memory_render() {
             sidecar(&many)["hit_records"],
             sidecar(&memory)["hit_records"]
         );
+        let left_to_beams = |p: &Path| sidecar(p)["beams"]["photon_hits_left_to_beams"].clone();
+        assert_eq!(left_to_beams(&many), left_to_beams(&memory));
+        if extra.contains(&"composed") {
+            let left = left_to_beams(&memory).as_u64().unwrap_or(0);
+            assert!(left > 0, "{scene}: no photon left to the beams");
+        }
         // Batches change only the order of float additions: about 1e-6 measured.
         let (a, b, m) = (pixels(&one), pixels(&many), pixels(&memory));
         let batching = largest_difference(&a, &b);
@@ -325,6 +334,15 @@ fn render_refuses_photon_files_it_cannot_use() {
     assert!(e.contains("--area-lights points"), "{e}");
     let e = render(&["--photons-file", s(&file), "--technique", "detp"]);
     assert!(e.contains("only the splatting techniques"), "{e}");
+    let e = render(&[
+        "--photons-file",
+        s(&file),
+        "--technique",
+        "composed",
+        "--reflectors",
+        "maps",
+    ]);
+    assert!(e.contains("radiance maps"), "{e}");
     let e = render(&["--photons-file", s(&file), "--aa", "2", "--aa-splats"]);
     assert!(e.contains("--aa-splats"), "{e}");
     let e = render(&["--photons-file", s(&file), "--photons", "10"]);

@@ -107,7 +107,7 @@ fn the_window_plays_a_path_and_its_screenshot_matches_render() {
     // Nothing on stderr but what the window reports.
     for line in stderr.lines() {
         assert!(
-            ["window on ", "traced ", "wrote "]
+            ["window on ", "beams: ", "traced ", "wrote "]
                 .iter()
                 .any(|s| line.starts_with(s)),
             "unexpected stderr line {line:?} in:\n{stderr}"
