@@ -458,6 +458,9 @@ fn stored_jittered_volumes_shadow_each_light_as_its_shadow_rays() {
     let volumes = stored.shadow_volumes.as_ref().unwrap();
     assert_eq!(volumes.jitter(), VolumeJitter::Stored);
     assert_eq!(volumes.positions().0.len(), 2 * k as usize);
+    // Until a frame's lights are prepared, each light has its first set's volumes.
+    let first: Vec<usize> = (0..k as usize).collect();
+    assert_eq!(volumes.positions().1, &first[..]);
     let camera = scene.camera().with_aspect(1.0);
     for (s, lights) in sets.iter().enumerate() {
         let cpu = direct_pixels_cpu_with_lights(

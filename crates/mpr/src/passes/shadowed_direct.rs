@@ -243,8 +243,13 @@ impl ShadowVolumes {
             VolumeJitter::Pivot => &[][..],
             VolumeJitter::Stored => &self.positions[..],
         };
-        let (positions, _) = including(stored, &all_positions);
+        let (positions, index) = including(stored, &all_positions);
         self.jitter = VolumeJitter::Stored;
+        if !sets.is_empty() {
+            // The first set's own volumes until `prepare` chooses a frame's.
+            self.volume_of = index[..self.volume_of.len()].to_vec();
+            *self.drawn.lock().unwrap_or_else(|e| e.into_inner()) = self.volume_of.clone();
+        }
         if positions == self.positions {
             return Ok(0);
         }
