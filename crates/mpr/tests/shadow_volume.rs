@@ -282,6 +282,23 @@ fn frame_direct(
 
 const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
+/// A frame graph with the direct pass under the shadow volumes of `lights`.
+fn volume_graph(ctx: &GpuContext, scene: &Scene, lights: &[Light]) -> FrameGraph {
+    let hdr = ctx.hdr_format();
+    FrameGraph::new(ctx, OUTPUT_FORMAT)
+        .unwrap()
+        .with_direct(ctx, hdr)
+        .unwrap()
+        .with_shadow_volumes(ctx, hdr, scene, lights)
+        .unwrap()
+}
+
+/// The CPU twin's direct light of `lights` through `camera`, shadowed by BVH shadow rays.
+fn cpu_direct(scene: &Scene, lights: &[Light], bvh: &Bvh, camera: &Camera) -> Vec<DirectPixel> {
+    direct_pixels_cpu_with_lights(scene, lights, bvh, camera, SIZE, SIZE, GlossyModel::Exact)
+        .unwrap()
+}
+
 /// One frame of `graph` (shadow maps drawn first where it has no volumes).
 fn render_graph(
     ctx: &GpuContext,
@@ -365,16 +382,7 @@ fn frame_direct_light_under_shadow_volumes_matches_bvh_shadow_rays() {
         ("scene camera", outside.with_aspect(1.0)),
         ("eye in shadow", inside.with_aspect(1.0)),
     ] {
-        let cpu = direct_pixels_cpu_with_lights(
-            &scene,
-            &lights,
-            &bvh,
-            &camera,
-            SIZE,
-            SIZE,
-            GlossyModel::Exact,
-        )
-        .unwrap();
+        let cpu = cpu_direct(&scene, &lights, &bvh, &camera);
         if name == "eye in shadow" {
             let eye = camera.position;
             let blocked = lights.iter().filter(|l| {
@@ -436,19 +444,8 @@ fn stored_jittered_volumes_shadow_each_light_as_its_shadow_rays() {
         jittered_point_lights(scene.lights(), k, Vec2::ZERO),
         jittered_point_lights(scene.lights(), k, paired_rotation(1, 4, k)),
     ];
-    let hdr = ctx.hdr_format();
-    let pivot = FrameGraph::new(&ctx, OUTPUT_FORMAT)
-        .unwrap()
-        .with_direct(&ctx, hdr)
-        .unwrap()
-        .with_shadow_volumes(&ctx, hdr, &scene, &pivot_point_lights(scene.lights(), k))
-        .unwrap();
-    let mut stored = FrameGraph::new(&ctx, OUTPUT_FORMAT)
-        .unwrap()
-        .with_direct(&ctx, hdr)
-        .unwrap()
-        .with_shadow_volumes(&ctx, hdr, &scene, &pivot_point_lights(scene.lights(), k))
-        .unwrap();
+    let pivot = volume_graph(&ctx, &scene, &pivot_point_lights(scene.lights(), k));
+    let mut stored = volume_graph(&ctx, &scene, &pivot_point_lights(scene.lights(), k));
     assert!(stored.store_jittered_volumes(&ctx, &scene, &sets).unwrap() > 0);
     // Stored once: storing the same sets again builds nothing.
     assert_eq!(
@@ -463,16 +460,7 @@ fn stored_jittered_volumes_shadow_each_light_as_its_shadow_rays() {
     assert_eq!(volumes.positions().1, &first[..]);
     let camera = scene.camera().with_aspect(1.0);
     for (s, lights) in sets.iter().enumerate() {
-        let cpu = direct_pixels_cpu_with_lights(
-            &scene,
-            lights,
-            &bvh,
-            &camera,
-            SIZE,
-            SIZE,
-            GlossyModel::Exact,
-        )
-        .unwrap();
+        let cpu = cpu_direct(&scene, lights, &bvh, &camera);
         let mut agreeing = Vec::new();
         for (what, graph) in [("stored", &stored), ("pivot", &pivot)] {
             let (gpu, ids) = render_graph(&ctx, graph, &scene, &camera, lights);
@@ -527,13 +515,7 @@ fn moved_object_rebuilds_its_volumes_and_the_frame_follows() {
     };
     let mut scene = builtin::cornell();
     let lights = jittered_point_lights(scene.lights(), 4, Vec2::ZERO);
-    let hdr = ctx.hdr_format();
-    let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)
-        .unwrap()
-        .with_direct(&ctx, hdr)
-        .unwrap()
-        .with_shadow_volumes(&ctx, hdr, &scene, &lights)
-        .unwrap();
+    let mut graph = volume_graph(&ctx, &scene, &lights);
     let object = scene
         .objects()
         .iter()
@@ -549,16 +531,7 @@ fn moved_object_rebuilds_its_volumes_and_the_frame_follows() {
     );
     let camera = scene.camera().with_aspect(1.0);
     let bvh = Bvh::build(&scene);
-    let cpu = direct_pixels_cpu_with_lights(
-        &scene,
-        &lights,
-        &bvh,
-        &camera,
-        SIZE,
-        SIZE,
-        GlossyModel::Exact,
-    )
-    .unwrap();
+    let cpu = cpu_direct(&scene, &lights, &bvh, &camera);
     let (gpu, ids) = render_graph(&ctx, &graph, &scene, &camera, &lights);
     let (agree, total, agree_edge, total_edge) = radiance_agreement(&gpu, &ids, &cpu);
     eprintln!(
