@@ -59,7 +59,6 @@ use lustre_geometry::obj::Studio;
 use lustre_geometry::{Bvh, Camera, Scene};
 use lustre_ibr::{SamplingSettings, SelectionRule};
 use lustre_image::{Image, Precision};
-use lustre_mpr::beam_paths::scatterer_surfaces;
 use lustre_mpr::frame::SplatInputs;
 use lustre_mpr::ibr::{
     IbrSettings, KernelSizing, Modulation, ReflectedResolution, ReflectedSource,
@@ -74,7 +73,7 @@ use lustre_mpr::passes::splat_lowres::{AUTO_QUANTILE, radius_quantile};
 use lustre_mpr::projective_texture::{
     DEFAULT_TEXTURE_SIZE, MAX_TEXTURE_SIZE, PaneLight, texture_bytes,
 };
-use lustre_mpr::virtual_light::{MAX_SHADOW_DEPTH, PassedFaces, SpecularShadows, equation_7};
+use lustre_mpr::virtual_light::{MAX_SHADOW_DEPTH, SpecularShadows, equation_7};
 use lustre_mpr::{AdapterPreference, FrameInputs, GpuContext};
 use lustre_photon::{
     BounceSelection, Edges, EmissionSampling, EstimatorOptions, Kernel, SplatEstimator, Support,
@@ -88,7 +87,7 @@ use crate::render_density::{
     GlossyEstimate, PreTestArg, check_lengths, vertex_lit_scene, vertex_radiance,
 };
 use crate::render_frames::{frame_path, median};
-use crate::render_stream::{StreamedPhotons, without_beam_photons, without_virtual_light_photons};
+use crate::render_stream::{LeftOut, StreamedPhotons};
 use crate::scene_arg;
 use crate::trace::{PhotonBar, emission_of};
 
@@ -1980,9 +1979,11 @@ fn splat_setup(
         }),
         _ => None,
     };
-    // Light that passed only mirrors and slabs is drawn by the virtual
-    // lights (Diefenbach & Badler 1997, sections 4.2, 6): the splats leave it out.
-    let virtual_depth = virtual_depth.filter(|&d| d > 0);
+    // Light that scatterers send onto the next surface is drawn by the
+    // beams (Duvenhage et al. 2010, section 3.1), light that passed only
+    // mirrors and slabs by the virtual lights (Diefenbach & Badler 1997,
+    // sections 4.2, 6): the splats leave both out.
+    let left_out = LeftOut::new(scene, beams, virtual_depth, args.pane_light())?;
     let start = Instant::now();
     if let Some(path) = &args.photons_file {
         let streamed = StreamedPhotons::open(
@@ -1991,9 +1992,7 @@ fn splat_setup(
             args.point_lights(),
             args.batch_records,
             &options,
-            virtual_depth,
-            args.pane_light(),
-            beams.then(|| scatterer_surfaces(scene)).transpose()?,
+            left_out,
         )?;
         timings.insert("tally".into(), json!(ms(start)));
         eprintln!(
@@ -2021,21 +2020,11 @@ fn splat_setup(
         ..TraceOptions::default()
     };
     let bar = PhotonBar::new("tracing photons", args.photons)?;
-    let mut map = trace_photons(scene, bvh, &trace_options, &bar)
+    let map = trace_photons(scene, bvh, &trace_options, &bar)
         .with_context(|| format!("cannot trace photons in `{}`", scene.name))?;
     timings.insert("trace".into(), json!(ms(start)));
-    // Light that scatterers send onto the next surface is drawn by the
-    // beams (Duvenhage et al. 2010, section 3.1): the splats leave it out.
-    let mut beam_hits = None;
-    if beams {
-        let before = map.len();
-        map = without_beam_photons(map, &scatterer_surfaces(scene)?)?;
-        beam_hits = Some((before - map.len()) as u64);
-    }
-    if let Some(depth) = virtual_depth {
-        let passed = PassedFaces::new(scene, args.pane_light())?;
-        map = without_virtual_light_photons(map, &passed, depth)?;
-    }
+    let (map, beam_records) = left_out.apply(map)?;
+    let beam_hits = beams.then_some(beam_records);
     eprintln!(
         "traced {} photons: {} hit records ({} indirect)",
         map.emitted(),

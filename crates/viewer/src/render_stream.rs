@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use lustre_geometry::Scene;
-use lustre_mpr::beam_paths::{BeamSurface, drawn_by_beams};
+use lustre_mpr::beam_paths::{BeamSurface, drawn_by_beams, scatterer_surfaces};
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::projective_texture::PaneLight;
 use lustre_mpr::virtual_light::{PassedFaces, drawn_by_virtual_lights};
@@ -22,7 +22,7 @@ use lustre_photon::{
 use crate::trace::PhotonBar;
 
 /// `map` without the records of light that reached them through mirrors, slabs and stained-glass windows only, which the virtual lights draw (Diefenbach & Badler 1997, sections 4.2, 4.5, 6; [`drawn_by_virtual_lights`]); `map` must hold whole photon paths.
-pub fn without_virtual_light_photons(
+fn without_virtual_light_photons(
     map: PhotonMap,
     passed: &PassedFaces,
     depth: u32,
@@ -44,7 +44,7 @@ fn without(map: PhotonMap, drawn: &[bool]) -> lustre_photon::Result<PhotonMap> {
 }
 
 /// `map` without the records of light that a scatterer (or a closed glass slab) sent onto the next surface, which the beams draw (Duvenhage et al. 2010, section 3.1; [`drawn_by_beams`]); `surfaces` per surface, `map` whole photon paths.
-pub fn without_beam_photons(map: PhotonMap, surfaces: &[BeamSurface]) -> anyhow::Result<PhotonMap> {
+fn without_beam_photons(map: PhotonMap, surfaces: &[BeamSurface]) -> anyhow::Result<PhotonMap> {
     let drawn = drawn_by_beams(map.records(), surfaces);
     without(map, &drawn).context("cannot leave the beams' photons out")
 }
@@ -77,9 +77,7 @@ impl StreamedPhotons {
         point_lights: bool,
         batch_records: usize,
         options: &EstimatorOptions,
-        virtual_depth: Option<u32>,
-        panes: PaneLight,
-        beams: Option<Vec<BeamSurface>>,
+        left_out: LeftOut,
     ) -> anyhow::Result<Self> {
         let params = SurfaceParams::new(scene);
         let reader = PhotonFileReader::open_for(path, &params).with_context(|| {
@@ -120,13 +118,6 @@ impl StreamedPhotons {
                 scene.name
             );
         }
-        let left_out = LeftOut {
-            beams,
-            virtual_lights: match virtual_depth.filter(|&d| d > 0) {
-                Some(d) => Some((PassedFaces::new(scene, panes)?, d)),
-                None => None,
-            },
-        };
         let bar = PhotonBar::new("reading photons", reader.header().records)?;
         let mut tally = SplatTally::new(&params, options.selection);
         let (mut kept, mut indirect) = (0u64, 0u64);
@@ -214,10 +205,42 @@ impl StreamedPhotons {
     }
 }
 
-/// The photons the splats of a streamed file leave out, as a render in memory leaves them out: light the beams draw (per surface, [`BeamSurface`]), then light the virtual lights draw (their faces and depth). Every batch holds whole photon paths, as both filters need.
-struct LeftOut {
+/// The photons the splats leave out, from the photons in memory or from each batch of a file alike: light the beams draw (Duvenhage et al. 2010, section 3.1; per surface, [`BeamSurface`]), then light the virtual lights draw (Diefenbach & Badler 1997, sections 4.2, 6; their faces and depth). Both filters need whole photon paths, which every batch holds.
+pub struct LeftOut {
     beams: Option<Vec<BeamSurface>>,
     virtual_lights: Option<(PassedFaces, u32)>,
+}
+
+impl LeftOut {
+    /// The filters of a render of `scene`: the beams' where it draws `beams`, the virtual lights' to `virtual_depth` (none for `None` or 0), their windows as `panes` says.
+    pub fn new(
+        scene: &Scene,
+        beams: bool,
+        virtual_depth: Option<u32>,
+        panes: PaneLight,
+    ) -> anyhow::Result<Self> {
+        Ok(Self {
+            beams: beams.then(|| scatterer_surfaces(scene)).transpose()?,
+            virtual_lights: match virtual_depth.filter(|&d| d > 0) {
+                Some(d) => Some((PassedFaces::new(scene, panes)?, d)),
+                None => None,
+            },
+        })
+    }
+
+    /// `map` without what the filters leave out, and the number of records the beams' filter left out.
+    pub fn apply(&self, mut map: PhotonMap) -> anyhow::Result<(PhotonMap, u64)> {
+        let mut beam_records = 0u64;
+        if let Some(surfaces) = &self.beams {
+            let before = map.len();
+            map = without_beam_photons(map, surfaces)?;
+            beam_records = (before - map.len()) as u64;
+        }
+        if let Some((faces, depth)) = &self.virtual_lights {
+            map = without_virtual_light_photons(map, faces, *depth)?;
+        }
+        Ok((map, beam_records))
+    }
 }
 
 /// Calls `f` with each batch of `reader`, what `left_out` names left out; `bar` counts records. Returns the number of records the beams' filter left out.
@@ -231,16 +254,10 @@ fn read_batches(
     bar.0.set_position(0);
     let mut beam_records = 0u64;
     for batch in reader.batches(batch_records)? {
-        let mut batch = batch?;
+        let batch = batch?;
         bar.0.inc(batch.len() as u64);
-        if let Some(surfaces) = &left_out.beams {
-            let before = batch.len();
-            batch = without_beam_photons(batch, surfaces)?;
-            beam_records += (before - batch.len()) as u64;
-        }
-        if let Some((faces, depth)) = &left_out.virtual_lights {
-            batch = without_virtual_light_photons(batch, faces, *depth)?;
-        }
+        let (batch, beams) = left_out.apply(batch)?;
+        beam_records += beams;
         f(&batch)?;
     }
     bar.0.finish_and_clear();
