@@ -44,7 +44,7 @@ impl Disc {
         }
     }
 
-    /// A box round every point where [`Disc::is_crossed_by`] with `slack` finds a segment crossing the disc: `centre ± r`, padded by the slack, a thousandth of `r` and `10⁻⁵` of the centre's largest coordinate for rounding.
+    /// A box round every point where [`Disc::is_crossed_by`] with `slack` finds a segment crossing the disc: `centre ± r`, padded by the slack, a thousandth of `r` and `10⁻⁵` of the centre's largest coordinate for rounding (the disc's part of it; [`segment_meets_box`] adds the segment's).
     pub fn bounds(&self, slack: f32) -> (Vec3, Vec3) {
         let pad = slack + 1e-3 * self.radius + 1e-5 * self.centre.abs().max_element();
         let half = Vec3::splat(self.radius + pad);
@@ -103,9 +103,12 @@ pub fn detp(scene: &Scene, rays: &RaySet, radius: f32) -> Result<VertexIrradianc
 }
 
 /// Whether `segment`, followed as far as any disc may see it (its length, or its hit plus its artifact-control extension, plus `slack`), passes through the box `lo..=hi` (slab test): false only when it crosses no disc whose [`Disc::bounds`] lie in the box, so a set of discs in a small region can skip every other segment (beyond the paper, section 2.5.2: the mobile object's discs against every ray).
+///
+/// The box is grown by `10⁻⁵` of the origin's largest coordinate: [`Disc::is_crossed_by`] rounds its crossing point `o + t d` by a few ulps of `|o|` as well as of `|c|` (see `accel::envelope`), and a tiny disc seen from far away may accept a segment whose exact path passes just outside `centre ± r` plus the disc's own pad.
 pub fn segment_meets_box(segment: &RaySegment, slack: f32, lo: Vec3, hi: Vec3) -> bool {
     let reach = segment_reach(segment, slack);
-    span_in_box(segment.origin, segment.direction, reach, lo, hi).is_some()
+    let pad = Vec3::splat(1e-5 * segment.origin.abs().max_element());
+    span_in_box(segment.origin, segment.direction, reach, lo - pad, hi + pad).is_some()
 }
 
 /// How far the tests follow a segment: its length, or its hit plus its artifact-control extension, plus `slack` (infinite for a segment without a hit).

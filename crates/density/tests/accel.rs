@@ -242,8 +242,8 @@ fn random_segments(
             let n = d.normal.normalize_or(Vec3::Y);
             let (u, v) = n.any_orthonormal_pair();
             let angle = rng.range(0.0, std::f32::consts::TAU);
-            let scale = [rng.f(), 1.0, 1.0 - 1e-7, 1.0 + 1e-7, 0.0][rng.below(5) as usize];
-            let point = d.centre + d.radius * scale * (angle.cos() * u + angle.sin() * v);
+            let rim = [rng.f(), 1.0, 1.0 - 1e-7, 1.0 + 1e-7, 0.0][rng.below(5) as usize];
+            let point = d.centre + d.radius * rim * (angle.cos() * u + angle.sin() * v);
             let mut dir = rng.unit();
             if rng.chance(0.15) {
                 // Grazing: almost in the plane.
@@ -253,7 +253,9 @@ fn random_segments(
             if dir.dot(n) > 0.0 {
                 dir = -dir;
             }
-            let t = rng.range(0.0, 2.0) * scale;
+            // From nearby, or from a thousand times farther (f32 rounding of the crossing point grows with |o|).
+            let far = if rng.chance(0.2) { 1e3 } else { 1.0 };
+            let t = rng.range(0.0, 2.0) * scale * far;
             let origin = point - t * dir;
             let h = match rng.below(6) {
                 0 => None,
@@ -327,6 +329,31 @@ fn random_scene(
         .collect();
     let segments = random_segments(&mut rng, &discs, n_segments, scale, shift);
     (discs, segments)
+}
+
+/// The case CI's random search found: a disc of radius `1e-7` seen from about two units away, where `is_crossed_by`'s rounded crossing point lies within the radius while the exact path passes outside the disc's box; the box test grows by the segment's share of the rounding and keeps it.
+#[test]
+fn a_tiny_disc_seen_from_far_keeps_its_crossing() {
+    let disc = Disc {
+        centre: Vec3::new(-0.000_485_363_74, 0.000_407_929_68, 0.000_737_381_4),
+        normal: Vec3::new(-0.801_723_96, 0.576_348_8, 0.158_306_18),
+        radius: 1e-7,
+        mesh: Some(2),
+    };
+    let (origin, direction) = (
+        Vec3::new(-1.074_967_5, 0.859_213_4, 1.361_177_4),
+        Vec3::new(0.555_389_4, -0.443_908_27, -0.703_198_4),
+    );
+    let mut segment = RaySegment::new(
+        origin,
+        direction,
+        Some(hit(origin, direction, 1.934_648_2, 2)),
+        Rgb::ONE,
+    );
+    segment.extension = 2e-4;
+    assert!(disc.is_crossed_by(&segment, 0.0));
+    let (lo, hi) = disc.bounds(0.0);
+    assert!(segment_meets_box(&segment, 0.0, lo, hi));
 }
 
 proptest! {
