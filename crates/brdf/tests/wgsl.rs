@@ -17,6 +17,7 @@ use lustre_brdf::shaders::BRDF_WGSL;
 use lustre_brdf::{Brdf, Fresnel};
 use lustre_geometry::Rgb;
 use lustre_geometry::material::MicrofacetDistribution;
+use lustre_mpr::{AdapterPreference, GpuContext, MprError};
 use support::Rng;
 use wgpu::util::DeviceExt;
 
@@ -170,18 +171,14 @@ fn cases(n: usize) -> Vec<Case> {
         .collect()
 }
 
-/// Runs the compute shader on `cases`; `None` when no adapter exists.
+/// Runs the compute shader on `cases`; `None` when no adapter exists. The device is opened as the renderer opens it ([`GpuContext`]: without a desktop session, libwayland's `XDG_RUNTIME_DIR` message is kept off stderr).
 fn run_on_gpu(cases: &[Case]) -> Option<(String, Vec<f32>)> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::VULKAN;
-    let instance = wgpu::Instance::new(desc);
-    let adapter =
-        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-            .ok()?;
-    let info = adapter.get_info();
-    let (device, queue) =
-        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
-            .expect("the adapter exists but refused a default device");
+    let ctx = match GpuContext::new(AdapterPreference::Hardware) {
+        Ok(ctx) => ctx,
+        Err(MprError::NoAdapter { .. }) => return None,
+        Err(e) => panic!("opening the GPU failed: {e}"),
+    };
+    let (device, queue) = (&ctx.device, &ctx.queue);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("brdf-test"),
         source: wgpu::ShaderSource::Wgsl(Cow::Owned(compute_source())),
@@ -267,7 +264,7 @@ fn run_on_gpu(cases: &[Case]) -> Option<(String, Vec<f32>)> {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
-    Some((format!("{} ({:?})", info.name, info.backend), out))
+    Some((ctx.adapter().to_string(), out))
 }
 
 #[test]
@@ -278,7 +275,7 @@ fn gpu_brdfs_match_the_rust_models() {
             panic!("LUSTRE_REQUIRE_GPU is set but no Vulkan adapter was found");
         }
         eprintln!(
-            "SKIPPED gpu_brdfs_match_the_rust_models: no Vulkan adapter (install mesa-vulkan-drivers for lavapipe; set LUSTRE_REQUIRE_GPU to make this a failure)"
+            "SKIPPED gpu_brdfs_match_the_rust_models: no GPU adapter (install mesa-vulkan-drivers for lavapipe; set LUSTRE_REQUIRE_GPU to make this a failure)"
         );
         return;
     };
