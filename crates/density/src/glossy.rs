@@ -24,6 +24,16 @@
 //! plain list, the QuadTree of section 2.10.1 without summarising (exact,
 //! faster estimates), or with summarising (the variant the paper proposes
 //! but did not implement; approximate, see [`crate::quadtree`]).
+//!
+//! Beyond the paper, a frame's Old and New Rays may be deferred on a vertex
+//! whose tangent plane faces away from the eye
+//! ([`GlossyVertices::update_towards`]): its radiance towards that eye is
+//! zero whatever its rays (every BRDF is zero for `ωo` below the plane), so
+//! the frame's insertions and removals wait until an eye in front of it asks
+//! ([`GlossyVertices::catch_up`]), and are then applied batch by batch in
+//! their frames' order: the same store, bit for bit, as applying them at once.
+//! Exact stores only (a list or a QuadTree without summarising), and at most
+//! as many deferred rays as the vertex holds.
 
 use std::cmp::Ordering;
 
@@ -265,6 +275,9 @@ impl std::ops::AddAssign for UpdateStats {
     }
 }
 
+/// One frame's Old and New Rays of a vertex, in its local frame.
+type Batch = (Vec<IncidentRay>, Vec<IncidentRay>);
+
 /// A glossy vertex (section 2.10): its DETP disc, its shading frame, the area that divides the flux, and the rays crossing the disc.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GlossyVertex {
@@ -273,6 +286,8 @@ pub struct GlossyVertex {
     area: f32,
     slack: f32,
     store: Store,
+    /// Frames' Old and New Rays not yet applied to the store, oldest first (see the module docs: deferred while the eye is behind the tangent plane).
+    deferred: Vec<Batch>,
 }
 
 impl GlossyVertex {
@@ -328,6 +343,7 @@ impl GlossyVertex {
             area: std::f32::consts::PI * disc.radius * disc.radius,
             slack,
             store,
+            deferred: Vec::new(),
         })
     }
 
@@ -408,22 +424,63 @@ impl GlossyVertex {
     pub fn update(&mut self, old: &[RaySegment], new: &[RaySegment]) -> Result<UpdateStats> {
         let old: Vec<IncidentRay> = old.iter().filter_map(|s| self.incident(s)).collect();
         let new: Vec<IncidentRay> = new.iter().filter_map(|s| self.incident(s)).collect();
-        self.apply(old, new)
+        let mut stats = self.catch_up()?;
+        stats += self.apply(old, new)?;
+        Ok(stats)
     }
 
-    /// [`GlossyVertex::update`] with the Old and New Rays already known to cross the disc.
+    /// [`GlossyVertex::update`] with the Old and New Rays already known to cross the disc; with an `eye` the vertex faces away from, an exact store with room for them keeps them deferred instead (`None`; see the module docs).
     fn update_crossing<'a>(
         &mut self,
         old: impl Iterator<Item = &'a RaySegment>,
         new: impl Iterator<Item = &'a RaySegment>,
-    ) -> Result<UpdateStats> {
-        let old = old
+        eye: Option<Vec3>,
+    ) -> Result<Option<UpdateStats>> {
+        let old: Vec<IncidentRay> = old
             .map(|s| IncidentRay::from_segment(&self.frame, s))
             .collect();
-        let new = new
+        let new: Vec<IncidentRay> = new
             .map(|s| IncidentRay::from_segment(&self.frame, s))
             .collect();
-        self.apply(old, new)
+        let exact = !matches!(self.store, Store::Summary(_));
+        let room = self.deferred_rays() + old.len() + new.len() <= self.len().max(64);
+        if exact && room && eye.is_some_and(|eye| self.faces_away_from(eye)) {
+            self.deferred.push((old, new));
+            return Ok(None);
+        }
+        let mut stats = self.catch_up()?;
+        stats += self.apply(old, new)?;
+        Ok(Some(stats))
+    }
+
+    /// Whether `eye` lies clearly behind the tangent plane (by more than a thousandth of its distance), where the vertex's radiance is zero whatever its rays.
+    pub fn faces_away_from(&self, eye: Vec3) -> bool {
+        let to_eye = eye - self.disc.centre;
+        to_eye.dot(self.frame.n) < -1e-3 * to_eye.length()
+    }
+
+    /// Number of deferred Old and New Rays not yet applied to the store.
+    pub fn deferred_rays(&self) -> usize {
+        self.deferred.iter().map(|(o, n)| o.len() + n.len()).sum()
+    }
+
+    /// Applies the deferred frames' Old and New Rays, oldest first.
+    pub fn catch_up(&mut self) -> Result<UpdateStats> {
+        let mut stats = UpdateStats::default();
+        for (old, new) in std::mem::take(&mut self.deferred) {
+            stats += self.apply(old, new)?;
+        }
+        Ok(stats)
+    }
+
+    /// The vertex with its deferred rays applied: itself when none are deferred, else a caught-up copy.
+    fn caught_up(&self) -> Result<std::borrow::Cow<'_, Self>> {
+        if self.deferred.is_empty() {
+            return Ok(std::borrow::Cow::Borrowed(self));
+        }
+        let mut copy = self.clone();
+        copy.catch_up()?;
+        Ok(std::borrow::Cow::Owned(copy))
     }
 
     /// Removes the Old Rays, then inserts the New Rays (section 2.10).
@@ -684,6 +741,16 @@ impl GlossyVertices {
         old: &[RaySegment],
         new: &[RaySegment],
     ) -> Result<(UpdateStats, Vec<(MeshId, u32)>)> {
+        self.update_towards(old, new, None)
+    }
+
+    /// [`GlossyVertices::update_listing`] that defers the rays of the vertices facing away from `eye` (see the module docs): they are not listed, since their radiance towards `eye` stays zero, and their stats are counted when they are applied. The listed vertices had their earlier deferred rays applied first.
+    pub fn update_towards(
+        &mut self,
+        old: &[RaySegment],
+        new: &[RaySegment],
+        eye: Option<Vec3>,
+    ) -> Result<(UpdateStats, Vec<(MeshId, u32)>)> {
         // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept.
         let old_crossing = self.discs.crossings(old)?;
         let new_crossing = self.discs.crossings(new)?;
@@ -706,13 +773,13 @@ impl GlossyVertices {
                 if old_in.is_empty() && new_in.is_empty() {
                     return None;
                 }
-                Some(
-                    v.update_crossing(
-                        old_in.iter().map(|&i| &old[i as usize]),
-                        new_in.iter().map(|&i| &new[i as usize]),
-                    )
-                    .map(|stats| (stats, id)),
+                v.update_crossing(
+                    old_in.iter().map(|&i| &old[i as usize]),
+                    new_in.iter().map(|&i| &new[i as usize]),
+                    eye,
                 )
+                .map(|stats| stats.map(|stats| (stats, id)))
+                .transpose()
             })
             .collect::<Result<_>>()?;
         let mut total = UpdateStats::default();
@@ -722,6 +789,35 @@ impl GlossyVertices {
             changed.push(id);
         }
         Ok((total, changed))
+    }
+
+    /// Applies the deferred rays of every vertex that does not face away from `eye`, listing them as `(mesh, vertex)` in mesh and vertex order: their radiance towards `eye` may have changed.
+    pub fn catch_up(&mut self, eye: Vec3) -> Result<Vec<(MeshId, u32)>> {
+        self.meshes
+            .par_iter_mut()
+            .enumerate()
+            .flat_map(|(m, vertices)| {
+                vertices
+                    .par_iter_mut()
+                    .enumerate()
+                    .map(move |(i, v)| ((m as MeshId, i as u32), v))
+            })
+            .filter_map(|(id, v)| {
+                let v = v.as_mut()?;
+                (!v.deferred.is_empty() && !v.faces_away_from(eye))
+                    .then(|| v.catch_up().map(|_| id))
+            })
+            .collect()
+    }
+
+    /// Number of deferred Old and New Rays over every vertex.
+    pub fn deferred_rays(&self) -> usize {
+        self.meshes
+            .iter()
+            .flatten()
+            .flatten()
+            .map(GlossyVertex::deferred_rays)
+            .sum()
     }
 
     /// Uses per-vertex areas (e.g. [`crate::artifact::reachable_areas`], section 1.2.1) instead of `π r²`; a zero area leaves `π r²`. Fails when the shape does not match or an area is negative or not finite.
@@ -745,12 +841,14 @@ impl GlossyVertices {
 
     /// The radiance of every vertex towards the eye (equation 2.1 per vertex, recomputed when the camera moves), `[mesh][vertex]`, with `brdfs` one per material (`lustre_photon::trace::scene_brdfs`); empty for meshes not built. Fails when a mesh's material has no BRDF.
     pub fn radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
-        self.per_vertex(brdfs, |v, brdf, _| v.radiance(brdf, eye - v.disc().centre))
+        self.per_vertex(brdfs, eye, |v, brdf, _| {
+            v.radiance(brdf, eye - v.disc().centre)
+        })
     }
 
     /// The radiance of the non-diffuse part of every vertex's BRDF towards the eye, [`GlossyVertex::lobe_estimate`] with the mesh material's Lambertian reflectance (beyond the paper: the diffuse part `ρ/π E` is left to the diffuse estimate), `[mesh][vertex]`; empty for meshes not built. Fails when a mesh's material has no BRDF.
     pub fn lobe_radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
-        self.per_vertex(brdfs, |v, brdf, diffuse| {
+        self.per_vertex(brdfs, eye, |v, brdf, diffuse| {
             lobe_towards(v, brdf, eye, diffuse)
         })
     }
@@ -777,15 +875,17 @@ impl GlossyVertices {
                     return Ok(Rgb::ZERO);
                 };
                 let brdf = brdf_of(brdfs, self.materials[m as usize])?;
-                Ok(lobe_towards(vertex, brdf, eye, self.diffuse[m as usize]))
+                let vertex = towards(vertex, eye)?;
+                Ok(lobe_towards(&vertex, brdf, eye, self.diffuse[m as usize]))
             })
             .collect()
     }
 
-    /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex, zero for a vertex without one.
+    /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex as [`towards`] `eye` gives it, zero for a vertex without one.
     fn per_vertex(
         &self,
         brdfs: &[BoxedBrdf],
+        eye: Vec3,
         f: impl Fn(&GlossyVertex, &dyn Brdf, Rgb) -> Rgb + Sync,
     ) -> Result<Vec<Vec<Rgb>>> {
         self.meshes
@@ -797,10 +897,13 @@ impl GlossyVertices {
                     return Ok(Vec::new());
                 }
                 let brdf = brdf_of(brdfs, material)?;
-                Ok(vertices
+                vertices
                     .par_iter()
-                    .map(|v| v.as_ref().map_or(Rgb::ZERO, |v| f(v, brdf, diffuse)))
-                    .collect())
+                    .map(|v| match v {
+                        Some(v) => Ok(f(towards(v, eye)?.as_ref(), brdf, diffuse)),
+                        None => Ok(Rgb::ZERO),
+                    })
+                    .collect()
             })
             .collect()
     }
@@ -815,6 +918,15 @@ fn brdf_of(brdfs: &[BoxedBrdf], material: MaterialId) -> Result<&(dyn Brdf + Sen
             option: "brdfs",
             message: format!("no BRDF for material {material}"),
         })
+}
+
+/// The vertex as an estimate towards `eye` must see it: with its deferred rays applied (on a copy) unless it faces away from `eye`, where its radiance is zero whatever its rays.
+fn towards(vertex: &GlossyVertex, eye: Vec3) -> Result<std::borrow::Cow<'_, GlossyVertex>> {
+    if vertex.faces_away_from(eye) {
+        Ok(std::borrow::Cow::Borrowed(vertex))
+    } else {
+        vertex.caught_up()
+    }
 }
 
 /// [`GlossyVertex::lobe_estimate`] of `vertex` towards `eye`: the radiance of its BRDF's non-diffuse part.

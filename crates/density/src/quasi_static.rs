@@ -129,6 +129,19 @@ impl LobeCache {
         self.0.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
+    /// The eye of the cached radiance, if any.
+    fn eye(&mut self) -> Option<Vec3> {
+        let cache = self.0.get_mut().unwrap_or_else(PoisonError::into_inner);
+        cache.as_ref().map(|c| c.eye)
+    }
+
+    /// Marks vertices whose lists changed, through `&self`.
+    fn mark_stale_shared(&self, changed: &[(MeshId, u32)]) {
+        if let Some(cache) = self.lock().as_mut() {
+            cache.stale.extend_from_slice(changed);
+        }
+    }
+
     /// Marks vertices whose lists changed.
     fn mark_stale(&mut self, changed: &[(MeshId, u32)]) {
         let cache = self.0.get_mut().unwrap_or_else(PoisonError::into_inner);
@@ -169,6 +182,27 @@ impl LobeCache {
     }
 }
 
+/// A value behind a lock, cloned by cloning the value: the static glossy vertices, so that [`QuasiStatic::glossy_radiance`] can apply through `&self` the rays they deferred while the eye was behind them ([`GlossyVertices::update_towards`]).
+#[derive(Debug)]
+struct Locked<T>(Mutex<T>);
+
+impl<T: Clone> Clone for Locked<T> {
+    fn clone(&self) -> Self {
+        Self(Mutex::new(self.lock().clone()))
+    }
+}
+
+impl<T> Locked<T> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, T> {
+        // Only whole frames' updates are applied under the lock; a panic elsewhere leaves it as it was.
+        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    fn get_mut(&mut self) -> &mut T {
+        self.0.get_mut().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
 /// What each estimator keeps between frames.
 #[derive(Debug, Clone)]
 enum State {
@@ -197,7 +231,7 @@ pub struct QuasiStatic {
     state: State,
     first_frame: FrameStats,
     /// Glossy vertices of static meshes (updated) and of mobile meshes (rebuilt each frame), section 2.10.
-    glossy: Option<(GlossyVertices, GlossyVertices)>,
+    glossy: Option<(Locked<GlossyVertices>, GlossyVertices)>,
     /// Irradiance per estimation point of the current frame (computed within the frame's radiosity time).
     irradiance: Vec<DVec3>,
     /// Impact Count's per-triangle impact lists of the glossy meshes (section 2.10 with figure 2.4), when the glossy option is on.
@@ -344,7 +378,7 @@ impl QuasiStatic {
                 State::Detp { .. } => {
                     let fixed = sim.build_glossy(false)?;
                     let moving = sim.build_glossy(true)?;
-                    sim.glossy = Some((fixed, moving));
+                    sim.glossy = Some((Locked(Mutex::new(fixed)), moving));
                 }
                 State::ImpactCount { .. } => {
                     sim.triangle_impacts = Some(sim.build_triangle_impacts()?);
@@ -410,8 +444,14 @@ impl QuasiStatic {
         }
         if self.glossy.is_some() {
             let moving = self.build_glossy(true)?;
+            // Vertices facing away from the last eye asked for defer the frame's rays until an eye in front of
+            // them asks (`glossy_radiance` applies them); their radiance towards that eye stays zero.
+            let eye = self.lobe_cache.eye();
             if let Some((fixed, mobile)) = &mut self.glossy {
-                match fixed.update_listing(&update.old, &update.new) {
+                match fixed
+                    .get_mut()
+                    .update_towards(&update.old, &update.new, eye)
+                {
                     Ok((_, changed)) => self.lobe_cache.mark_stale(&changed),
                     Err(error) => {
                         // Some vertices may have changed: forget every cached radiance.
@@ -669,6 +709,10 @@ impl QuasiStatic {
         let Some((fixed, moving)) = &self.glossy else {
             return Ok(None);
         };
+        // The rays deferred on vertices this eye sees.
+        let mut fixed = fixed.lock();
+        let caught_up = fixed.catch_up(eye)?;
+        self.lobe_cache.mark_stale_shared(&caught_up);
         // ρ/π E on the diffuse discs plus the non-diffuse part on the glossy discs.
         let a = self.lobe_cache.get(
             eye,
@@ -693,6 +737,13 @@ impl QuasiStatic {
                 })
                 .collect(),
         ))
+    }
+
+    /// Old and New Rays the static glossy vertices hold deferred (beyond the paper: frames' rays on vertices facing away from the last eye asked for, applied when an eye in front of them asks; [`GlossyVertices::update_towards`]).
+    pub fn deferred_glossy_rays(&self) -> usize {
+        self.glossy
+            .as_ref()
+            .map_or(0, |(fixed, _)| fixed.lock().deferred_rays())
     }
 
     /// Impact Count's per-triangle impact lists of every glossy mesh from the whole current ray set (section 2.10, first frame).

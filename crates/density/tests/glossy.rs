@@ -789,6 +789,74 @@ fn glossy_vertices_refuse_more_rays_than_allowed() {
     }
 }
 
+/// Two frames' Old and New Rays deferred on the vertices facing away from an eye, then applied when an eye on the other side asks, leave the same vertices, store for store, as applying each frame at once; the vertices the eye sees are updated and listed at once, the others are not listed.
+#[test]
+fn deferred_updates_equal_updates_applied_at_once() {
+    let (scene, brdfs, rays) = shared();
+    let meshes = glossy_meshes(scene);
+    let mode = GlossyMode::QuadTree {
+        options: QuadTreeOptions::default(),
+        tolerance: 0.01,
+    };
+    let mut eager = GlossyVertices::build(scene, rays, 0.3, mode, &meshes).unwrap();
+    let mut lazy = eager.clone();
+    let segments: Vec<RaySegment> = rays.segments().copied().collect();
+    let other = trace_ray_set(
+        scene,
+        &Bvh::build(scene),
+        &RaySetOptions {
+            photons: 5_000,
+            seed: 9,
+            max_segments: 16,
+            extension: 0.0,
+        },
+    )
+    .unwrap();
+    let new: Vec<RaySegment> = other.segments().copied().collect();
+    // Frame 1 removes some held rays and adds the other trace's; frame 2 removes those again.
+    let frames = [(&segments[..20_000], &new[..]), (&new[..], &[][..])];
+    let eye = scene.camera().position;
+    let centre = scene.bounds().center();
+    let behind = centre + (centre - eye);
+    let mut deferred = 0;
+    for (old, new) in frames {
+        let (_, all) = eager.update_listing(old, new).unwrap();
+        let (_, listed) = lazy.update_towards(old, new, Some(eye)).unwrap();
+        deferred = deferred.max(lazy.deferred_rays());
+        // Listed: every changed vertex the eye is not behind, and those behind it that had no room left.
+        for &(m, v) in &all {
+            let vertex = lazy.vertices(m)[v as usize].as_ref().unwrap();
+            assert!(vertex.faces_away_from(eye) || listed.contains(&(m, v)));
+        }
+        assert!(listed.iter().all(|id| all.contains(id)));
+        assert!(listed.len() < all.len(), "no vertex deferred");
+    }
+    assert!(deferred > 1000, "only {deferred} rays deferred");
+    // Towards either eye the radiance is the eager vertices' (deferred ones are applied on a copy).
+    for at in [eye, behind] {
+        assert_eq!(
+            lazy.lobe_radiance(brdfs, at).unwrap(),
+            eager.lobe_radiance(brdfs, at).unwrap()
+        );
+    }
+    assert_ne!(lazy, eager, "deferred rays are part of a vertex's state");
+    let caught_up = lazy.catch_up(behind).unwrap();
+    assert!(!caught_up.is_empty());
+    for (m, v) in caught_up {
+        let vertex = lazy.vertices(m)[v as usize].as_ref().unwrap();
+        assert!(!vertex.faces_away_from(behind));
+        assert_eq!(vertex.deferred_rays(), 0);
+    }
+    // What the eye behind does not see either (vertices seen edge-on from both) is applied vertex by vertex.
+    for &m in &meshes {
+        for vertex in lazy.vertices_mut(m).iter_mut().flatten() {
+            vertex.catch_up().unwrap();
+        }
+    }
+    assert_eq!(lazy.deferred_rays(), 0);
+    assert_eq!(lazy, eager);
+}
+
 /// The scene's glossy vertices, whose crossing rays disc indexing finds, hold exactly the rays that testing every segment against each vertex's disc finds (section 2.10), before and after a frame's Old and New Rays; the lobe radiance is the full radiance less the diffuse part `ρ/π E` on the same disc (the floor's `ρ` is 0.7 · white; the gold box has none).
 #[test]
 fn glossy_vertices_hold_the_rays_of_a_brute_force_search() {

@@ -389,6 +389,62 @@ fn glossy_radiance_of_a_resting_eye_equals_a_full_recomputation() {
     );
 }
 
+/// Frames' Old and New Rays deferred on glossy vertices facing away from the eye (applied when an eye in front of them asks) give, bit for bit, the radiance of a simulation that applied every frame's rays at once: towards the resting eye each frame, then from behind, where the deferred vertices are seen.
+#[test]
+fn deferred_glossy_rays_give_the_radiance_of_rays_applied_at_once() {
+    let scene = glosbox(0.4);
+    let small = scene.object_by_name("small-box").expect("object");
+    let rest = scene.objects()[small as usize].transform;
+    let mut options = options(Estimator::Detp { radius: 0.2 });
+    options.glossy = Some(GlossyMode::QuadTree {
+        options: QuadTreeOptions::default(),
+        tolerance: 0.01,
+    });
+    let mut lazy = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    // Never asked until the end: no eye, so every frame's rays are applied at once.
+    let mut eager = lazy.clone();
+    let eye = scene.camera().position;
+    let centre = scene.bounds().center();
+    let behind = centre + (centre - eye);
+    let radiance = |sim: &QuasiStatic, eye: Vec3| {
+        sim.glossy_radiance(eye)
+            .expect("radiance")
+            .expect("glossy on")
+    };
+    radiance(&lazy, eye);
+    let mut deferred = 0;
+    for (dx, dz, degrees) in [(-0.3, 0.1, 20.0), (0.2, -0.1, -40.0), (0.1, 0.2, 10.0)] {
+        let pose = [(small, motion(rest, dx, dz, degrees))];
+        lazy.set_pose(&pose).expect("frame");
+        eager.set_pose(&pose).expect("frame");
+        deferred = deferred.max(lazy.deferred_glossy_rays());
+        radiance(&lazy, eye);
+    }
+    assert_eq!(eager.deferred_glossy_rays(), 0);
+    assert!(
+        deferred > 100,
+        "only {deferred} rays deferred: the test proves little"
+    );
+    assert_eq!(radiance(&lazy, eye), radiance(&eager, eye));
+    let seen = radiance(&lazy, behind);
+    assert_eq!(seen, radiance(&eager, behind));
+    assert!(
+        lazy.deferred_glossy_rays() < deferred,
+        "the eye behind caught up no deferred vertex"
+    );
+    let lit = seen
+        .iter()
+        .flatten()
+        .filter(|l| l.max_element() > 0.0)
+        .count();
+    assert!(lit > 50, "only {lit} glossy vertices lit from behind");
+    // And a frame after the eye moved applies the rest as the new eye sees them.
+    let pose = [(small, motion(rest, 0.0, 0.0, 0.0))];
+    lazy.set_pose(&pose).expect("frame");
+    eager.set_pose(&pose).expect("frame");
+    assert_eq!(radiance(&lazy, eye), radiance(&eager, eye));
+}
+
 /// Glossy vertices (section 2.10): the ray lists of static glossy vertices updated with OldRays and NewRays give the radiance that lists built from scratch at the new pose give.
 #[test]
 fn glossy_lists_follow_the_motion() {
