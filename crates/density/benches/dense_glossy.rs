@@ -178,6 +178,8 @@ fn bench(c: &mut Criterion) {
     let mut sim = QuasiStatic::new(scene.clone(), &[ball], options).expect("first frame");
     let mut frame = 0usize;
     let mut stats: Vec<(FrameStats, Duration)> = Vec::new();
+    // Old and New Rays held deferred on glossy vertices facing away from the eye, after each frame.
+    let mut deferred: Vec<f64> = Vec::new();
     group
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
@@ -193,6 +195,7 @@ fn bench(c: &mut Criterion) {
                 let glossy = glossy_start.elapsed();
                 total += t.elapsed();
                 stats.push((s, glossy));
+                deferred.push(sim.deferred_glossy_rays() as f64);
             }
             total
         })
@@ -215,6 +218,7 @@ fn bench(c: &mut Criterion) {
         "median_radiosity_ms": median(stats.iter().map(|(s, _)| ms(s.radiosity)).collect()),
         "median_glossy_radiance_ms": median(stats.iter().map(|(_, g)| ms(*g)).collect()),
         "median_recalculated_paths": median(stats.iter().map(|(s, _)| s.recalculated as f64).collect()),
+        "median_deferred_glossy_rays": median(deferred),
         "frames_measured": stats.len(),
         "ray_set_bytes": ray_bytes,
         "state_bytes": state_bytes,

@@ -29,11 +29,15 @@
 //! whose tangent plane faces away from the eye
 //! ([`GlossyVertices::update_towards`]): its radiance towards that eye is
 //! zero whatever its rays (every BRDF is zero for `ωo` below the plane), so
-//! the frame's insertions and removals wait until an eye in front of it asks
-//! ([`GlossyVertices::catch_up`]), and are then applied batch by batch in
-//! their frames' order: the same store, bit for bit, as applying them at once.
-//! Exact stores only (a list or a QuadTree without summarising), and at most
-//! as many deferred rays as the vertex holds.
+//! the frames' insertions and removals wait until an eye in front of it asks
+//! ([`GlossyVertices::catch_up`]). They are kept as their net change: a ray
+//! removed and inserted again, or inserted by one frame and removed by a
+//! later one (a shadow that passes), cancels out and never reaches the store.
+//! The exact stores depend on the multiset of their rays alone, so applying
+//! the net change gives the store that applying every frame at once gives,
+//! bit for bit (for consistent updates, whose Old Rays are all held). Exact
+//! stores only (a list or a QuadTree without summarising), and at most as many
+//! deferred rays as the vertex holds.
 
 use std::cmp::Ordering;
 
@@ -275,8 +279,81 @@ impl std::ops::AddAssign for UpdateStats {
     }
 }
 
-/// One frame's Old and New Rays of a vertex, in its local frame.
-type Batch = (Vec<IncidentRay>, Vec<IncidentRay>);
+/// The net change of the frames a vertex deferred: rays to remove and rays to insert, each sorted by [`IncidentRay::key`], no ray in both.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Deferred {
+    old: Vec<IncidentRay>,
+    new: Vec<IncidentRay>,
+}
+
+impl Deferred {
+    /// Adds a frame's Old and New Rays (removals first, as the store applies them): each cancels one equal ray of the other kind.
+    fn add(&mut self, mut old: Vec<IncidentRay>, mut new: Vec<IncidentRay>) {
+        old.sort_by(key_order);
+        new.sort_by(key_order);
+        let (old, inserted) = cancel(old, std::mem::take(&mut self.new));
+        self.old = merge(std::mem::take(&mut self.old), old);
+        let (new, removed) = cancel(new, std::mem::take(&mut self.old));
+        self.old = removed;
+        self.new = merge(inserted, new);
+    }
+
+    /// Number of rays held.
+    fn len(&self) -> usize {
+        self.old.len() + self.new.len()
+    }
+
+    /// Whether no ray is held.
+    fn is_empty(&self) -> bool {
+        self.old.is_empty() && self.new.is_empty()
+    }
+}
+
+/// Two key-sorted multisets less their common part: each ray of `a` cancels one equal ray of `b`.
+fn cancel(a: Vec<IncidentRay>, b: Vec<IncidentRay>) -> (Vec<IncidentRay>, Vec<IncidentRay>) {
+    let (mut left, mut right) = (Vec::with_capacity(a.len()), Vec::with_capacity(b.len()));
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match key_order(&a[i], &b[j]) {
+            Ordering::Less => {
+                left.push(a[i]);
+                i += 1;
+            }
+            Ordering::Greater => {
+                right.push(b[j]);
+                j += 1;
+            }
+            Ordering::Equal => {
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    left.extend_from_slice(&a[i..]);
+    right.extend_from_slice(&b[j..]);
+    (left, right)
+}
+
+/// The key-sorted union of two key-sorted multisets.
+fn merge(a: Vec<IncidentRay>, b: Vec<IncidentRay>) -> Vec<IncidentRay> {
+    if a.is_empty() {
+        return b;
+    }
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        if key_order(&b[j], &a[i]) == Ordering::Less {
+            out.push(b[j]);
+            j += 1;
+        } else {
+            out.push(a[i]);
+            i += 1;
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
 
 /// A glossy vertex (section 2.10): its DETP disc, its shading frame, the area that divides the flux, and the rays crossing the disc.
 #[derive(Debug, Clone, PartialEq)]
@@ -286,8 +363,8 @@ pub struct GlossyVertex {
     area: f32,
     slack: f32,
     store: Store,
-    /// Frames' Old and New Rays not yet applied to the store, oldest first (see the module docs: deferred while the eye is behind the tangent plane).
-    deferred: Vec<Batch>,
+    /// The net change of the frames not yet applied to the store (see the module docs: deferred while the eye is behind the tangent plane).
+    deferred: Deferred,
 }
 
 impl GlossyVertex {
@@ -343,7 +420,7 @@ impl GlossyVertex {
             area: std::f32::consts::PI * disc.radius * disc.radius,
             slack,
             store,
-            deferred: Vec::new(),
+            deferred: Deferred::default(),
         })
     }
 
@@ -443,10 +520,12 @@ impl GlossyVertex {
             .map(|s| IncidentRay::from_segment(&self.frame, s))
             .collect();
         let exact = !matches!(self.store, Store::Summary(_));
-        let room = self.deferred_rays() + old.len() + new.len() <= self.len().max(64);
-        if exact && room && eye.is_some_and(|eye| self.faces_away_from(eye)) {
-            self.deferred.push((old, new));
-            return Ok(None);
+        if exact && eye.is_some_and(|eye| self.faces_away_from(eye)) {
+            self.deferred.add(old, new);
+            if self.deferred.len() <= self.len().max(64) {
+                return Ok(None);
+            }
+            return self.catch_up().map(Some);
         }
         let mut stats = self.catch_up()?;
         stats += self.apply(old, new)?;
@@ -461,16 +540,16 @@ impl GlossyVertex {
 
     /// Number of deferred Old and New Rays not yet applied to the store.
     pub fn deferred_rays(&self) -> usize {
-        self.deferred.iter().map(|(o, n)| o.len() + n.len()).sum()
+        self.deferred.len()
     }
 
-    /// Applies the deferred frames' Old and New Rays, oldest first.
+    /// Applies the net change of the deferred frames.
     pub fn catch_up(&mut self) -> Result<UpdateStats> {
-        let mut stats = UpdateStats::default();
-        for (old, new) in std::mem::take(&mut self.deferred) {
-            stats += self.apply(old, new)?;
+        if self.deferred.is_empty() {
+            return Ok(UpdateStats::default());
         }
-        Ok(stats)
+        let Deferred { old, new } = std::mem::take(&mut self.deferred);
+        self.apply(old, new)
     }
 
     /// The vertex with its deferred rays applied: itself when none are deferred, else a caught-up copy.
@@ -718,7 +797,7 @@ impl GlossyVertices {
         })
     }
 
-    /// The vertices of a mesh (empty for a mesh that was not built).
+    /// The vertices of a mesh (empty for a mesh that was not built). A vertex holding deferred rays ([`GlossyVertex::deferred_rays`], after [`GlossyVertices::update_towards`]) has the store of the frame before them until [`GlossyVertex::catch_up`].
     pub fn vertices(&self, mesh: MeshId) -> &[Option<GlossyVertex>] {
         self.meshes.get(mesh as usize).map_or(&[], |v| v.as_slice())
     }
@@ -744,7 +823,7 @@ impl GlossyVertices {
         self.update_towards(old, new, None)
     }
 
-    /// [`GlossyVertices::update_listing`] that defers the rays of the vertices facing away from `eye` (see the module docs): they are not listed, since their radiance towards `eye` stays zero, and their stats are counted when they are applied. The listed vertices had their earlier deferred rays applied first.
+    /// [`GlossyVertices::update_listing`] that defers the rays of the vertices facing away from `eye` (see the module docs): they are not listed, since their radiance towards `eye` stays zero, and their stats are those of the net change, counted when it is applied. The listed vertices had their earlier deferred rays applied first.
     pub fn update_towards(
         &mut self,
         old: &[RaySegment],
