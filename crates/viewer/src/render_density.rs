@@ -130,13 +130,22 @@ pub fn vertex_radiance(
         .with_context(|| format!("{} on `{}`", estimator.name(), scene.name))?;
     let first = sim.first_frame();
     let corners = corners(&sim)?;
-    Ok(VertexRadiance {
+    let radiance = VertexRadiance {
         corners,
         primary_rays: sim.rays().rays.len(),
         segments: sim.rays().segments().count(),
         ray_set_ms: first.photosimulation.as_secs_f64() * 1e3,
         estimate_ms: first.radiosity.as_secs_f64() * 1e3,
-    })
+    };
+    drop_in_background(sim);
+    Ok(radiance)
+}
+
+/// Drops a simulation on a thread of its own: its ray set and its glossy vertices' lists are millions of allocations, about a second of freeing on a dense model (`dense_glossy`'s blob), which the frame after it and the process's exit (which does not wait for the thread) need not wait for. Dropped at once when no thread can be started.
+pub fn drop_in_background(sim: QuasiStatic) {
+    let _ = std::thread::Builder::new()
+        .name("drop-simulation".into())
+        .spawn(move || drop(sim));
 }
 
 /// A density error, with the options that lower its memory when the glossy lists would not fit.

@@ -248,6 +248,7 @@ pub fn run(
     lustre_image::write_json_atomic(&sidecar, &info)
         .with_context(|| format!("cannot write {}", sidecar.display()))?;
     eprintln!("wrote {} images and {}", written.len(), sidecar.display());
+    crate::render_density::drop_in_background(sim);
     Ok(())
 }
 
