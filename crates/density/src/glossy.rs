@@ -36,8 +36,11 @@
 //! The exact stores depend on the multiset of their rays alone, so applying
 //! the net change gives the store that applying every frame at once gives,
 //! bit for bit (for consistent updates, whose Old Rays are all held). Exact
-//! stores only (a list or a QuadTree without summarising), and at most as many
-//! deferred rays as the vertex holds.
+//! stores only (a list or a QuadTree without summarising). A vertex defers at
+//! most a quarter as many rays as it holds, plus 64 ([`MAX_DEFERRED_SHARE`]):
+//! the lists' memory grows by less than a tenth at worst (24 bytes a deferred ray against
+//! about [`BYTES_PER_STORED_RAY`] a stored one), and beyond it the net change
+//! is applied.
 
 use std::cmp::Ordering;
 
@@ -278,6 +281,9 @@ impl std::ops::AddAssign for UpdateStats {
         self.missing += other.missing;
     }
 }
+
+/// A vertex defers at most `1 / MAX_DEFERRED_SHARE` as many rays as it holds, plus 64 (module docs).
+pub const MAX_DEFERRED_SHARE: usize = 4;
 
 /// The net change of the frames a vertex deferred: rays to remove and rays to insert, each sorted by [`IncidentRay::key`], no ray in both.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -522,7 +528,7 @@ impl GlossyVertex {
         let exact = !matches!(self.store, Store::Summary(_));
         if exact && eye.is_some_and(|eye| self.faces_away_from(eye)) {
             self.deferred.add(old, new);
-            if self.deferred.len() <= self.len().max(64) {
+            if self.deferred.len() <= self.len() / MAX_DEFERRED_SHARE + 64 {
                 return Ok(None);
             }
             return self.catch_up().map(Some);
