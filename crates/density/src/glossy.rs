@@ -924,7 +924,7 @@ impl GlossyVertices {
         Ok(())
     }
 
-    /// The radiance of every vertex towards the eye (equation 2.1 per vertex, recomputed when the camera moves), `[mesh][vertex]`, with `brdfs` one per material (`lustre_photon::trace::scene_brdfs`); empty for meshes not built. Fails when a mesh's material has no BRDF.
+    /// The radiance of every vertex towards the eye (equation 2.1 per vertex, recomputed when the camera moves), `[mesh][vertex]`, with `brdfs` one per material (`lustre_photon::trace::scene_brdfs`); empty for meshes not built; zero without an estimate for the vertices that face away from the eye. Fails when a mesh's material has no BRDF.
     pub fn radiance(&self, brdfs: &[BoxedBrdf], eye: Vec3) -> Result<Vec<Vec<Rgb>>> {
         self.per_vertex(brdfs, eye, |v, brdf, _| {
             v.radiance(brdf, eye - v.disc().centre)
@@ -960,13 +960,13 @@ impl GlossyVertices {
                     return Ok(Rgb::ZERO);
                 };
                 let brdf = brdf_of(brdfs, self.materials[m as usize])?;
-                let vertex = towards(vertex, eye)?;
-                Ok(lobe_towards(&vertex, brdf, eye, self.diffuse[m as usize]))
+                let diffuse = self.diffuse[m as usize];
+                seen_from(vertex, eye, |v| lobe_towards(v, brdf, eye, diffuse))
             })
             .collect()
     }
 
-    /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex as [`towards`] `eye` gives it, zero for a vertex without one.
+    /// `f(vertex, its mesh's BRDF, its mesh's Lambertian reflectance)` at every built vertex as [`seen_from`] `eye` gives it, zero for a vertex without one.
     fn per_vertex(
         &self,
         brdfs: &[BoxedBrdf],
@@ -985,7 +985,7 @@ impl GlossyVertices {
                 vertices
                     .par_iter()
                     .map(|v| match v {
-                        Some(v) => Ok(f(towards(v, eye)?.as_ref(), brdf, diffuse)),
+                        Some(v) => seen_from(v, eye, |v| f(v, brdf, diffuse)),
                         None => Ok(Rgb::ZERO),
                     })
                     .collect()
@@ -1005,12 +1005,16 @@ fn brdf_of(brdfs: &[BoxedBrdf], material: MaterialId) -> Result<&(dyn Brdf + Sen
         })
 }
 
-/// The vertex as an estimate towards `eye` must see it: with its deferred rays applied (on a copy) unless it faces away from `eye`, where its radiance is zero whatever its rays.
-fn towards(vertex: &GlossyVertex, eye: Vec3) -> Result<std::borrow::Cow<'_, GlossyVertex>> {
+/// An estimate `f` of the vertex towards `eye`: zero, without evaluating it, for a vertex that faces away from `eye` (every BRDF is zero for `ωo` below the tangent plane, so its radiance is zero whatever its rays: back-face culling), else `f` of the vertex with its deferred rays applied (on a copy).
+fn seen_from(
+    vertex: &GlossyVertex,
+    eye: Vec3,
+    f: impl FnOnce(&GlossyVertex) -> Rgb,
+) -> Result<Rgb> {
     if vertex.faces_away_from(eye) {
-        Ok(std::borrow::Cow::Borrowed(vertex))
+        Ok(Rgb::ZERO)
     } else {
-        vertex.caught_up()
+        Ok(f(vertex.caught_up()?.as_ref()))
     }
 }
 

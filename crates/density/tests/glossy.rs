@@ -855,6 +855,20 @@ fn deferred_updates_equal_updates_applied_at_once() {
         );
     }
     assert!(lazy != eager, "deferred rays are part of a vertex's state");
+    // What the deferral and the back-face culling rest on: a vertex the eye is behind has zero radiance whatever its
+    // rays, here estimated from its own rays (the floor's blend and the gold conductor).
+    let mut culled = 0;
+    for &m in &meshes {
+        let brdf = brdfs[scene.meshes()[m as usize].material as usize].as_ref();
+        for vertex in eager.vertices(m).iter().flatten() {
+            if vertex.faces_away_from(eye) && !vertex.is_empty() {
+                let wo = eye - vertex.disc().centre;
+                assert_eq!(vertex.estimate(brdf, wo).value, Rgb::ZERO);
+                culled += 1;
+            }
+        }
+    }
+    assert!(culled > 10, "only {culled} vertices face away from the eye");
     // Frame 3 removes a sixth of the held rays, more than many vertices may defer: those apply it.
     let (_, capped, _) = frame(
         &mut eager,
