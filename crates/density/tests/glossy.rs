@@ -789,6 +789,22 @@ fn glossy_vertices_refuse_more_rays_than_allowed() {
     }
 }
 
+/// The segments of another trace of `scene` (5,000 photons, seed 9): a frame's New Rays.
+fn other_trace(scene: &Scene) -> Vec<RaySegment> {
+    let other = trace_ray_set(
+        scene,
+        &Bvh::build(scene),
+        &RaySetOptions {
+            photons: 5_000,
+            seed: 9,
+            max_segments: 16,
+            extension: 0.0,
+        },
+    )
+    .unwrap();
+    other.segments().copied().collect()
+}
+
 /// One frame's Old and New Rays on `eager` (applied at once) and `lazy` (deferred behind `eye`): the rays `lazy` then holds deferred, the vertices behind the eye it applied because they reached the bound on deferred rays, and the changed vertices it did not list. Listed: every changed vertex the eye is not behind, and those that reached the bound.
 fn frame(
     eager: &mut GlossyVertices,
@@ -826,18 +842,7 @@ fn deferred_updates_equal_updates_applied_at_once() {
     let mut eager = GlossyVertices::build(scene, rays, 0.3, mode, &meshes).unwrap();
     let mut lazy = eager.clone();
     let segments: Vec<RaySegment> = rays.segments().copied().collect();
-    let other = trace_ray_set(
-        scene,
-        &Bvh::build(scene),
-        &RaySetOptions {
-            photons: 5_000,
-            seed: 9,
-            max_segments: 16,
-            extension: 0.0,
-        },
-    )
-    .unwrap();
-    let new: Vec<RaySegment> = other.segments().copied().collect();
+    let new = other_trace(scene);
     let eye = scene.camera().position;
     let centre = scene.bounds().center();
     let behind = centre + (centre - eye);
@@ -910,18 +915,7 @@ fn glossy_vertices_hold_the_rays_of_a_brute_force_search() {
     // A frame's update: some of the held rays leave, rays of another trace arrive.
     let segments: Vec<RaySegment> = rays.segments().copied().collect();
     let old = &segments[..20_000];
-    let other = trace_ray_set(
-        scene,
-        &Bvh::build(scene),
-        &RaySetOptions {
-            photons: 5_000,
-            seed: 9,
-            max_segments: 16,
-            extension: 0.0,
-        },
-    )
-    .unwrap();
-    let new: Vec<RaySegment> = other.segments().copied().collect();
+    let new = other_trace(scene);
     let stats = vertices.update(old, &new).unwrap();
     let mut expected_stats = UpdateStats::default();
     let full = vertices.radiance(brdfs, eye).unwrap();

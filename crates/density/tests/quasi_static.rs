@@ -335,9 +335,8 @@ fn refused_input_leaves_the_simulation_unchanged() {
     assert!(bad.is_err());
 }
 
-/// The glossy radiance towards a resting eye, recomputed each frame only for the vertices whose lists changed, equals the radiance computed for every vertex, bit for bit, also after the eye moves away and back.
-#[test]
-fn glossy_radiance_of_a_resting_eye_equals_a_full_recomputation() {
+/// The glosbox (edges of 0.4 m) with its small box mobile under DETP (r = 0.2) and the QuadTree glossy estimate: the scene, the box, its rest pose and the simulation's first frame.
+fn glossy_quadtree_simulation() -> (Scene, ObjectId, Affine3A, QuasiStatic) {
     let scene = glosbox(0.4);
     let small = scene.object_by_name("small-box").expect("object");
     let rest = scene.objects()[small as usize].transform;
@@ -346,7 +345,14 @@ fn glossy_radiance_of_a_resting_eye_equals_a_full_recomputation() {
         options: QuadTreeOptions::default(),
         tolerance: 0.01,
     });
-    let mut cached = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let sim = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    (scene, small, rest, sim)
+}
+
+/// The glossy radiance towards a resting eye, recomputed each frame only for the vertices whose lists changed, equals the radiance computed for every vertex, bit for bit, also after the eye moves away and back.
+#[test]
+fn glossy_radiance_of_a_resting_eye_equals_a_full_recomputation() {
+    let (scene, small, rest, mut cached) = glossy_quadtree_simulation();
     let mut full = cached.clone();
     let never = Vec3::new(9.0, 9.0, 9.0);
     let eye = scene.camera().position;
@@ -392,15 +398,7 @@ fn glossy_radiance_of_a_resting_eye_equals_a_full_recomputation() {
 /// Frames' Old and New Rays deferred on glossy vertices facing away from the eye (applied when an eye in front of them asks) give, bit for bit, the radiance of a simulation that applied every frame's rays at once: towards the resting eye each frame, then from behind, where the deferred vertices are seen.
 #[test]
 fn deferred_glossy_rays_give_the_radiance_of_rays_applied_at_once() {
-    let scene = glosbox(0.4);
-    let small = scene.object_by_name("small-box").expect("object");
-    let rest = scene.objects()[small as usize].transform;
-    let mut options = options(Estimator::Detp { radius: 0.2 });
-    options.glossy = Some(GlossyMode::QuadTree {
-        options: QuadTreeOptions::default(),
-        tolerance: 0.01,
-    });
-    let mut lazy = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let (scene, small, rest, mut lazy) = glossy_quadtree_simulation();
     // Never asked until the end: no eye, so every frame's rays are applied at once.
     let mut eager = lazy.clone();
     let eye = scene.camera().position;
