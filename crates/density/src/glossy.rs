@@ -109,21 +109,21 @@ pub fn ray_difference(
     let mut b = current.to_vec();
     a.sort_by(key_order);
     b.sort_by(key_order);
-    let (mut old, mut new) = (Vec::new(), Vec::new());
+    sorted_difference(&a, &b)
+}
+
+/// Two key-sorted multisets less their common part, `(a − b, b − a)`, each still sorted: every ray of `a` cancels one equal ray of `b`.
+fn sorted_difference(a: &[IncidentRay], b: &[IncidentRay]) -> (Vec<IncidentRay>, Vec<IncidentRay>) {
+    let (mut left, mut right) = (Vec::with_capacity(a.len()), Vec::with_capacity(b.len()));
     let (mut i, mut j) = (0, 0);
-    while i < a.len() || j < b.len() {
-        let order = match (a.get(i), b.get(j)) {
-            (Some(x), Some(y)) => key_order(x, y),
-            (Some(_), None) => Ordering::Less,
-            _ => Ordering::Greater,
-        };
-        match order {
+    while i < a.len() && j < b.len() {
+        match key_order(&a[i], &b[j]) {
             Ordering::Less => {
-                old.push(a[i]);
+                left.push(a[i]);
                 i += 1;
             }
             Ordering::Greater => {
-                new.push(b[j]);
+                right.push(b[j]);
                 j += 1;
             }
             Ordering::Equal => {
@@ -132,7 +132,9 @@ pub fn ray_difference(
             }
         }
     }
-    (old, new)
+    left.extend_from_slice(&a[i..]);
+    right.extend_from_slice(&b[j..]);
+    (left, right)
 }
 
 /// A radiance estimate with its error bound (section 2.10.1): `value` and `bound` are both either sums `Σ f_r φ` (W/sr, the QuadTree's) or radiances (W/(m² sr), a vertex's, divided by the disc area).
@@ -293,13 +295,13 @@ struct Deferred {
 }
 
 impl Deferred {
-    /// Adds a frame's Old and New Rays (removals first, as the store applies them): each cancels one equal ray of the other kind.
+    /// Adds a frame's Old and New Rays (removals first, as the store applies them): each cancels one equal ray of the other kind ([`sorted_difference`]).
     fn add(&mut self, mut old: Vec<IncidentRay>, mut new: Vec<IncidentRay>) {
         old.sort_by(key_order);
         new.sort_by(key_order);
-        let (old, inserted) = cancel(old, std::mem::take(&mut self.new));
+        let (old, inserted) = sorted_difference(&old, &self.new);
         self.old = merge(std::mem::take(&mut self.old), old);
-        let (new, removed) = cancel(new, std::mem::take(&mut self.old));
+        let (new, removed) = sorted_difference(&new, &self.old);
         self.old = removed;
         self.new = merge(inserted, new);
     }
@@ -313,31 +315,6 @@ impl Deferred {
     fn is_empty(&self) -> bool {
         self.old.is_empty() && self.new.is_empty()
     }
-}
-
-/// Two key-sorted multisets less their common part: each ray of `a` cancels one equal ray of `b`.
-fn cancel(a: Vec<IncidentRay>, b: Vec<IncidentRay>) -> (Vec<IncidentRay>, Vec<IncidentRay>) {
-    let (mut left, mut right) = (Vec::with_capacity(a.len()), Vec::with_capacity(b.len()));
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        match key_order(&a[i], &b[j]) {
-            Ordering::Less => {
-                left.push(a[i]);
-                i += 1;
-            }
-            Ordering::Greater => {
-                right.push(b[j]);
-                j += 1;
-            }
-            Ordering::Equal => {
-                i += 1;
-                j += 1;
-            }
-        }
-    }
-    left.extend_from_slice(&a[i..]);
-    right.extend_from_slice(&b[j..]);
-    (left, right)
 }
 
 /// The key-sorted union of two key-sorted multisets.

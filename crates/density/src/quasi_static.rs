@@ -107,8 +107,8 @@ pub struct FrameStats {
 }
 
 /// The static glossy vertices' lobe radiance towards the last eye asked for, and which vertices' lists changed since (beyond the paper: section 2.10 recomputes the view-dependent radiance when the camera moves; while it rests, a frame recomputes only the vertices an Old or New Ray crossed, and the others keep theirs exactly). Behind a lock so that [`QuasiStatic::glossy_radiance`] can fill it through `&self`.
-#[derive(Debug, Default)]
-struct LobeCache(Mutex<Option<CachedLobe>>);
+#[derive(Debug, Clone, Default)]
+struct LobeCache(Locked<Option<CachedLobe>>);
 
 #[derive(Debug, Clone)]
 struct CachedLobe {
@@ -117,35 +117,19 @@ struct CachedLobe {
     stale: Vec<(MeshId, u32)>,
 }
 
-impl Clone for LobeCache {
-    fn clone(&self) -> Self {
-        Self(Mutex::new(self.lock().clone()))
-    }
-}
-
 impl LobeCache {
     fn lock(&self) -> std::sync::MutexGuard<'_, Option<CachedLobe>> {
-        // The cache is only ever replaced whole, so a panic elsewhere leaves it consistent.
-        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+        self.0.lock()
     }
 
     /// The eye of the cached radiance, if any.
     fn eye(&mut self) -> Option<Vec3> {
-        let cache = self.0.get_mut().unwrap_or_else(PoisonError::into_inner);
-        cache.as_ref().map(|c| c.eye)
-    }
-
-    /// Marks vertices whose lists changed, through `&self`.
-    fn mark_stale_shared(&self, changed: &[(MeshId, u32)]) {
-        if let Some(cache) = self.lock().as_mut() {
-            cache.stale.extend_from_slice(changed);
-        }
+        self.0.get_mut().as_ref().map(|c| c.eye)
     }
 
     /// Marks vertices whose lists changed.
-    fn mark_stale(&mut self, changed: &[(MeshId, u32)]) {
-        let cache = self.0.get_mut().unwrap_or_else(PoisonError::into_inner);
-        if let Some(cache) = cache {
+    fn mark_stale(&self, changed: &[(MeshId, u32)]) {
+        if let Some(cache) = self.lock().as_mut() {
             cache.stale.extend_from_slice(changed);
         }
     }
@@ -182,8 +166,8 @@ impl LobeCache {
     }
 }
 
-/// A value behind a lock, cloned by cloning the value: the static glossy vertices, so that [`QuasiStatic::glossy_radiance`] can apply through `&self` the rays they deferred while the eye was behind them ([`GlossyVertices::update_towards`]).
-#[derive(Debug)]
+/// A value behind a lock, cloned by cloning the value, so that [`QuasiStatic::glossy_radiance`] can change it through `&self`: the static glossy vertices (the rays they deferred while the eye was behind them, [`GlossyVertices::update_towards`]) and the [`LobeCache`].
+#[derive(Debug, Default)]
 struct Locked<T>(Mutex<T>);
 
 impl<T: Clone> Clone for Locked<T> {
@@ -194,7 +178,8 @@ impl<T: Clone> Clone for Locked<T> {
 
 impl<T> Locked<T> {
     fn lock(&self) -> std::sync::MutexGuard<'_, T> {
-        // Only whole frames' updates are applied under the lock; a panic elsewhere leaves it as it was.
+        // Only whole updates are made under the lock (a frame's rays, a cache replaced whole), so a panic elsewhere
+        // leaves the value consistent.
         self.0.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
@@ -712,7 +697,7 @@ impl QuasiStatic {
         // The rays deferred on vertices this eye sees.
         let mut fixed = fixed.lock();
         let caught_up = fixed.catch_up(eye)?;
-        self.lobe_cache.mark_stale_shared(&caught_up);
+        self.lobe_cache.mark_stale(&caught_up);
         // ρ/π E on the diffuse discs plus the non-diffuse part on the glossy discs.
         let a = self.lobe_cache.get(
             eye,

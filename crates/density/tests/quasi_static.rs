@@ -10,7 +10,7 @@ use lustre_density::{
     photon_maps_radiance, trace_ray_set_in,
 };
 use lustre_geometry::meshing::subdivide;
-use lustre_geometry::{ObjectId, Scene, builtin};
+use lustre_geometry::{ObjectId, Rgb, Scene, builtin};
 use proptest::prelude::*;
 
 /// The Cornell box with every mesh subdivided to edges of at most `edge` metres.
@@ -228,6 +228,11 @@ fn photon_maps_follow_the_motion() {
     );
 }
 
+/// How many of `radiance` are lit (some channel above zero).
+fn count_lit<'a>(radiance: impl Iterator<Item = &'a Rgb>) -> usize {
+    radiance.filter(|l| l.max_element() > 0.0).count()
+}
+
 /// The glosbox with every mesh subdivided to edges of at most `edge` metres.
 fn glosbox(edge: f32) -> Scene {
     let s = builtin("glosbox").expect("built-in");
@@ -292,11 +297,7 @@ fn impact_count_glossy_lists_follow_the_motion() {
         .expect("radiance")
         .expect("glossy on");
     assert_eq!(incremental, scratch);
-    let lit = incremental
-        .iter()
-        .flatten()
-        .filter(|l| l.max_element() > 0.0)
-        .count();
+    let lit = count_lit(incremental.iter().flatten());
     let total = incremental.iter().flatten().count();
     assert!(lit > total / 4, "{lit} of {total} glossy vertices lit");
 }
@@ -430,11 +431,7 @@ fn deferred_glossy_rays_give_the_radiance_of_rays_applied_at_once() {
         lazy.deferred_glossy_rays() < deferred,
         "the eye behind caught up no deferred vertex"
     );
-    let lit = seen
-        .iter()
-        .flatten()
-        .filter(|l| l.max_element() > 0.0)
-        .count();
+    let lit = count_lit(seen.iter().flatten());
     assert!(lit > 50, "only {lit} glossy vertices lit from behind");
     // And a frame after the eye moved applies the rest as the new eye sees them.
     let pose = [(small, motion(rest, 0.0, 0.0, 0.0))];
@@ -480,11 +477,7 @@ fn glossy_lists_follow_the_motion() {
         worst < 1e-4,
         "incremental and rebuilt glossy radiance differ by {worst}"
     );
-    let lit = incremental
-        .iter()
-        .flatten()
-        .filter(|l| l.max_element() > 0.0)
-        .count();
+    let lit = count_lit(incremental.iter().flatten());
     assert!(
         lit > compared / 2,
         "{lit} of {compared} glossy vertices are lit"
@@ -588,11 +581,7 @@ fn glossy_radius_lists_follow_the_motion_under_artifact_control() {
     }
     let gold_mesh = moved.objects()[gold as usize].meshes[0] as usize;
     assert!(
-        incremental[gold_mesh]
-            .iter()
-            .filter(|l| l.max_element() > 0.0)
-            .count()
-            > 20,
+        count_lit(incremental[gold_mesh].iter()) > 20,
         "the gold box is not lit"
     );
     assert!(compared > 100, "only {compared} lit glossy vertices");
