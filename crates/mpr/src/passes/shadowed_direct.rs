@@ -203,11 +203,8 @@ impl ShadowVolumes {
     /// the number of volumes rebuilt.
     pub fn refresh(&mut self, ctx: &GpuContext, scene: &Scene, lights: &[Light]) -> Result<usize> {
         let all_positions: Vec<Vec3> = lights.iter().map(light_position).collect();
-        let (positions, volume_of) = match self.jitter {
-            VolumeJitter::Pivot => including(&[], &all_positions),
-            // The stored jittered positions stay, with the lights' own added.
-            VolumeJitter::Stored => including(&self.positions, &all_positions),
-        };
+        // The stored jittered positions stay, with the lights' own added.
+        let (positions, volume_of) = including(self.stored_positions(), &all_positions);
         self.volume_of = volume_of;
         self.rebuild(ctx, scene, positions)
     }
@@ -239,11 +236,7 @@ impl ShadowVolumes {
             });
         }
         let all_positions: Vec<Vec3> = sets.iter().flatten().map(light_position).collect();
-        let stored = match self.jitter {
-            VolumeJitter::Pivot => &[][..],
-            VolumeJitter::Stored => &self.positions[..],
-        };
-        let (positions, index) = including(stored, &all_positions);
+        let (positions, index) = including(self.stored_positions(), &all_positions);
         self.jitter = VolumeJitter::Stored;
         if !sets.is_empty() {
             // The first set's own volumes until `prepare` chooses a frame's.
@@ -259,6 +252,14 @@ impl ShadowVolumes {
     /// How the volumes follow jittered lights.
     pub fn jitter(&self) -> VolumeJitter {
         self.jitter
+    }
+
+    /// The positions whose volumes a rebuild keeps: the stored jittered ones under [`VolumeJitter::Stored`], none under [`VolumeJitter::Pivot`].
+    fn stored_positions(&self) -> &[Vec3] {
+        match self.jitter {
+            VolumeJitter::Pivot => &[],
+            VolumeJitter::Stored => &self.positions,
+        }
     }
 
     /// Rebuilds and re-uploads the volumes for `positions` (the distinct
