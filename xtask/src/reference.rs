@@ -15,7 +15,7 @@ use anyhow::{Context, Result, bail, ensure};
 use clap::ValueEnum;
 use lustre_geometry::builtin::{BUILTIN_SCENES, builtin};
 use lustre_geometry::mitsuba::{self, ExportOptions, Integrator, ReconstructionFilter};
-use lustre_geometry::{Scene, load_scene_file};
+use lustre_geometry::{Scene, load_scene_arg};
 
 /// The spp a committed reference aims for.
 const TARGET_SPP: u32 = 4096;
@@ -200,29 +200,15 @@ pub fn run(args: Args) -> Result<()> {
     result
 }
 
-/// The scene `--scene` names and the name its files take: a built-in scene
-/// by its name, else a scene file ([`load_scene_file`], named by its stem;
-/// the loader's warnings on stderr). Fails on a name that is neither.
+/// The scene `--scene` names and the name its files take (the scene's own:
+/// a built-in scene's name, a scene file's stem; [`load_scene_arg`], the
+/// loader's warnings on stderr). Fails on a name that is neither.
 fn reference_scene(arg: &str) -> Result<(String, Scene)> {
-    if BUILTIN_SCENES.contains(&arg) {
-        return Ok((arg.to_owned(), builtin(arg)?));
-    }
-    let path = Path::new(arg);
-    ensure!(
-        path.is_file(),
-        "--scene `{arg}` is neither a built-in scene ({}) nor a scene file",
-        BUILTIN_SCENES.join(", ")
-    );
-    let loaded = load_scene_file(path).with_context(|| format!("cannot load `{arg}`"))?;
+    let loaded = load_scene_arg(arg).with_context(|| format!("--scene `{arg}`"))?;
     for warning in &loaded.warnings {
         eprintln!("reference: {arg}: warning: {warning}");
     }
-    let name = path
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .with_context(|| format!("`{arg}` has no UTF-8 file name"))?
-        .to_owned();
-    Ok((name, loaded.scene))
+    Ok((loaded.scene.name.clone(), loaded.scene))
 }
 
 /// Exports one scene, renders it and writes its EXR and sidecar.
@@ -594,11 +580,10 @@ mod tests {
         assert_eq!(name, "textured-cornell");
         // The file's checker map is loaded, as the export bakes it into the reference.
         assert!(scene.materials().iter().any(|m| m.diffuse_map.is_some()));
-        let error = reference_scene("no-such-scene.obj")
-            .unwrap_err()
-            .to_string();
+        let error = format!("{:#}", reference_scene("no-such-scene.obj").unwrap_err());
         assert!(
-            error.contains("neither a built-in scene (cornell, ") && error.contains("scene file"),
+            error.contains("neither a built-in scene (cornell, ")
+                && error.contains("nor an existing file"),
             "{error}"
         );
     }

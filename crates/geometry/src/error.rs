@@ -83,6 +83,14 @@ pub enum GeometryError {
         /// The names that exist, comma separated.
         known: String,
     },
+    /// A scene argument names neither a built-in scene nor an existing file.
+    #[error("`{arg}` is neither a built-in scene ({known}) nor an existing file")]
+    NotASceneOrFile {
+        /// The argument given.
+        arg: String,
+        /// The built-in scenes, comma separated.
+        known: String,
+    },
     /// An object id or name does not exist.
     #[error("no object `{0}` in the scene")]
     UnknownObject(String),

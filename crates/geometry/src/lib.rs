@@ -62,7 +62,7 @@ pub use ray::{Hit, LeanHit, Ray, TriangleHit, intersect_triangle};
 pub use scene::{
     Object, ObjectId, Scene, Surface, SurfaceId, SurfaceKind, TriangleId, WorldTriangle,
 };
-pub use scene_file::{is_gltf, load_scene_file};
+pub use scene_file::{is_gltf, load_scene_arg, load_scene_file};
 pub use texture::Texture;
 
 /// Linear Rec.709 RGB.
