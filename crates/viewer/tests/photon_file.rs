@@ -314,7 +314,7 @@ fn streamed_render_memory_is_bounded_by_the_batch() {
     // records' own bytes rather than a measured figure: peak resident memory
     // moves with the allocator (+49 to +58 MB measured in memory, +1 to +3 MB
     // streamed, for some 660,000 more records of 48 bytes, 32 MB).
-    let record_bytes = (peaks[1].2 - peaks[0].2) * std::mem::size_of::<HitRecord>() as f64;
+    let record_bytes = (peaks[1].2 - peaks[0].2) * size_of::<HitRecord>() as f64;
     let streamed_growth = peaks[1].0 - peaks[0].0;
     let memory_growth = peaks[1].1 - peaks[0].1;
     assert!(
