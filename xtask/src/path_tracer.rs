@@ -257,11 +257,102 @@ pub fn render(
     variant: &str,
     dir: &Path,
 ) -> Result<(lustre_image::Image, Times)> {
-    let root = crate::workspace_root();
+    let xml = export_into(scene, options, dir)?;
+    let rendered = run_exported(python, &xml, options, variant);
+    let _ = std::fs::remove_dir_all(dir);
+    rendered
+}
+
+/// Like [`render`] for a reference, whose time nobody reads: taken from
+/// `cache` when a render of the same exported files (XML, meshes, textures),
+/// variant, samples, seed, Mitsuba release and helper script is there, else
+/// rendered and kept there (written atomically, so an interrupted run keeps
+/// only whole images). The walkthrough's references take hours on a small
+/// machine, so they outlive a run; returns the image and whether it was rendered now.
+pub fn render_cached(
+    python: &Path,
+    scene: &lustre_geometry::Scene,
+    options: &mitsuba::ExportOptions,
+    variant: &str,
+    dir: &Path,
+    cache: &Path,
+) -> Result<(lustre_image::Image, bool)> {
+    let result = (|| {
+        let xml = export_into(scene, options, dir)?;
+        let kept = cache.join(format!("{}.exr", render_key(dir, options, variant)?));
+        if kept.is_file() {
+            let image = read_exr(&kept)
+                .with_context(|| format!("reading the kept reference {}", kept.display()))?;
+            return Ok((image, false));
+        }
+        let (image, _) = run_exported(python, &xml, options, variant)?;
+        std::fs::create_dir_all(cache).with_context(|| format!("creating {}", cache.display()))?;
+        lustre_image::write_exr(&kept, &image, lustre_image::Precision::F32)
+            .with_context(|| format!("keeping the reference as {}", kept.display()))?;
+        Ok((image, true))
+    })();
+    let _ = std::fs::remove_dir_all(dir);
+    result
+}
+
+/// Exports `scene` into `dir` as `scene.xml` with its meshes and textures.
+fn export_into(
+    scene: &lustre_geometry::Scene,
+    options: &mitsuba::ExportOptions,
+    dir: &Path,
+) -> Result<std::path::PathBuf> {
     let xml = dir.join("scene.xml");
     mitsuba::export(scene, &xml, options)
         .with_context(|| format!("exporting `{}` to Mitsuba", scene.name))?;
-    let exr = dir.join("render.exr");
+    Ok(xml)
+}
+
+/// SHA-256, in hex, of everything a render of the export in `dir` depends
+/// on: every file there (relative name and bytes, in name order), the
+/// variant, samples, seed, Mitsuba release and the helper script.
+fn render_key(dir: &Path, options: &mitsuba::ExportOptions, variant: &str) -> Result<String> {
+    use sha2::{Digest, Sha256};
+    let mut files = Vec::new();
+    let mut pending = vec![dir.to_path_buf()];
+    while let Some(d) = pending.pop() {
+        for entry in std::fs::read_dir(&d).with_context(|| format!("listing {}", d.display()))? {
+            let path = entry?.path();
+            if path.is_dir() {
+                pending.push(path);
+            } else {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    let mut hash = Sha256::new();
+    let mut field = |bytes: &[u8]| {
+        hash.update((bytes.len() as u64).to_le_bytes());
+        hash.update(bytes);
+    };
+    for file in &files {
+        let name = file.strip_prefix(dir).unwrap_or(file);
+        field(path_str(name)?.as_bytes());
+        field(&std::fs::read(file).with_context(|| format!("reading {}", file.display()))?);
+    }
+    field(variant.as_bytes());
+    field(&options.spp.to_le_bytes());
+    field(&options.seed.to_le_bytes());
+    field(crate::reference::MITSUBA_VERSION.as_bytes());
+    let script = crate::reference::helper_script(&crate::workspace_root());
+    field(&std::fs::read(&script).with_context(|| format!("reading {}", script.display()))?);
+    Ok(hash.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// Renders the exported `xml` with the helper: the image and its times.
+fn run_exported(
+    python: &Path,
+    xml: &Path,
+    options: &mitsuba::ExportOptions,
+    variant: &str,
+) -> Result<(lustre_image::Image, Times)> {
+    let root = crate::workspace_root();
+    let exr = xml.with_file_name("render.exr");
     let spp = options.spp.to_string();
     let seed = options.seed.to_string();
     let info = run_helper(
@@ -271,7 +362,7 @@ pub fn render(
             "--variant",
             variant,
             "--scene",
-            path_str(&xml)?,
+            path_str(xml)?,
             "--out",
             path_str(&exr)?,
             "--spp",
@@ -291,14 +382,50 @@ pub fn render(
         load: time("load_seconds")?,
         render: time("render_seconds")?,
     };
-    let image = read_exr(&exr)?;
-    let _ = std::fs::remove_dir_all(dir);
-    Ok((image, times))
+    Ok((read_exr(&exr)?, times))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_reference_is_kept_under_what_its_render_depends_on() {
+        let scratch = crate::render::Scratch::new("render-key").unwrap();
+        let key = |scene: &lustre_geometry::Scene, options: &mitsuba::ExportOptions, name: &str| {
+            let dir = scratch.path().join(name);
+            export_into(scene, options, &dir).unwrap();
+            render_key(&dir, options, "scalar_rgb").unwrap()
+        };
+        let scene = builtin("cornell").unwrap();
+        let options = mitsuba::ExportOptions {
+            width: 8,
+            height: 6,
+            ..Default::default()
+        };
+        let first = key(&scene, &options, "a");
+        // The same export in another directory: the same key.
+        assert_eq!(key(&scene, &options, "b"), first);
+        let dir = scratch.path().join("a");
+        assert_ne!(render_key(&dir, &options, "llvm_ad_rgb").unwrap(), first);
+        let seed = mitsuba::ExportOptions { seed: 1, ..options };
+        assert_ne!(key(&scene, &seed, "seed"), first);
+        let size = mitsuba::ExportOptions {
+            width: 9,
+            ..options
+        };
+        assert_ne!(key(&scene, &size, "size"), first);
+        // Another camera changes only the XML; another scene the meshes too.
+        let mut moved = scene.clone();
+        let mut camera = *scene.camera();
+        camera.position.x += 0.01;
+        moved.set_camera(camera);
+        assert_ne!(key(&moved, &options, "camera"), first);
+        assert_ne!(
+            key(&builtin("glosbox").unwrap(), &options, "glosbox"),
+            first
+        );
+    }
 
     /// Points on the exact model c (1/N + 1/N_ref), seconds a + b N.
     fn exact(c: f64, n_ref: u64, a: f64, b: f64, spps: &[u32]) -> Vec<Point> {

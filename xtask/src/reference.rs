@@ -426,7 +426,7 @@ pub fn export_like(
 /// Runs the Python helper with `args`, passing its stderr (progress) through,
 /// and returns the JSON object on the last line of its stdout.
 pub fn run_helper(python: &Path, root: &Path, args: &[&str]) -> Result<serde_json::Value> {
-    let script = root.join("xtask").join("python").join("mitsuba_render.py");
+    let script = helper_script(root);
     let output = Command::new(python)
         .arg(&script)
         .args(args)
@@ -448,6 +448,11 @@ pub fn run_helper(python: &Path, root: &Path, args: &[&str]) -> Result<serde_jso
         .find(|l| !l.trim().is_empty())
         .unwrap_or("");
     serde_json::from_str(last).with_context(|| format!("reading the helper's report {last:?}"))
+}
+
+/// The Python helper that renders with Mitsuba, under the workspace `root`.
+pub fn helper_script(root: &Path) -> PathBuf {
+    root.join("xtask").join("python").join("mitsuba_render.py")
 }
 
 /// The Mitsuba 3 release the references and the Mitsuba tests use (`tests/references/*.json` say 3.9.1).

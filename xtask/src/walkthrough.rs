@@ -15,6 +15,12 @@
 //! path tracer's time is taken at N_ref samples, a lower bound (counted in
 //! the report). Writes the result into BENCHMARKS.md between `<!--
 //! walkthrough:start -->` and `<!-- walkthrough:end -->`.
+//!
+//! The references (1,024 spp at 640 × 480: about two hours for 100 frames
+//! on 2 cores) are kept in `--reference-cache`, keyed by the exported scene
+//! and the render's settings ([`path_tracer::render_cached`]); their time is
+//! never read, so `--references-only` can fill the cache beforehand, for
+//! example under `nice`, and the timed run renders only ours and the probes.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -65,6 +71,15 @@ pub struct Args {
     /// Name of the BENCHMARKS.md section to (re)write.
     #[arg(long, default_value = "walkthrough")]
     section: String,
+    /// Where the frames' references are kept between runs (relative to the
+    /// workspace), keyed by everything their render depends on.
+    #[arg(long, default_value = "target/path-traced")]
+    reference_cache: PathBuf,
+    /// Only path-trace the references missing from the cache, without our
+    /// render, the probes or BENCHMARKS.md: hours of work that can run
+    /// ahead, at low priority, of the timed run on a quiet machine.
+    #[arg(long)]
+    references_only: bool,
 }
 
 /// One frame's measurements.
@@ -122,8 +137,48 @@ pub fn run(args: Args) -> Result<()> {
     let path = CameraPath::load(&path_file)?;
     let reference = load_reference(&references_dir(), &args.scene)?;
     let python = ensure_venv(&root)?;
-    let lustre = Lustre::build()?;
+    let cache = root.join(&args.reference_cache);
     let scratch = Scratch::new("walkthrough")?;
+    let cameras = path.frames(args.frames);
+    let frame_scene = |camera: &lustre_geometry::Camera| -> Result<lustre_geometry::Scene> {
+        let mut scene = builtin(&args.scene)?;
+        scene.set_camera(camera.with_aspect(width as f32 / height as f32));
+        Ok(scene)
+    };
+    let options =
+        |spp: u32, seed: u32| -> Result<(lustre_geometry::mitsuba::ExportOptions, String)> {
+            let (mut options, variant) = export_like(&reference.sidecar, spp, seed)?;
+            (options.width, options.height) = (width, height);
+            Ok((options, variant))
+        };
+    let truth = |i: usize, scene: &lustre_geometry::Scene| {
+        let (options, variant) = options(args.reference_spp, REFERENCE_SEED + i as u32)?;
+        let dir = scratch.path().join(format!("reference-{i}"));
+        let start = std::time::Instant::now();
+        let (image, rendered) =
+            path_tracer::render_cached(&python, scene, &options, &variant, &dir, &cache)
+                .with_context(|| format!("path tracing frame {i}'s reference"))?;
+        if rendered {
+            println!(
+                "walkthrough: frame {i}'s reference rendered in {:.0} s, kept in {}",
+                start.elapsed().as_secs_f64(),
+                cache.display()
+            );
+        }
+        anyhow::Ok(image)
+    };
+    if args.references_only {
+        for (i, camera) in cameras.iter().enumerate() {
+            truth(i, &frame_scene(camera)?)?;
+            println!(
+                "walkthrough: {} of {} references ready",
+                i + 1,
+                cameras.len()
+            );
+        }
+        return Ok(());
+    }
+    let lustre = Lustre::build()?;
 
     // Ours: one run, every frame.
     let out = scratch.path().join("walk.exr");
@@ -167,20 +222,14 @@ pub fn run(args: Args) -> Result<()> {
         .to_owned();
 
     // The path tracer: a reference and a probe per frame.
-    let cameras = path.frames(args.frames);
     let mut frames = Vec::with_capacity(args.frames);
     for (i, camera) in cameras.iter().enumerate() {
-        let mut scene = builtin(&args.scene)?;
-        scene.set_camera(camera.with_aspect(width as f32 / height as f32));
-        let rendered = |spp: u32, seed: u32, what: &str| {
-            let (mut options, variant) = export_like(&reference.sidecar, spp, seed)?;
-            (options.width, options.height) = (width, height);
-            let dir = scratch.path().join(format!("{what}-{i}"));
-            path_tracer::render(&python, &scene, &options, &variant, &dir)
-                .with_context(|| format!("path tracing frame {i} at {spp} spp"))
-        };
-        let (truth, _) = rendered(args.reference_spp, REFERENCE_SEED + i as u32, "reference")?;
-        let (probe, probe_times) = rendered(args.probe_spp, PROBE_SEED + i as u32, "probe")?;
+        let scene = frame_scene(camera)?;
+        let truth = truth(i, &scene)?;
+        let (options, variant) = options(args.probe_spp, PROBE_SEED + i as u32)?;
+        let dir = scratch.path().join(format!("probe-{i}"));
+        let (probe, probe_times) = path_tracer::render(&python, &scene, &options, &variant, &dir)
+            .with_context(|| format!("path tracing frame {i}'s probe"))?;
         let ours = read_exr(crate::render::frame_path(&out, i))
             .with_context(|| format!("reading our frame {i}"))?;
         let rel_mse = metrics::relative_mse(&ours, &truth, RELATIVE_MSE_EPSILON)?;
