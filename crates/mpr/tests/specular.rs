@@ -14,7 +14,8 @@ use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Ray, Rgb, Scene};
 use lustre_mpr::frame::FrameInputs;
 use lustre_mpr::passes::specular::{
-    SpecularFace, SpecularKind, SpecularSettings, ViewTree, specular_faces,
+    SpecularFace, SpecularKind, SpecularSettings, ViewTree, image_factor, nearly_planar,
+    specular_faces,
 };
 use lustre_mpr::passes::tonemap::Tonemap;
 use lustre_mpr::readback::read_rgba_f32;
@@ -663,7 +664,8 @@ fn interface_scene() -> Scene {
 /// CPU twin of the paraxial image of a single interface: where the primary
 /// ray meets the interface, the scene beyond it seen from the eye moved to
 /// `1/ratio` of its height (the paraxial source of the refracted rays),
-/// from just beyond the plane, times the face's factor.
+/// from just beyond the plane, times the face's factor and the radiance
+/// law's ratio² (`L/n²` is conserved along a refracted ray).
 fn trace_interface(scene: &Scene, bvh: &Bvh, ray: Ray, faces: &[SpecularFace]) -> Vec3 {
     let Some(hit) = bvh.closest_hit(&ray) else {
         return Vec3::ZERO;
@@ -693,7 +695,7 @@ fn trace_interface(scene: &Scene, bvh: &Bvh, ray: Ray, faces: &[SpecularFace]) -
     let sd = face.plane.signed_distance(eye);
     let lambda = (-(1e-4 * height) - sd) / direction.dot(n);
     match bvh.closest_hit(&Ray::new(eye + direction * lambda, direction)) {
-        Some(h) => face.factor * emitted(&h, direction),
+        Some(h) => face.factor * ratio * ratio * emitted(&h, direction),
         None => Vec3::ZERO,
     }
 }
@@ -728,16 +730,15 @@ fn a_single_interface_shows_the_paraxially_scaled_scene_as_its_cpu_twin_does() {
         Vec3::Y,
         40.0,
     );
-    for (name, camera) in [
-        ("from above", scene.camera().with_aspect(1.0)),
-        ("from below", below.with_aspect(1.0)),
+    for (name, camera, ratio) in [
+        ("from above", scene.camera().with_aspect(1.0), ratios[0]),
+        ("from below", below.with_aspect(1.0), ratios[1]),
     ] {
         let (cpu, interior) =
             cpu_interior(&camera, &|ray| trace_interface(&scene, &bvh, ray, &faces));
-        let through = cpu
-            .iter()
-            .filter(|v| (v.x - 0.96 * LE.x).abs() < 1e-4)
-            .count();
+        // Radiance through the interface: (1 - F0) (n_eye / n_beyond)² L_e.
+        let seen = 0.96 * ratio * ratio * LE.x;
+        let through = cpu.iter().filter(|v| (v.x - seen).abs() < 1e-4).count();
         assert!(
             through > 100,
             "{name}: {through} pixels see a cube through the interface"
@@ -766,10 +767,7 @@ fn a_single_interface_shows_the_paraxially_scaled_scene_as_its_cpu_twin_does() {
                         .is_some_and(|h| h.position.z < 0.0 && h.material == 1)
                 })
                 .count();
-            let through_lower = cpu
-                .iter()
-                .filter(|v| (v.x - 0.96 * LE.x).abs() < 1e-4)
-                .count();
+            let through_lower = cpu.iter().filter(|v| (v.x - seen).abs() < 1e-4).count();
             eprintln!(
                 "{name}: the lower cube covers {through_lower} pixels through the interface, {plain} without it"
             );
@@ -843,4 +841,92 @@ fn view_regions_hold_every_pixel_their_mirror_chains_reach() {
         }
     }
     assert!(seen[1..].iter().all(|&n| n > 20), "{seen:?}");
+}
+
+/// The pool's wavy water (a curved dielectric, waves of 2.5 cm at most) is
+/// one single interface at its mean level: 1/1.33 from above, 1.33 from
+/// below, each face's plane moved to the farthest corner behind it, so that
+/// the view through it clips every water triangle away; radiance through
+/// it scales by (n_eye / n_beyond)².
+#[test]
+fn the_pools_wavy_water_is_one_interface_at_its_mean_level() {
+    let scene = lustre_geometry::builtin::builtin("pool").unwrap();
+    let faces = specular_faces(&scene);
+    // Every face is water; a few of its triangles lie in planes of their
+    // own (planar surfaces, interfaces as before), the rest is the curved one.
+    assert!(
+        faces
+            .iter()
+            .all(|f| matches!(f.kind, SpecularKind::Interface { .. }))
+    );
+    let curved = lustre_geometry::SurfaceKind::Curved;
+    let water: Vec<&SpecularFace> = faces
+        .iter()
+        .filter(|f| scene.surfaces()[f.surface as usize].kind == curved)
+        .collect();
+    assert_eq!(water.len(), 2);
+    assert!(
+        water[0].corners.len() > 3 * 700,
+        "{}",
+        water[0].corners.len()
+    );
+    let level = lustre_geometry::builtin::pool::WATER_LEVEL;
+    for (face, up, ratio) in [(water[0], 1.0, 1.0 / 1.33), (water[1], -1.0, 1.33)] {
+        let SpecularKind::Interface { ratio: r } = face.kind else {
+            unreachable!()
+        };
+        assert!((r - ratio).abs() < 1e-6, "{r}");
+        assert!(
+            face.plane.normal.dot(Vec3::Y) * up > 0.999,
+            "{:?}",
+            face.plane
+        );
+        let distances: Vec<f32> = face
+            .corners
+            .iter()
+            .map(|&c| face.plane.signed_distance(c))
+            .collect();
+        let nearest = distances.iter().copied().fold(f32::INFINITY, f32::min);
+        assert!(
+            nearest.abs() < 1e-5,
+            "the nearest corner is {nearest} from the plane"
+        );
+        // The plane lies within the waves' reach of the mean level.
+        let on_plane = face.plane.normal * face.plane.offset;
+        assert!((on_plane.y - level).abs() < 0.026, "{on_plane}");
+        let f = image_factor(face);
+        assert!((f.x - face.factor.x * ratio * ratio).abs() < 1e-6, "{f}");
+    }
+}
+
+/// [`nearly_planar`]: tilted flat triangles give their own plane; a surface
+/// bent by more than the tilt bound (a 60° ridge) gives none.
+#[test]
+fn nearly_planar_fits_flat_triangles_and_refuses_a_ridge() {
+    let n = Vec3::new(0.2, 1.0, -0.1).normalize();
+    let (u, v) = n.any_orthonormal_pair();
+    let origin = Vec3::new(0.3, -0.2, 0.5);
+    let at = |a: f32, b: f32| origin + u * a + v * b;
+    let flat = [
+        at(0.0, 0.0),
+        at(1.0, 0.0),
+        at(1.0, 1.0),
+        at(0.0, 0.0),
+        at(1.0, 1.0),
+        at(0.0, 1.0),
+    ];
+    let plane = nearly_planar(&flat).unwrap();
+    assert!(plane.normal.dot(n) > 1.0 - 1e-5, "{plane:?}");
+    assert!(flat.iter().all(|&c| plane.signed_distance(c).abs() < 1e-5));
+    // Two triangles folded 30° each way about their shared edge.
+    let (c, s) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+    let ridge = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(-c, -s, 0.5),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(c, -s, 0.5),
+    ];
+    assert_eq!(nearly_planar(&ridge), None);
 }

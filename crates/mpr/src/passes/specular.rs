@@ -16,6 +16,15 @@
 //! ([`mean_radiance`]) — the paper's constant ambient term (section 7.4)
 //! standing in for the images not drawn.
 //!
+//! A single interface passes its image times `1 − F₀` and the radiance
+//! law's `(n_eye / n_beyond)²` ([`image_factor`]; the record tells the eye's
+//! side by the face's plane). A curved dielectric whose triangles lean at
+//! most [`MAX_INTERFACE_TILT_DEGREES`] from their mean plane (the pool's
+//! wavy water) is one interface at that plane ([`nearly_planar`], beyond
+//! the paper, which images planar faces only), each side's plane moved to
+//! the corner farthest behind it so that the view through it clips all of
+//! its triangles: the waves do not distort the view.
+//!
 //! CPU twin: the views of [`ViewTree`] are checked against ray casts through
 //! the mirrors (`tests/specular.rs`).
 
@@ -179,10 +188,19 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
         .iter()
         .enumerate()
         .flat_map(|(id, surface)| {
-            let Some(plane) = planar(surface) else {
-                return Vec::new();
-            };
             let material = &scene.materials()[surface.material as usize];
+            let plane = match (planar(surface), &material.model) {
+                (Some(plane), _) => plane,
+                // A wavy dielectric (the pool's water): one interface at
+                // its mean plane where it is nearly flat.
+                (None, MaterialModel::Dielectric { .. }) if slabs[id].is_none() => {
+                    match nearly_planar(&corners(surface)) {
+                        Some(plane) => plane,
+                        None => return Vec::new(),
+                    }
+                }
+                (None, _) => return Vec::new(),
+            };
             match material.model {
                 MaterialModel::Mirror { reflectance } => vec![SpecularFace {
                     surface: id as u32,
@@ -207,12 +225,27 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                             corners: corners(surface),
                         }],
                         None => {
+                            let corners = corners(surface);
+                            // A curved face's plane on each side moved to its
+                            // farthest corner behind it, so that the view
+                            // through it clips every one of its triangles away.
+                            let behind = |plane: Plane| match surface.kind {
+                                SurfaceKind::Planar(_) => plane,
+                                SurfaceKind::Curved => Plane {
+                                    offset: plane.offset
+                                        + corners
+                                            .iter()
+                                            .map(|&c| plane.signed_distance(c))
+                                            .fold(0.0, f32::min),
+                                    ..plane
+                                },
+                            };
                             let face = |plane: Plane, ratio: f32| SpecularFace {
                                 surface: id as u32,
-                                plane,
+                                plane: behind(plane),
                                 kind: SpecularKind::Interface { ratio },
                                 factor: tint * (1.0 - f0),
-                                corners: corners(surface),
+                                corners: corners.clone(),
                             };
                             vec![face(plane, 1.0 / ior), face(plane.flipped(), ior)]
                         }
@@ -222,6 +255,45 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
             }
         })
         .collect()
+}
+
+/// Largest angle between a triangle's normal and the fitted plane's normal
+/// for a curved dielectric to count as one interface ([`nearly_planar`]).
+pub const MAX_INTERFACE_TILT_DEGREES: f32 = 20.0;
+
+/// The plane of a curved surface's triangles (`corners`, three per
+/// triangle) where they are nearly flat: the area-weighted mean normal
+/// through the area-weighted centroid, or `None` when a triangle's normal
+/// leans more than [`MAX_INTERFACE_TILT_DEGREES`] from it or a corner lies
+/// farther from it than a tenth of the surface's extent across.
+pub fn nearly_planar(corners: &[Vec3]) -> Option<Plane> {
+    let triangles = corners.chunks_exact(3);
+    let (mut weighted, mut centroid, mut area) = (Vec3::ZERO, Vec3::ZERO, 0.0);
+    for t in triangles.clone() {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]) * 0.5;
+        let a = n.length();
+        weighted += n;
+        centroid += (t[0] + t[1] + t[2]) / 3.0 * a;
+        area += a;
+    }
+    if !(area > 0.0) || weighted.length() <= 0.0 {
+        return None;
+    }
+    let plane = Plane::from_point_normal(centroid / area, weighted);
+    let cos_tilt = MAX_INTERFACE_TILT_DEGREES.to_radians().cos();
+    let (lo, hi) = corners
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &c| {
+            (lo.min(c), hi.max(c))
+        });
+    let extent = (hi - lo).length();
+    let flat = triangles.clone().all(|t| {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+        n.dot(plane.normal) >= cos_tilt
+    }) && corners
+        .iter()
+        .all(|&c| plane.signed_distance(c).abs() <= 0.1 * extent);
+    flat.then_some(plane)
 }
 
 /// The views of one frame in depth-first order and, per view, the faces
@@ -475,11 +547,33 @@ fn face_indices(scene: &SceneBuffers, face: &SpecularFace) -> Range<u32> {
         .unwrap_or(0..0)
 }
 
-/// The per-surface record of `specular.wgsl`.
+/// The per-surface record of `specular.wgsl`: what the face passes of its
+/// image to an eye in front of `plane` and to one behind it.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuFace {
     reflectance: [f32; 4],
+    behind: [f32; 4],
+    plane: [f32; 4],
+}
+
+impl GpuFace {
+    const NONE: Self = Self {
+        reflectance: [0.0; 4],
+        behind: [0.0; 4],
+        plane: [0.0; 4],
+    };
+}
+
+/// What `face` passes of the radiance of its image to the eye: its factor,
+/// and through a single interface also the ratio² = (n_eye / n_beyond)² by
+/// which radiance changes across it (`L/n²` is conserved along a refracted
+/// ray; the paper's accumulation leaves it out).
+pub fn image_factor(face: &SpecularFace) -> Vec3 {
+    match face.kind {
+        SpecularKind::Interface { ratio } => face.factor * ratio * ratio,
+        _ => face.factor,
+    }
 }
 
 /// The GPU specular pass for one scene's mirror faces.
@@ -541,21 +635,34 @@ impl SpecularPass {
             .any(|f| matches!(f.kind, SpecularKind::Glossy(_)))
             .then(|| GlossyImagePass::new(ctx, hdr_format, &faces, glossy.fog_radiance))
             .transpose()?;
-        let mut records = vec![
-            GpuFace {
-                reflectance: [0.0; 4],
-            };
-            scene.surfaces().len()
-        ];
+        let mut records = vec![GpuFace::NONE; scene.surfaces().len()];
         for face in &faces {
-            records[face.surface as usize] = GpuFace {
-                reflectance: face.factor.extend(1.0).to_array(),
-            };
+            let record = &mut records[face.surface as usize];
+            let factor = image_factor(face).extend(1.0).to_array();
+            match face.kind {
+                // The two sides of a single interface: the first (wound)
+                // face's plane tells them apart.
+                SpecularKind::Interface { .. } if record.reflectance[3] > 0.0 => {
+                    record.behind = factor;
+                }
+                SpecularKind::Interface { .. } => {
+                    *record = GpuFace {
+                        reflectance: factor,
+                        behind: factor,
+                        plane: face.plane.to_vec4().to_array(),
+                    };
+                }
+                _ => {
+                    *record = GpuFace {
+                        reflectance: factor,
+                        behind: factor,
+                        plane: [0.0; 4],
+                    };
+                }
+            }
         }
         if records.is_empty() {
-            records.push(GpuFace {
-                reflectance: [0.0; 4],
-            });
+            records.push(GpuFace::NONE);
         }
         let depth_format = ctx.depth_format();
         ctx.checked("specular pass creation", || {

@@ -14,8 +14,12 @@
 // | L_lim  | radiance shown by a face at the recursion limit                | W/(m^2 sr) |
 
 struct Face {
-    // rgb: R; a: 1 where the surface is a specular face.
+    // rgb: R for an eye in front of `plane`; a: 1 where the surface is a specular face.
     reflectance: vec4f,
+    // rgb: R for an eye behind `plane` (the other side of a single interface).
+    behind: vec4f,
+    // The plane (n, -offset) that tells the sides apart; zero for one-sided faces.
+    plane: vec4f,
 }
 
 struct SpecularUniforms {
@@ -56,10 +60,18 @@ struct Restored {
     @location(1) surface: u32,
 }
 
+// R of surface s as the view's eye sees it.
+fn face_factor(s: u32) -> vec3f {
+    if dot(faces[s].plane, vec4f(view.eye.xyz, 1.0)) >= 0.0 {
+        return faces[s].reflectance.xyz;
+    }
+    return faces[s].behind.xyz;
+}
+
 @fragment
 fn fs_restore(in: VertexOutput) -> Restored {
     var out: Restored;
-    out.reflectance = vec4f(faces[in.surface].reflectance.xyz, 1.0);
+    out.reflectance = vec4f(face_factor(in.surface), 1.0);
     out.surface = in.surface;
     return out;
 }
@@ -75,5 +87,5 @@ fn fs_restore_zero(in: VertexOutput) -> Restored {
 
 @fragment
 fn fs_limit(in: VertexOutput) -> @location(0) vec4f {
-    return vec4f(faces[in.surface].reflectance.xyz * specular.limit_radiance.xyz, 0.0);
+    return vec4f(face_factor(in.surface) * specular.limit_radiance.xyz, 0.0);
 }
