@@ -403,6 +403,22 @@ impl PassedFaces {
         panes: crate::projective_texture::PaneLight,
     ) -> crate::Result<Self> {
         let mut faces = crate::passes::specular::specular_faces(scene);
+        // A curved interface imaged at its mean plane (the pool's wavy
+        // water) passes no virtual light, nor do the triangles of its mesh
+        // that happen to form planar surfaces: a light through the mean
+        // plane, or through a single wave facet, would lose or distort the
+        // waves' caustic, which their photons' splats keep.
+        let surfaces = scene.surfaces();
+        let curved: std::collections::HashSet<u32> = surfaces
+            .iter()
+            .filter(|s| s.kind == lustre_geometry::SurfaceKind::Curved)
+            .map(|s| s.mesh)
+            .collect();
+        faces.retain(|f| {
+            surfaces
+                .get(f.surface as usize)
+                .is_some_and(|s| !curved.contains(&s.mesh))
+        });
         let windows = crate::projective_texture::windows(scene, panes)?;
         faces.extend(window_faces(&windows));
         Ok(Self { faces, windows })
