@@ -557,7 +557,9 @@ pub const CASES: &[Case] = &[
     },
     // measured: relMSE 0.01061, FLIP mean 0.0500, p99 0.3934, mean ratio 0.8172 (36.8 s)
     // The wavy water as one interface at its mean level (before: no view
-    // through it, relMSE 0.103 at 256²); a fifth too dark, not yet explained.
+    // through it, relMSE 0.103 at 256²); a fifth too dark, not yet explained
+    // (the floor through the water 0.82-0.89 of the reference under beams
+    // and under splats alike; the water's Fresnel reflection is not drawn).
     Case {
         name: "pool-composed",
         scene: "pool",
