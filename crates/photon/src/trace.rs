@@ -42,7 +42,11 @@
 //!
 //! Surfaces are two-sided: the shading normal is flipped to the side the
 //! photon arrives from. Planar surfaces use their [`crate::PlanarFrame`]
-//! (tangent `u_axis`); curved ones the interpolated shading normal.
+//! (tangent `u_axis`); curved ones the interpolated shading normal. A smooth
+//! dielectric is the exception: its frame stays on its outside (the side of
+//! the triangles' wound normal), so that a photon inside the medium leaves
+//! it with η's inverse or is totally reflected (the pool's water traps a
+//! good part of the light its floor sends up).
 
 use lustre_brdf::{BoxedBrdf, BrdfSample, from_model};
 use lustre_geometry::sampling::Frame;
@@ -384,7 +388,25 @@ impl<'a> PhotonTracer<'a> {
             let Some(brdf) = self.brdfs.get(hit.material as usize) else {
                 return;
             };
-            let frame = self.frame_at(&hit, incoming);
+            // A dielectric knows its inside by the side: its frame stays on
+            // the outside (the wound normal's side), so a photon inside the
+            // medium arrives with `wi.z < 0` and meets η's inverse and total
+            // internal reflection; every other surface is two-sided.
+            let outside = matches!(
+                self.scene
+                    .materials()
+                    .get(hit.material as usize)
+                    .map(|m| &m.model),
+                Some(lustre_geometry::MaterialModel::Dielectric { .. })
+            );
+            let frame = self.frame_at(
+                &hit,
+                if outside {
+                    hit.geometric_normal
+                } else {
+                    incoming
+                },
+            );
             let wi = frame.to_local(incoming);
             let u = rng.next_vec2();
             let u_lobe = rng.next_f32();
