@@ -374,7 +374,18 @@ impl<'a> Tracer<'a> {
             let mut rng = bounce_stream(self.options.seed, light, index, n);
             let incoming = -ray.direction;
             let mut normal = hit.shading_normal;
-            let side = if incoming.dot(hit.geometric_normal) >= 0.0 {
+            // Two-sided surfaces shade on the ray's side; a smooth dielectric
+            // on its outside (the wound normal's), so that a ray inside the
+            // medium meets η's inverse and total internal reflection (as in
+            // lustre-photon's tracer).
+            let dielectric = matches!(
+                self.scene
+                    .materials()
+                    .get(hit.material as usize)
+                    .map(|m| &m.model),
+                Some(lustre_geometry::MaterialModel::Dielectric { .. })
+            );
+            let side = if dielectric || incoming.dot(hit.geometric_normal) >= 0.0 {
                 1.0
             } else {
                 -1.0

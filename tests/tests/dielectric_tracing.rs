@@ -1,8 +1,11 @@
-//! Particle tracing through a smooth dielectric (section 2.1 with the
-//! Fresnel equations): a photon inside the medium meets the interface from
-//! its inside, with η's inverse and total internal reflection.
+//! Particle tracing through a smooth dielectric, in lustre-photon's tracer
+//! (Stürzlinger & Bastos section 2.1) and DETP's ray set (García et al.
+//! section 2.3), against the Fresnel equations: a photon inside the medium
+//! meets the interface from its inside, with η's inverse and total internal
+//! reflection.
 
 use glam::{Affine3A, Vec3};
+use lustre_density::{RaySetOptions, trace_ray_set};
 use lustre_geometry::light::PointLight;
 use lustre_geometry::{Bvh, Camera, Light, Material, MaterialModel, Mesh, Object, Rgb, Scene};
 use lustre_photon::{NoProgress, TraceOptions, trace_photons};
@@ -73,12 +76,39 @@ fn submerged_light() -> Scene {
     .unwrap()
 }
 
-/// Of the photons that meet the interface from below, the share that the
-/// Fresnel equations reflect back into the medium (total internal
-/// reflection beyond 48.8°): photons from an isotropic point source meet
-/// the plane with `cos θ` uniform on `(cos θ_max, 1]`, so the share is the
-/// mean of `R(cos θ)` there, 0.68. The tracer that met every dielectric
-/// as if from the air (its frame flipped to the photon's side) reflected 0.17.
+/// The share of photons meeting the interface from below that the Fresnel
+/// equations reflect back into the medium (total internal reflection beyond
+/// 48.8°): photons from an isotropic point source meet the plane with
+/// `cos θ` uniform on `(cos θ_max, 1]` (the quad's edge, 50 m away, seen
+/// from 0.5 m below its centre), so the share is the mean of `R(cos θ)`
+/// there, 0.68.
+fn expected_reflected_share() -> f64 {
+    let mu_min = 0.5 / (0.5f64 * 0.5 + 50.0 * 50.0).sqrt();
+    let steps = 100_000;
+    (0..steps)
+        .map(|i| {
+            let mu = mu_min + (1.0 - mu_min) * (i as f64 + 0.5) / steps as f64;
+            reflectance_from_inside(mu, f64::from(IOR))
+        })
+        .sum::<f64>()
+        / steps as f64
+}
+
+/// Checks `reflected` of `met` against [`expected_reflected_share`] within 5 σ.
+fn check_share(what: &str, reflected: u64, met: u64, photons: u64) {
+    assert!(met > photons / 3, "{what}: {met} photons met the interface");
+    let expected = expected_reflected_share();
+    let share = reflected as f64 / met as f64;
+    let sigma = (expected * (1.0 - expected) / met as f64).sqrt();
+    eprintln!("{what}: reflected {share:.4} of {met}, expected {expected:.4} (sigma {sigma:.4})");
+    assert!(
+        (share - expected).abs() <= 5.0 * sigma,
+        "{what}: reflected {share} where Fresnel gives {expected}"
+    );
+}
+
+/// lustre-photon: the tracer that met every dielectric as if from the air
+/// (its frame flipped to the photon's side) reflected 0.17.
 #[test]
 fn photons_inside_a_dielectric_are_totally_reflected_beyond_the_critical_angle() {
     let scene = submerged_light();
@@ -98,34 +128,48 @@ fn photons_inside_a_dielectric_are_totally_reflected_beyond_the_critical_angle()
         ..TraceOptions::default()
     };
     let map = trace_photons(&scene, &Bvh::build(&scene), &options, &NoProgress).unwrap();
-    let records = map.records();
-    let (mut reflected, mut transmitted) = (0u64, 0u64);
-    for pair in records.windows(2) {
+    let (mut reflected, mut met) = (0u64, 0u64);
+    for pair in map.records().windows(2) {
         if pair[0].bounce == 1 && pair[0].surface == interface && pair[1].bounce == 2 {
             if pair[1].surface == below {
                 reflected += 1;
+                met += 1;
             } else if pair[1].surface == above {
-                transmitted += 1;
+                met += 1;
             }
         }
     }
-    let met = reflected + transmitted;
-    assert!(met > n / 3, "{met} photons met the interface");
-    // cos θ_max: the quad's edge seen from 0.5 m below its centre, at 50 m.
-    let mu_min = 0.5 / (0.5f64 * 0.5 + 50.0 * 50.0).sqrt();
-    let steps = 100_000;
-    let expected = (0..steps)
-        .map(|i| {
-            let mu = mu_min + (1.0 - mu_min) * (i as f64 + 0.5) / steps as f64;
-            reflectance_from_inside(mu, f64::from(IOR))
-        })
-        .sum::<f64>()
-        / steps as f64;
-    let share = reflected as f64 / met as f64;
-    let sigma = (expected * (1.0 - expected) / met as f64).sqrt();
-    eprintln!("reflected {share:.4} of {met}, expected {expected:.4} (sigma {sigma:.4})");
-    assert!(
-        (share - expected).abs() <= 5.0 * sigma,
-        "reflected {share} where Fresnel gives {expected}"
-    );
+    check_share("photons", reflected, met, n);
+}
+
+/// DETP's ray set: the same, its segments after one on the interface.
+#[test]
+fn detp_rays_inside_a_dielectric_are_totally_reflected_beyond_the_critical_angle() {
+    let scene = submerged_light();
+    let mesh = |name: &str| scene.meshes().iter().position(|m| m.name == name).unwrap() as u32;
+    let (interface, above, below) = (mesh("interface"), mesh("above"), mesh("below"));
+    let n = 200_000u64;
+    let options = RaySetOptions {
+        photons: n,
+        seed: 5,
+        ..RaySetOptions::default()
+    };
+    let rays = trace_ray_set(&scene, &Bvh::build(&scene), &options).unwrap();
+    let (mut reflected, mut met) = (0u64, 0u64);
+    for ray in &rays.rays {
+        let hits: Vec<u32> = ray
+            .segments
+            .iter()
+            .filter_map(|s| s.hit.map(|h| h.mesh))
+            .collect();
+        if hits.len() >= 2 && hits[0] == interface {
+            if hits[1] == below {
+                reflected += 1;
+                met += 1;
+            } else if hits[1] == above {
+                met += 1;
+            }
+        }
+    }
+    check_share("DETP rays", reflected, met, n);
 }
