@@ -4,7 +4,7 @@
 //! meets the interface from its inside, with η's inverse and total internal
 //! reflection.
 
-use glam::{Affine3A, Vec3};
+use glam::Vec3;
 use lustre_density::{RaySetOptions, trace_ray_set};
 use lustre_geometry::light::PointLight;
 use lustre_geometry::{Bvh, Camera, Light, Material, MaterialModel, Mesh, Object, Rgb, Scene};
@@ -53,13 +53,7 @@ fn submerged_light() -> Scene {
         Mesh::flat("above", &square(1.0, 500.0), &triangles, 1),
         Mesh::flat("below", &square(-1.0, 500.0), &triangles, 1),
     ];
-    let objects = (0..meshes.len() as u32)
-        .map(|m| Object {
-            name: meshes[m as usize].name.clone(),
-            meshes: vec![m],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     let light = Light::Point(PointLight {
         position: Vec3::new(0.0, -0.5, 0.0),
         intensity: Rgb::ONE,

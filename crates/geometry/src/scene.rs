@@ -29,6 +29,21 @@ pub struct Object {
     pub transform: Affine3A,
 }
 
+impl Object {
+    /// One object per mesh, named as the mesh, at rest.
+    pub fn one_per_mesh(meshes: &[Mesh]) -> Vec<Self> {
+        meshes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| Self {
+                name: m.name.clone(),
+                meshes: vec![i as u32],
+                transform: Affine3A::IDENTITY,
+            })
+            .collect()
+    }
+}
+
 /// The shape of a surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SurfaceKind {

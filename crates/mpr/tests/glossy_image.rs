@@ -10,7 +10,7 @@
 
 mod support;
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
 use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Plane, Ray, Rgb, Scene};
 use lustre_mpr::frame::{AccumulatedSplats, FrameInputs};
@@ -110,13 +110,7 @@ fn floor_scene_with_back(
             3,
         ));
     }
-    let objects = (0..meshes.len() as u32)
-        .map(|m| Object {
-            name: meshes[m as usize].name.clone(),
-            meshes: vec![m],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     Scene::new(
         "glossy-floor",
         meshes,
@@ -731,13 +725,7 @@ fn slab_scene(thickness: f32, depth: f32) -> Scene {
         1,
     );
     let meshes = vec![slab, emitter];
-    let objects = (0..meshes.len() as u32)
-        .map(|m| Object {
-            name: meshes[m as usize].name.clone(),
-            meshes: vec![m],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     let camera = Camera::look_at(
         Vec3::new(0.0, 0.0, 0.6),
         Vec3::new(0.0, 0.0, -1.0),

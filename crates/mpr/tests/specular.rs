@@ -112,13 +112,7 @@ fn facing_mirrors() -> Scene {
         ),
         cube("cube", Vec3::new(0.2, 0.0, -0.3), 0.15, 1),
     ];
-    let objects = (0..meshes.len() as u32)
-        .map(|m| Object {
-            name: meshes[m as usize].name.clone(),
-            meshes: vec![m],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     let camera = Camera::look_at(
         Vec3::new(0.7, 0.1, 0.9),
         Vec3::new(-1.0, 0.0, -0.4),
@@ -372,13 +366,7 @@ fn slab_scene() -> Scene {
         p.z = 0.3 + (p.z - 0.3) * 0.025;
     }
     let meshes = vec![slab, cube("cube", Vec3::new(0.1, 0.05, -0.6), 0.2, 1)];
-    let objects = (0..meshes.len() as u32)
-        .map(|m| Object {
-            name: meshes[m as usize].name.clone(),
-            meshes: vec![m],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     let camera = Camera::look_at(
         Vec3::new(0.25, 0.2, 1.6),
         Vec3::new(0.0, 0.0, -0.6),
@@ -637,13 +625,7 @@ fn interface_scene() -> Scene {
         cube("below", Vec3::new(0.1, 0.05, -0.6), 0.2, 1),
         cube("above", Vec3::new(-0.1, 0.0, 1.1), 0.15, 1),
     ];
-    let objects = (0..meshes.len() as u32)
-        .map(|m| Object {
-            name: meshes[m as usize].name.clone(),
-            meshes: vec![m],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     let camera = Camera::look_at(
         Vec3::new(0.35, 0.25, 1.8),
         Vec3::new(0.0, 0.0, -0.6),

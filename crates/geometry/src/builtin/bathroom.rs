@@ -48,8 +48,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::mirrors::objects_of;
 use super::parts::{Outline, append, cuboid, cylinder, empty, frame_solid, lathe, quad};
+use crate::Object;
 use crate::{Camera, Material, MaterialModel, Mesh, Rgb, Scene};
 
 /// Index of refraction of the shower door (Diefenbach & Badler 1997, section 3).
@@ -256,7 +256,7 @@ pub fn bathroom() -> Scene {
         "bathroom",
         meshes.clone(),
         materials,
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         Vec::new(),
         camera,
     )

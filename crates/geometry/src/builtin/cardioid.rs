@@ -18,8 +18,8 @@ use std::f32::consts::TAU;
 
 use glam::Vec3;
 
-use super::mirrors::objects_of;
 use super::parts::quad;
+use crate::Object;
 use crate::light::PointLight;
 use crate::{Camera, Light, Material, MaterialModel, Mesh, Rgb, Scene};
 
@@ -97,7 +97,7 @@ pub fn cardioid_with(segments: usize) -> Scene {
         "cardioid",
         meshes.clone(),
         materials,
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         lights,
         camera,
     )

@@ -63,12 +63,12 @@ use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use glam::{Affine3A, Quat, Vec2, Vec3};
 
-use super::mirrors::objects_of;
 use super::parts::{
     Outline, append, cells, cuboid, cylinder, edges, empty, frame_solid, lathe, open_top,
     push_facing, push_triangle, quad, sphere, transformed, tube,
 };
 use super::pyramid::varnish;
+use crate::Object;
 use crate::camera_path::{CameraKeyframe, CameraPath};
 use crate::{Camera, Material, MaterialModel, Mesh, Rgb, Scene};
 
@@ -288,7 +288,7 @@ pub fn house() -> Scene {
         "house",
         meshes.clone(),
         materials(),
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         Vec::new(),
         camera,
     )

@@ -28,7 +28,7 @@
 //! The pedestal, the ball and the frames are closed manifolds with outward
 //! faces ([`CLOSED_MESHES`]).
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
 use super::parts::{cuboid, frame_solid, quad, sphere};
 use crate::{Camera, Material, MaterialModel, Mesh, Object, Rgb, Scene};
@@ -170,7 +170,7 @@ pub fn mirrors() -> Scene {
         "mirrors",
         meshes.clone(),
         materials,
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         Vec::new(),
         camera,
     )
@@ -196,17 +196,4 @@ fn mirror_frame(name: &str, side: f32, material: u32) -> Mesh {
         (Vec2::new(y0, -w), Vec2::new(y1, w)),
         material,
     )
-}
-
-/// One object per mesh, named as the mesh, at rest.
-pub(crate) fn objects_of(meshes: &[Mesh]) -> Vec<Object> {
-    meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect()
 }

@@ -14,8 +14,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::mirrors::objects_of;
 use super::parts::quad;
+use crate::Object;
 use crate::light::PointLight;
 use crate::{Camera, Light, Material, MaterialModel, Mesh, Rgb, Scene};
 
@@ -148,7 +148,7 @@ pub fn pool_at(t: f32) -> Scene {
         "pool",
         meshes.clone(),
         materials,
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         lights,
         camera,
     )

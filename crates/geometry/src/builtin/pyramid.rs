@@ -54,10 +54,10 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::mirrors::objects_of;
 use super::parts::{
     Outline, append, bezier, cells, cuboid, edges, empty, lathe, push_triangle, quad, tube,
 };
+use crate::Object;
 use crate::material::{ConductorFresnel, MicrofacetDistribution};
 use crate::{Camera, Material, MaterialModel, Mesh, Rgb, Scene};
 
@@ -209,7 +209,7 @@ pub fn pyramid() -> Scene {
         "pyramid",
         meshes.clone(),
         materials,
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         Vec::new(),
         camera,
     )

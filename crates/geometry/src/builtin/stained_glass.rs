@@ -19,8 +19,8 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use super::mirrors::objects_of;
 use super::parts::quad;
+use crate::Object;
 use crate::light::PointLight;
 use crate::{Camera, Light, Material, MaterialModel, Mesh, Rgb, Scene};
 
@@ -132,7 +132,7 @@ pub fn stained_glass_with(roughness: f32) -> Scene {
         "stained-glass",
         meshes.clone(),
         materials,
-        objects_of(&meshes),
+        Object::one_per_mesh(&meshes),
         lights,
         camera,
     )
