@@ -89,6 +89,11 @@ pub trait Brdf: Debug + Send + Sync {
     fn transmits(&self) -> bool {
         false
     }
+
+    /// Whether the surface scatters alike seen from either side, so a tracer may turn the frame to the side light arrives from; false for a model that tells the medium's inside (`z < 0`) from its outside, as a smooth dielectric does.
+    fn is_two_sided(&self) -> bool {
+        true
+    }
 }
 
 /// Number of strata per axis of [`sampled_albedo`] (32 × 32 = 1024 samples).

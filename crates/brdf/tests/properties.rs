@@ -335,3 +335,26 @@ fn lower_hemisphere_is_zero_for_reflection_models() {
         }
     }
 }
+
+/// Which models a tracer may turn towards the arriving light: every model
+/// but a smooth dielectric (its inside is `z < 0`), and a blend only when
+/// all its weighted parts are.
+#[test]
+fn only_models_with_an_inside_are_one_sided() {
+    let water = MaterialModel::Dielectric {
+        ior: 1.33,
+        transmittance: Rgb::ONE,
+    };
+    let diffuse = MaterialModel::Diffuse {
+        reflectance: Rgb::splat(0.5),
+    };
+    let blend = |weight: f32| MaterialModel::Blend {
+        weight,
+        first: Box::new(diffuse.clone()),
+        second: Box::new(water.clone()),
+    };
+    assert!(!from_model(&water).unwrap().is_two_sided());
+    assert!(from_model(&diffuse).unwrap().is_two_sided());
+    assert!(!from_model(&blend(0.5)).unwrap().is_two_sided());
+    assert!(from_model(&blend(0.0)).unwrap().is_two_sided());
+}

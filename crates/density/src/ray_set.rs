@@ -378,14 +378,7 @@ impl<'a> Tracer<'a> {
             // on its outside (the wound normal's), so that a ray inside the
             // medium meets η's inverse and total internal reflection (as in
             // lustre-photon's tracer).
-            let dielectric = matches!(
-                self.scene
-                    .materials()
-                    .get(hit.material as usize)
-                    .map(|m| &m.model),
-                Some(lustre_geometry::MaterialModel::Dielectric { .. })
-            );
-            let side = if dielectric || incoming.dot(hit.geometric_normal) >= 0.0 {
+            let side = if !brdf.is_two_sided() || incoming.dot(hit.geometric_normal) >= 0.0 {
                 1.0
             } else {
                 -1.0

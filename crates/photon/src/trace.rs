@@ -392,19 +392,12 @@ impl<'a> PhotonTracer<'a> {
             // the outside (the wound normal's side), so a photon inside the
             // medium arrives with `wi.z < 0` and meets η's inverse and total
             // internal reflection; every other surface is two-sided.
-            let outside = matches!(
-                self.scene
-                    .materials()
-                    .get(hit.material as usize)
-                    .map(|m| &m.model),
-                Some(lustre_geometry::MaterialModel::Dielectric { .. })
-            );
             let frame = self.frame_at(
                 &hit,
-                if outside {
-                    hit.geometric_normal
-                } else {
+                if brdf.is_two_sided() {
                     incoming
+                } else {
+                    hit.geometric_normal
                 },
             );
             let wi = frame.to_local(incoming);

@@ -116,4 +116,8 @@ impl Brdf for SmoothDielectric {
     fn transmits(&self) -> bool {
         true
     }
+
+    fn is_two_sided(&self) -> bool {
+        false
+    }
 }

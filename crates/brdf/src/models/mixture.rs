@@ -143,4 +143,10 @@ impl Brdf for Mixture {
             .iter()
             .any(|(w, b)| *w > 0.0 && b.transmits())
     }
+
+    fn is_two_sided(&self) -> bool {
+        self.components
+            .iter()
+            .all(|(w, b)| *w <= 0.0 || b.is_two_sided())
+    }
 }
