@@ -42,8 +42,9 @@
 //!
 //! Surfaces are two-sided: the shading normal is flipped to the side the
 //! photon arrives from. Planar surfaces use their [`crate::PlanarFrame`]
-//! (tangent `u_axis`); curved ones the interpolated shading normal. A smooth
-//! dielectric is the exception: its frame stays on its outside (the side of
+//! (tangent `u_axis`); curved ones the interpolated shading normal. A model
+//! that is not two-sided ([`lustre_brdf::Brdf::is_two_sided`]: a smooth
+//! dielectric) is the exception: its frame stays on its outside (the side of
 //! the triangles' wound normal), so that a photon inside the medium leaves
 //! it with η's inverse or is totally reflected (the pool's water traps a
 //! good part of the light its floor sends up).
