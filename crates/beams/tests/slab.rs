@@ -7,7 +7,7 @@
 
 mod support;
 
-use glam::{Affine3A, Vec3};
+use glam::Vec3;
 use lustre_beams::{BeamKind, BeamSet, BuildOptions, ScatterMaterial};
 use lustre_geometry::light::PointLight;
 use lustre_geometry::{Camera, Light, Material, MaterialModel, Mesh, Object, Rgb, Scene};
@@ -81,15 +81,7 @@ fn slab_scene() -> Scene {
         1,
     );
     let meshes = vec![slab, floor];
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(m, mesh)| Object {
-            name: mesh.name.clone(),
-            meshes: vec![m as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     Scene::new(
         "closed-slab",
         meshes,

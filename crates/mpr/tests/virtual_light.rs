@@ -624,15 +624,7 @@ fn stained_glass_through_mirrors_matches_the_unfolded_paths() {
         4.0 * y,
         wall,
     ));
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| lustre_geometry::Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: glam::Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = lustre_geometry::Object::one_per_mesh(&meshes);
     let camera = Camera::look_at(
         Vec3::new(0.0, 1.2, 0.6),
         Vec3::new(0.0, 1.0, 4.0),

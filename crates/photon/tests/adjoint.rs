@@ -11,7 +11,7 @@
 //! lustre-brdf's `eval` in the radiance order `f(wi = to light, wo = to
 //! viewer)`.
 
-use glam::{Affine3A, Vec3};
+use glam::Vec3;
 use lustre_brdf::{BoxedBrdf, from_model};
 use lustre_geometry::light::PointLight;
 use lustre_geometry::material::MaterialModel;
@@ -66,15 +66,7 @@ fn scene() -> Scene {
         1,
     );
     let meshes = vec![floor, wall];
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     Scene::new(
         "phong-floor",
         meshes,

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 use lustre_geometry::light::PointLight;
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::texture::Texture;
@@ -46,15 +46,7 @@ fn box_with_floor(floor: Material) -> Scene {
         "the floor faces up"
     );
     let meshes = vec![walls, floor_mesh];
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     Scene::new(
         "textured-floor-box",
         meshes,

@@ -180,15 +180,7 @@ fn box_scene(
             large_box_material,
         ),
     ];
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     let camera = Camera::look_at(Vec3::new(0.0, 0.0, 3.9), Vec3::ZERO, Vec3::Y, 39.3077);
     Scene::new(name, meshes, materials, objects, Vec::new(), camera)
         .and_then(|scene| scene.with_mobile("small-box", small_box_path()))

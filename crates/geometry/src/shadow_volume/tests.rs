@@ -12,15 +12,7 @@ use crate::{Bvh, Camera, Material, Mesh, Object, Ray, Rgb, intersect_triangle};
 
 /// A scene with one object per mesh, a point light at `light`.
 fn scene_of(meshes: Vec<Mesh>, light: Vec3) -> Scene {
-    let objects = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect();
+    let objects = Object::one_per_mesh(&meshes);
     Scene::new(
         "test",
         meshes,

@@ -1,23 +1,10 @@
 //! Scenes with known answers for the photon tests.
 #![allow(dead_code)]
 
-use glam::{Affine3A, Vec3};
+use glam::Vec3;
 use lustre_geometry::light::PointLight;
 use lustre_geometry::material::MaterialModel;
 use lustre_geometry::{Camera, Light, Material, Mesh, Object, Rgb, Scene};
-
-/// One object per mesh, identity transforms.
-fn objects(meshes: &[Mesh]) -> Vec<Object> {
-    meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| Object {
-            name: m.name.clone(),
-            meshes: vec![i as u32],
-            transform: Affine3A::IDENTITY,
-        })
-        .collect()
-}
 
 /// A square diffuse floor of half-size `half` in the plane y = 0 facing +y, albedo `rho`, lit by an isotropic point light of intensity `intensity` at height `height` above the origin.
 pub fn point_over_plane(half: f32, height: f32, rho: f32, intensity: f32) -> Scene {
@@ -33,7 +20,7 @@ pub fn point_over_plane(half: f32, height: f32, rho: f32, intensity: f32) -> Sce
         "point-over-plane",
         meshes.clone(),
         vec![Material::diffuse("floor", Rgb::splat(rho))],
-        objects(&meshes),
+        Object::one_per_mesh(&meshes),
         vec![Light::Point(PointLight {
             position: Vec3::new(0.0, height, 0.0),
             intensity: Rgb::splat(intensity),
@@ -86,7 +73,7 @@ pub fn furnace(albedo: Rgb, light_at: Vec3) -> Scene {
                 reflectance: albedo,
             },
         )],
-        objects(&meshes),
+        Object::one_per_mesh(&meshes),
         vec![Light::Point(PointLight {
             position: light_at,
             intensity: Rgb::ONE,
