@@ -189,17 +189,21 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
         .enumerate()
         .flat_map(|(id, surface)| {
             let material = &scene.materials()[surface.material as usize];
-            let plane = match (planar(surface), &material.model) {
-                (Some(plane), _) => plane,
-                // A wavy dielectric (the pool's water): one interface at
-                // its mean plane where it is nearly flat.
-                (None, MaterialModel::Dielectric { .. }) if slabs[id].is_none() => {
-                    match nearly_planar(&corners(surface)) {
-                        Some(plane) => plane,
-                        None => return Vec::new(),
-                    }
-                }
-                (None, _) => return Vec::new(),
+            // A wavy dielectric (the pool's water) is one interface at its
+            // mean plane where it is nearly flat; other curved surfaces make
+            // no image. The corners are gathered once, for specular surfaces.
+            let curved_interface =
+                matches!(material.model, MaterialModel::Dielectric { .. }) && slabs[id].is_none();
+            let specular = matches!(
+                material.model,
+                MaterialModel::Mirror { .. } | MaterialModel::Dielectric { .. }
+            );
+            if !specular || (planar(surface).is_none() && !curved_interface) {
+                return Vec::new();
+            }
+            let corners = corners(surface);
+            let Some(plane) = planar(surface).or_else(|| nearly_planar(&corners)) else {
+                return Vec::new();
             };
             match material.model {
                 MaterialModel::Mirror { reflectance } => vec![SpecularFace {
@@ -207,7 +211,7 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                     plane,
                     kind: SpecularKind::Mirror,
                     factor: Vec3::new(reflectance.x, reflectance.y, reflectance.z),
-                    corners: corners(surface),
+                    corners,
                 }],
                 MaterialModel::Dielectric { ior, transmittance } => {
                     let thickness = slabs[id].map(|slab| slab.thickness);
@@ -222,10 +226,9 @@ pub fn specular_faces(scene: &Scene) -> Vec<SpecularFace> {
                                 thickness,
                             },
                             factor: tint * (1.0 - f0) * (1.0 - f0),
-                            corners: corners(surface),
+                            corners,
                         }],
                         None => {
-                            let corners = corners(surface);
                             // A curved face's plane on each side moved to its
                             // farthest corner behind it, so that the view
                             // through it clips every one of its triangles away.
@@ -645,18 +648,14 @@ impl SpecularPass {
                 SpecularKind::Interface { .. } if record.reflectance[3] > 0.0 => {
                     record.behind = factor;
                 }
-                SpecularKind::Interface { .. } => {
+                kind => {
                     *record = GpuFace {
                         reflectance: factor,
                         behind: factor,
-                        plane: face.plane.to_vec4().to_array(),
-                    };
-                }
-                _ => {
-                    *record = GpuFace {
-                        reflectance: factor,
-                        behind: factor,
-                        plane: [0.0; 4],
+                        plane: match kind {
+                            SpecularKind::Interface { .. } => face.plane.to_vec4().to_array(),
+                            _ => [0.0; 4],
+                        },
                     };
                 }
             }
