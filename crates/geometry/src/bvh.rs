@@ -3,15 +3,16 @@
 //! triangles tested four at once ([`crate::wide_bvh`]): closest hit and any
 //! hit, single rays and rayon-parallel batches, and box queries.
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance};
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
+use crate::material::MaterialId;
 use crate::ray::{Hit, LeanHit, Ray};
-use crate::scene::{Scene, TriangleId, WorldTriangle};
+use crate::scene::{Scene, SurfaceId, TriangleId, WorldTriangle};
 use crate::wide_bvh::WideBvh;
 
 /// A BVH over every triangle of a scene in world space.
@@ -23,8 +24,68 @@ use crate::wide_bvh::WideBvh;
 pub struct Bvh {
     /// The eight-wide BVH (`None` when there is no triangle).
     wide: Option<WideBvh>,
-    /// The shading attributes, by scene-wide triangle id.
+    /// The world-space triangles, by scene-wide triangle id.
     triangles: Vec<WorldTriangle>,
+    /// What [`Bvh::closest_hit`]'s record reads of each triangle, by scene-wide id.
+    shading: Vec<Shading>,
+    /// Each triangle's material.
+    materials: Materials,
+}
+
+/// The part of a triangle's record that the leaves do not hold, in one cache
+/// line: corner normals, corner UVs and surface (the geometric normal comes
+/// from the edges the triangle test has just read, the material from
+/// [`Materials`]). On incoherent rays over a large scene the record's read is
+/// a cache miss that evicts the traversal's nodes; one 64-byte line instead
+/// of the two or three of a 104-byte [`WorldTriangle`] (BENCHMARKS.md).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Shading {
+    normals: [Vec3; 3],
+    uvs: [Vec2; 3],
+    surface: SurfaceId,
+}
+
+/// Each triangle's material, looked up the cheapest way the triangles allow.
+#[derive(Debug, Clone)]
+enum Materials {
+    /// By surface id: every surface's triangles share one material (a
+    /// scene's surfaces lie within one mesh, which has one material), and the
+    /// ids are dense; a small table the caches keep.
+    BySurface(Vec<MaterialId>),
+    /// By scene-wide triangle id, for any other triangles.
+    ByTriangle(Vec<MaterialId>),
+}
+
+impl Materials {
+    /// The lookup for `triangles`.
+    fn new(triangles: &[WorldTriangle]) -> Self {
+        let by_triangle = || Self::ByTriangle(triangles.iter().map(|t| t.material).collect());
+        let Some(last) = triangles.iter().map(|t| t.surface as usize).max() else {
+            return by_triangle();
+        };
+        if last >= triangles.len() {
+            return by_triangle();
+        }
+        let mut table = vec![None; last + 1];
+        for t in triangles {
+            match table[t.surface as usize] {
+                None => table[t.surface as usize] = Some(t.material),
+                Some(m) if m == t.material => {}
+                Some(_) => return by_triangle(),
+            }
+        }
+        Self::BySurface(table.into_iter().map(|m| m.unwrap_or(0)).collect())
+    }
+
+    /// The material of triangle `id` on surface `surface`.
+    #[inline]
+    fn get(&self, id: TriangleId, surface: SurfaceId) -> MaterialId {
+        match self {
+            Self::BySurface(table) => table[surface as usize],
+            Self::ByTriangle(list) => list[id as usize],
+        }
+    }
 }
 
 /// The ray direction the triangle test takes: -0.0 components as +0.0, as
@@ -44,10 +105,21 @@ impl Bvh {
     ///
     /// Panics with a billion triangles or more (the leaf encoding's limit).
     pub fn from_triangles(triangles: Vec<WorldTriangle>) -> Self {
+        let shading = triangles
+            .iter()
+            .map(|t| Shading {
+                normals: t.normals,
+                uvs: t.uvs,
+                surface: t.surface,
+            })
+            .collect();
+        let materials = Materials::new(&triangles);
         if triangles.is_empty() {
             return Self {
                 wide: None,
                 triangles,
+                shading,
+                materials,
             };
         }
         let tris: Vec<Triangle> = triangles
@@ -79,6 +151,8 @@ impl Bvh {
         Self {
             wide: WideBvh::from_bvh2(&bvh2, &corners),
             triangles,
+            shading,
+            materials,
         }
     }
 
@@ -109,23 +183,19 @@ impl Bvh {
         }
     }
 
-    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`: [`Bvh::closest_hit_lean`] and [`Bvh::hit_record`].
+    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`: [`Bvh::closest_hit_lean`] and [`Bvh::hit_record`], the record built from the leaf's edges and the triangle's 64-byte [`Shading`] line.
     ///
-    /// Each hit that becomes the closest so far has the first and last words
-    /// of its 104-byte record loaded as it is found, so that the record's
-    /// cache misses (on incoherent rays over a large scene, a third of the
-    /// query's time) overlap the rest of the traversal instead of following
-    /// it: about 6 % more incoherent and 8 % more coherent rays a second on
-    /// the Embree comparison's scene (BENCHMARKS.md), the same hits.
+    /// Each hit that becomes the closest so far has its shading line loaded
+    /// as it is found, so that the record's cache miss (on incoherent rays
+    /// over a large scene) overlaps the rest of the traversal instead of
+    /// following it (BENCHMARKS.md). The same record as `hit_record`, bit for bit.
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        let (triangle, h) = self
-            .wide
-            .as_ref()?
-            .closest_hit(ray, test_direction(ray), |id| {
-                let tri = &self.triangles[id as usize];
-                std::hint::black_box((tri.positions[0].x, tri.material));
-            })?;
-        Some(self.hit_record(
+        let wide = self.wide.as_ref()?;
+        let (triangle, h, lane) = wide.closest_hit(ray, test_direction(ray), |id| {
+            std::hint::black_box(self.shading[id as usize].surface);
+        })?;
+        let shading = &self.shading[triangle as usize];
+        Some(self.record(
             ray,
             LeanHit {
                 triangle,
@@ -133,12 +203,14 @@ impl Bvh {
                 u: h.u,
                 v: h.v,
             },
+            wide.edge_cross(lane),
+            shading,
         ))
     }
 
     /// The closest intersection's distance, triangle and barycentrics, without the shading record (eight-wide BVH traversal, children nearest first, and Möller-Trumbore four triangles at a time).
     pub fn closest_hit_lean(&self, ray: &Ray) -> Option<LeanHit> {
-        let (triangle, h) = self
+        let (triangle, h, _) = self
             .wide
             .as_ref()?
             .closest_hit(ray, test_direction(ray), |_| {})?;
@@ -152,22 +224,30 @@ impl Bvh {
 
     /// The full hit record of `hit` on `ray` (a hit this BVH returned for that ray): position, geometric and interpolated shading normals, interpolated UVs, surface and material.
     pub fn hit_record(&self, ray: &Ray, hit: LeanHit) -> Hit {
-        let tri = &self.triangles[hit.triangle as usize];
+        let [p0, p1, p2] = self.triangles[hit.triangle as usize].positions;
+        let shading = &self.shading[hit.triangle as usize];
+        self.record(ray, hit, (p1 - p0).cross(p2 - p0), shading)
+    }
+
+    /// The record of `hit` given its triangle's unnormalised geometric normal `e1 × e2` and shading line.
+    #[inline]
+    fn record(&self, ray: &Ray, hit: LeanHit, edge_cross: Vec3, shading: &Shading) -> Hit {
         let w = 1.0 - hit.u - hit.v;
-        let [p0, p1, p2] = tri.positions;
-        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        let shading = w * tri.normals[0] + hit.u * tri.normals[1] + hit.v * tri.normals[2];
+        let geometric_normal = edge_cross.normalize_or_zero();
+        let [n0, n1, n2] = shading.normals;
+        let [uv0, uv1, uv2] = shading.uvs;
+        let normal = w * n0 + hit.u * n1 + hit.v * n2;
         Hit {
             triangle: hit.triangle,
-            surface: tri.surface,
-            material: tri.material,
+            surface: shading.surface,
+            material: self.materials.get(hit.triangle, shading.surface),
             t: hit.t,
             u: hit.u,
             v: hit.v,
             position: ray.at(hit.t),
             geometric_normal,
-            shading_normal: shading.try_normalize().unwrap_or(geometric_normal),
-            uv: w * tri.uvs[0] + hit.u * tri.uvs[1] + hit.v * tri.uvs[2],
+            shading_normal: normal.try_normalize().unwrap_or(geometric_normal),
+            uv: w * uv0 + hit.u * uv1 + hit.v * uv2,
         }
     }
 

@@ -14,11 +14,19 @@
 //! that one reached about 0.37 (camera rays) and 0.38 (random rays) of
 //! Embree's rays per second with its full hit records, and it missed hits
 //! closer than `10⁻⁴` to the origin and some grazing hits along flat boxes;
-//! this one reaches about 0.9 and 0.6 with full records, 1.3 and 0.9 with
-//! [`crate::Bvh::closest_hit_lean`] (BENCHMARKS.md, `cargo xtask bench embree`).
+//! this one reaches about 0.75 and 0.55–0.7 with full records, 0.97 and
+//! 0.72–0.86 with [`crate::Bvh::closest_hit_lean`] (an Intel Xeon with
+//! AVX-512, where Embree uses it; BENCHMARKS.md, `cargo xtask bench embree`).
 //! obvhs still builds the binary tree.
+//!
+//! The queries are compiled twice, for the x86-64 baseline and for AVX2, and
+//! the `multiversion` crate picks one at run time: writing the
+//! dispatch ourselves would take `unsafe` (calling a `#[target_feature]`
+//! function), which the workspace forbids; the crate's macro keeps it out of
+//! our code.
 
 use glam::{Vec3, Vec3A, Vec4};
+use multiversion::multiversion;
 use obvhs::bvh2::Bvh2;
 
 use crate::ray::{Ray, TriangleHit, Triangles4, intersect_triangles4};
@@ -84,6 +92,13 @@ struct Leaf {
     triangles: Triangles4,
     /// Their scene-wide ids, by lane (beside them, in the cache lines the test reads).
     ids: [u32; 4],
+}
+
+/// Where a triangle sits in the leaves: its block and lane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Lane {
+    block: u32,
+    lane: u32,
 }
 
 /// The wide BVH.
@@ -251,8 +266,29 @@ impl WideBvh {
         &self,
         ray: &Ray,
         direction: Vec3A,
+        on_best: impl FnMut(u32),
+    ) -> Option<(u32, TriangleHit, Lane)> {
+        closest_hit_dispatch(self, ray, direction, on_best)
+    }
+
+    /// The unnormalised geometric normal `e1 × e2` of the triangle in `lane`, from the edges the
+    /// triangle test read (the same operations as `(p1 - p0).cross(p2 - p0)` on its corners, so
+    /// the same bits).
+    pub(crate) fn edge_cross(&self, lane: Lane) -> Vec3 {
+        let tris = &self.leaves[lane.block as usize].triangles;
+        let k = lane.lane as usize;
+        let edge = |e: &[Vec4; 3]| Vec3::new(e[0][k], e[1][k], e[2][k]);
+        edge(&tris.e1).cross(edge(&tris.e2))
+    }
+
+    /// [`WideBvh::closest_hit`]'s body, compiled once per instruction set by [`closest_hit_dispatch`].
+    #[inline(always)]
+    fn closest_hit_body(
+        &self,
+        ray: &Ray,
+        direction: Vec3A,
         mut on_best: impl FnMut(u32),
-    ) -> Option<(u32, TriangleHit)> {
+    ) -> Option<(u32, TriangleHit, Lane)> {
         let mut best: Option<((usize, usize), TriangleHit)> = None;
         self.traverse::<true>(ray, direction, |block, mask, t, u, v, t_max| {
             // Lane by lane, as one triangle after the other would.
@@ -276,12 +312,29 @@ impl WideBvh {
             false
         });
         // The id once, for the closest hit only.
-        best.map(|((block, k), h)| (self.leaves[block].ids[k], h))
+        best.map(|((block, k), h)| {
+            let lane = Lane {
+                block: block as u32,
+                lane: k as u32,
+            };
+            (self.leaves[block].ids[k], h, lane)
+        })
     }
 
     /// Whether a Möller-Trumbore hit at `t` in `[t_min, t_max)` (the CWBVH's any-hit interval: `t_max` itself excluded) is one `accept` takes (scene-wide id, distance); each hit met is offered until one is taken.
     #[inline]
     pub(crate) fn any_hit_where(
+        &self,
+        ray: &Ray,
+        direction: Vec3A,
+        accept: impl FnMut(u32, f32) -> bool,
+    ) -> bool {
+        any_hit_dispatch(self, ray, direction, accept)
+    }
+
+    /// [`WideBvh::any_hit_where`]'s body, compiled once per instruction set by [`any_hit_dispatch`].
+    #[inline(always)]
+    fn any_hit_body(
         &self,
         ray: &Ray,
         direction: Vec3A,
@@ -508,6 +561,32 @@ impl WideBvh {
     }
 }
 
+/// [`WideBvh::closest_hit`] compiled for the base instruction set and for
+/// AVX2, picked at run time: the same operations in the same order (Rust does
+/// not fuse or reorder floating-point arithmetic), so the same hits bit for
+/// bit; the AVX2 copy's three-operand encoding makes camera rays about a
+/// tenth faster (BENCHMARKS.md).
+#[multiversion(targets("x86_64+avx2"))]
+fn closest_hit_dispatch<F: FnMut(u32)>(
+    bvh: &WideBvh,
+    ray: &Ray,
+    direction: Vec3A,
+    on_best: F,
+) -> Option<(u32, TriangleHit, Lane)> {
+    bvh.closest_hit_body(ray, direction, on_best)
+}
+
+/// [`WideBvh::any_hit_where`] compiled per instruction set, as [`closest_hit_dispatch`].
+#[multiversion(targets("x86_64+avx2"))]
+fn any_hit_dispatch<F: FnMut(u32, f32) -> bool>(
+    bvh: &WideBvh,
+    ray: &Ray,
+    direction: Vec3A,
+    accept: F,
+) -> bool {
+    bvh.any_hit_body(ray, direction, accept)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -594,7 +673,7 @@ mod tests {
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             let got = wide
                 .closest_hit(&ray, Vec3A::from(direction), |_| {})
-                .map(|(id, h)| (id, h.t));
+                .map(|(id, h, _)| (id, h.t));
             assert_eq!(got, expected, "{ray:?}");
         }
     }

@@ -234,6 +234,51 @@ fn hit_record_interpolates_normals_and_uvs() {
 }
 
 #[test]
+fn hit_records_carry_each_triangles_surface_and_material() {
+    // A row of unit triangles along x, one per id, hit at their centroids
+    // from above; surfaces and materials assigned three ways: surfaces that
+    // each have one material (looked up by surface), a surface with two
+    // materials, and sparse surface ids (both looked up by triangle).
+    let row = |surface: &dyn Fn(u32) -> u32, material: &dyn Fn(u32) -> u32| -> Vec<WorldTriangle> {
+        (0..12u32)
+            .map(|i| {
+                let x = 2.0 * i as f32;
+                WorldTriangle {
+                    positions: [
+                        Vec3::new(x, 0.0, 0.0),
+                        Vec3::new(x + 1.0, 0.0, 0.0),
+                        Vec3::new(x, 1.0, 0.0),
+                    ],
+                    normals: [Vec3::Z; 3],
+                    uvs: [Vec2::ZERO; 3],
+                    surface: surface(i),
+                    material: material(i),
+                }
+            })
+            .collect()
+    };
+    let cases = [
+        row(&|i| i / 3, &|i| 10 + i / 3),
+        row(&|i| i / 3, &|i| i % 2),
+        row(&|i| u32::MAX - i, &|i| 5 * i),
+    ];
+    for triangles in cases {
+        let bvh = Bvh::from_triangles(triangles.clone());
+        for (id, tri) in triangles.iter().enumerate() {
+            let centroid = (tri.positions[0] + tri.positions[1] + tri.positions[2]) / 3.0;
+            let ray = Ray::new(centroid + Vec3::Z, -Vec3::Z);
+            let h = bvh.closest_hit(&ray).unwrap();
+            assert_eq!(
+                (h.triangle, h.surface, h.material),
+                (id as u32, tri.surface, tri.material)
+            );
+            let lean = bvh.closest_hit_lean(&ray).unwrap();
+            assert_eq!(bvh.hit_record(&ray, lean), h);
+        }
+    }
+}
+
+#[test]
 fn t_interval_is_respected() {
     let tri = [
         Vec3::new(-1.0, -1.0, 0.0),
