@@ -77,6 +77,24 @@ fn median(list: &Value) -> Result<f64> {
     Ok(crate::bench::median(v))
 }
 
+/// Our query `key`'s rays a second over Embree's on the ray set `set`, each
+/// round's medians against each other (a round's two sides run back to back,
+/// so a slow spell of a shared machine falls on both more often than across
+/// rounds): the rounds' ratios, lowest to highest, as `a, b, c`.
+fn round_ratios(ours: &[Value], embree: &[Value], set: &str, key: &str) -> Result<String> {
+    let mut ratios = ours
+        .iter()
+        .zip(embree)
+        .map(|(o, e)| Ok(median(&e["sets"][set]["wall_ns"])? / median(&o["sets"][set][key])?))
+        .collect::<Result<Vec<f64>>>()?;
+    ratios.sort_by(f64::total_cmp);
+    Ok(ratios
+        .iter()
+        .map(|r| format!("{r:.2}"))
+        .collect::<Vec<_>>()
+        .join(", "))
+}
+
 /// The first of several runs' JSON results with every list of times under
 /// `sets` replaced by the concatenation of all runs' lists, and `build_ms` by
 /// its median.
@@ -209,7 +227,8 @@ pub fn run() -> Result<String> {
          pixel of a 1000×1000 image; incoherent: one million rays from random points inside the \
          grid's bounds in uniformly random directions; `t` in `[0, ∞)`. Each figure is the median \
          of {} passes over all rays of the set ({RUNS} per round), wall time of the query calls only (rays and arrays \
-         prepared before, BVHs built before). Ours: `Bvh::closest_hit` (the full hit record: \
+         prepared before, BVHs built before); *each round*: the ratio of one round's medians \
+         (its {RUNS} passes on each side), lowest to highest. Ours: `Bvh::closest_hit` (the full hit record: \
          position, normals, UVs, surface, material) and `Bvh::closest_hit_lean` (distance, triangle \
          id, barycentrics), called ray by ray in a loop, on the eight-wide BVH; *before*: the full \
          record as `closest_hit` made it until the eight-wide BVH, rebuilt in the example from \
@@ -231,9 +250,9 @@ pub fn run() -> Result<String> {
     );
     let _ = writeln!(
         s,
-        "| rays | before | ours, full record | ours, lean | Embree | before / Embree | full / Embree | lean / Embree | Embree CPU / wall |"
+        "| rays | before | ours, full record | ours, lean | Embree | before / Embree | full / Embree | lean / Embree | full / Embree, each round | lean / Embree, each round | Embree CPU / wall |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut checks = String::new();
     let mut floors = Vec::new();
     for set in ["coherent", "incoherent"] {
@@ -249,9 +268,11 @@ pub fn run() -> Result<String> {
                 .map_or(0.0, |a| a.iter().filter_map(Value::as_f64).sum::<f64>())
         };
         let cpu = sum(&e["cpu_ns"]) / sum(&e["wall_ns"]);
+        let full_rounds = round_ratios(&ours_rounds, &embree_rounds, set, "full_ns")?;
+        let lean_rounds = round_ratios(&ours_rounds, &embree_rounds, set, "lean_ns")?;
         let _ = writeln!(
             s,
-            "| {set} | {:.2} M/s | {:.2} M/s | {:.2} M/s | {:.2} M/s | {:.2} | {:.2} | {:.2} | {cpu:.2} |",
+            "| {set} | {:.2} M/s | {:.2} M/s | {:.2} M/s | {:.2} M/s | {:.2} | {:.2} | {:.2} | {full_rounds} | {lean_rounds} | {cpu:.2} |",
             before / 1e6,
             full / 1e6,
             lean / 1e6,
@@ -311,6 +332,24 @@ pub fn run() -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn round_ratios_compare_each_rounds_medians() {
+        let ours = [
+            serde_json::json!({"sets": {"c": {"full_ns": [40.0, 20.0, 30.0]}}}),
+            serde_json::json!({"sets": {"c": {"full_ns": [10.0, 10.0, 50.0]}}}),
+        ];
+        let embree = [
+            serde_json::json!({"sets": {"c": {"wall_ns": [15.0, 15.0, 15.0]}}}),
+            serde_json::json!({"sets": {"c": {"wall_ns": [1.0, 9.0, 8.0]}}}),
+        ];
+        // Round 1: 15 / 30 = 0.5; round 2: 8 / 10 = 0.8.
+        assert_eq!(
+            round_ratios(&ours, &embree, "c", "full_ns").unwrap(),
+            "0.50, 0.80"
+        );
+        assert!(round_ratios(&ours, &embree, "c", "lean_ns").is_err());
+    }
 
     #[test]
     fn agreement_counts_hits_triangles_and_distances() {
