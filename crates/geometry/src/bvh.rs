@@ -183,7 +183,7 @@ impl Bvh {
         }
     }
 
-    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`: [`Bvh::closest_hit_lean`] and [`Bvh::hit_record`], the record built from the leaf's edges and the triangle's 64-byte [`Shading`] line.
+    /// The closest intersection with `t` in `[ray.t_min, ray.t_max]`: [`Bvh::closest_hit_lean`] and [`Bvh::hit_record`], the record built from the leaf's edges and the triangle's 64-byte shading line.
     ///
     /// Each hit that becomes the closest so far has its shading line loaded
     /// as it is found, so that the record's cache miss (on incoherent rays
