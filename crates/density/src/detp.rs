@@ -24,16 +24,15 @@ pub struct Disc {
 impl Disc {
     /// Whether a ray segment crosses the disc from its front (section 1.2, "rays intersecting a given disc"): it travels against the normal, reaches the plane between its origin and its end (within `slack` past the end, for a segment that ends on the very surface the disc lies on), at a point no farther than `r` from the centre.
     pub fn is_crossed_by(&self, segment: &RaySegment, slack: f32) -> bool {
+        // Every test is evaluated and combined with `&` rather than `&&`: the same answer (a comparison with NaN is
+        // false either way), without the data-dependent branches that disc indexing's candidates mispredict.
         let denom = segment.direction.dot(self.normal);
-        if !(denom < 0.0) {
-            return false;
-        }
         let t = (self.centre - segment.origin).dot(self.normal) / denom;
-        if !(t >= 0.0 && t <= self.reach(segment) + slack) {
-            return false;
-        }
         let p = segment.origin + t * segment.direction;
-        p.distance_squared(self.centre) <= self.radius * self.radius
+        (denom < 0.0)
+            & (t >= 0.0)
+            & (t <= self.reach(segment) + slack)
+            & (p.distance_squared(self.centre) <= self.radius * self.radius)
     }
 
     /// How far along a segment the disc may be crossed: its length, plus its artifact-control extension when it ends on the disc's own mesh (section 1.2.1, concave surfaces).

@@ -50,7 +50,7 @@ use lustre_geometry::sampling::Frame;
 use lustre_geometry::{MaterialId, MeshId, Rgb, Scene};
 use rayon::prelude::*;
 
-use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
+use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, mean_edge};
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::quadtree::{QuadTree, QuadTreeOptions, SummaryTree};
@@ -707,7 +707,11 @@ impl GlossyVertices {
             discs,
             DiscSetOptions {
                 slack,
-                acceleration: Acceleration::default(),
+                // Tuned for the edges of the meshes the discs lie on.
+                acceleration: Acceleration::tuned_disc_index(
+                    radius,
+                    mean_edge(scene, meshes.iter().copied()),
+                ),
                 pretest: PreTest::None,
             },
         )?;
@@ -720,12 +724,7 @@ impl GlossyVertices {
         if let Some(limit) = max_rays {
             // One segment in 64 first, so that lists far too large fail before their crossings are gathered (12 bytes each).
             let sample: Vec<RaySegment> = segments.iter().step_by(64).copied().collect();
-            let estimate: u64 = 64
-                * set
-                    .crossings(&sample)?
-                    .iter()
-                    .map(|c| c.len() as u64)
-                    .sum::<u64>();
+            let estimate = 64 * set.crossings(&sample)?.pairs() as u64;
             if estimate > 2 * limit {
                 return Err(DensityError::TooManyRays {
                     rays: estimate,
@@ -734,15 +733,16 @@ impl GlossyVertices {
             }
         }
         let crossings = set.crossings(&segments)?;
-        let total: u64 = crossings.iter().map(|c| c.len() as u64).sum();
+        let total = crossings.pairs() as u64;
         if let Some(limit) = max_rays.filter(|&limit| total > limit) {
             return Err(DensityError::TooManyRays { rays: total, limit });
         }
         let built = set
             .discs()
             .par_iter()
-            .zip(crossings.par_iter())
-            .map(|(&disc, ids)| {
+            .enumerate()
+            .map(|(d, &disc)| {
+                let ids = &crossings[d];
                 // DiscSet::new checked the discs, and its crossings are exactly the segments `is_crossed_by` accepts.
                 GlossyVertex::from_crossing(
                     disc,

@@ -90,7 +90,7 @@ mod update;
 mod vertex_lit;
 mod world;
 
-pub use accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, SegmentGrid};
+pub use accel::{Acceleration, Crossings, DiscSet, DiscSetOptions, PreTest, SegmentGrid};
 pub use detp::{Disc, detp, segment_meets_box};
 pub use error::{DensityError, Result};
 pub use impact_count::{impact_count, triangle_irradiance};

@@ -9,7 +9,8 @@
 //! list) keeps a 512-bit mask of the cells of a coarse 8 × 8 × 8 grid over
 //! the scene that its path passes, and a pass visits only the paths whose
 //! masks meet the cells of its region: 64 bytes a path instead of all its
-//! segments. The masks are conservative: every point of a segment, followed
+//! segments, stored word by word (a word is one slice of the grid along
+//! `z`), so that a pass reads only the words its region has cells in. The masks are conservative: every point of a segment, followed
 //! as far as any of those tests follows it (its length, or its hit plus its
 //! artifact-control extension, plus the crossing test's slack), lies in a
 //! marked cell, so the passes find exactly the rays they found by visiting
@@ -55,8 +56,9 @@ pub struct PathCells {
     pad: f32,
     /// The slack the disc crossing test adds past a segment's end.
     slack: f32,
-    /// One mask per primary ray, in the ray set's order.
-    masks: Vec<Mask>,
+    /// The masks of every primary ray, in the ray set's order, word by word: `words[w][i]` is word `w` of path
+    /// `i`'s mask, so that a pass reads only the words its region has cells in (a slice of the grid along `z`).
+    words: Vec<Vec<u64>>,
 }
 
 impl PathCells {
@@ -77,10 +79,14 @@ impl PathCells {
             cell: Vec3::ONE,
             pad: 1e-3 * size + 1e-5 * scale,
             slack: slack.max(0.0),
-            masks: Vec::new(),
+            words: Vec::new(),
         };
         cells.cell = (cells.hi - cells.lo) / CELLS_PER_AXIS as f32;
-        cells.masks = rays.rays.par_iter().map(|p| cells.path_mask(p)).collect();
+        let masks: Vec<Mask> = rays.rays.par_iter().map(|p| cells.path_mask(p)).collect();
+        cells.words = (0..ALL_CELLS.len())
+            .into_par_iter()
+            .map(|w| masks.iter().map(|m| m[w]).collect())
+            .collect();
         cells
     }
 
@@ -91,9 +97,11 @@ impl PathCells {
             .par_iter()
             .filter_map(|&i| rays.rays.get(i).map(|p| (i, self.path_mask(p))))
             .collect();
-        self.masks.resize(rays.rays.len(), ALL_CELLS);
-        for (i, mask) in fresh {
-            self.masks[i] = mask;
+        for (w, words) in self.words.iter_mut().enumerate() {
+            words.resize(rays.rays.len(), ALL_CELLS[w]);
+            for (i, mask) in &fresh {
+                words[*i] = mask[w];
+            }
         }
     }
 
@@ -114,9 +122,14 @@ impl PathCells {
 
     /// Whether the path of primary ray `primary` may pass through `region` (true for a path it has no mask for).
     pub fn may_meet(&self, primary: usize, region: &Region) -> bool {
-        self.masks
-            .get(primary)
-            .is_none_or(|m| m.iter().zip(&region.0).any(|(a, b)| a & b != 0))
+        if self.words[0].len() <= primary {
+            return true;
+        }
+        // Only the words the region has cells in are read.
+        self.words
+            .iter()
+            .zip(&region.0)
+            .any(|(words, &r)| r != 0 && words[primary] & r != 0)
     }
 
     /// The cells a path passes.
@@ -315,11 +328,11 @@ mod tests {
         cells.refresh(&rays, &[5]);
         assert!(cells.may_meet(5, &region));
         let fresh = PathCells::new(bounds, 0.0, &rays);
-        assert_eq!(cells.masks, fresh.masks);
+        assert_eq!(cells.words, fresh.words);
         // New paths get masks too (a grown ray set).
         rays.rays.push(rays.rays[5].clone());
         cells.refresh(&rays, &[rays.rays.len() - 1]);
-        assert_eq!(cells.masks.len(), rays.rays.len());
+        assert!(cells.words.iter().all(|w| w.len() == rays.rays.len()));
         assert!(cells.may_meet(rays.rays.len() - 1, &region));
     }
 }

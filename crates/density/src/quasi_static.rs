@@ -10,7 +10,7 @@ use lustre_photon::trace::scene_brdfs;
 use rayon::prelude::*;
 
 use crate::VertexIrradiance;
-use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest};
+use crate::accel::{Acceleration, DiscSet, DiscSetOptions, PreTest, mean_edge};
 use crate::artifact::{ArtifactOptions, inward_directions, mesh_triangles, reachable_area_near};
 use crate::detp::{Disc, segment_meets_box};
 use crate::error::{DensityError, Result};
@@ -331,9 +331,12 @@ impl QuasiStatic {
         };
         let t1 = Instant::now();
         if let State::Detp { radius, .. } = sim.state {
-            let acceleration = options
-                .acceleration
-                .unwrap_or_else(|| Acceleration::tuned_disc_index(radius, mean_edge(&sim.scene)));
+            let acceleration = options.acceleration.unwrap_or_else(|| {
+                Acceleration::tuned_disc_index(
+                    radius,
+                    mean_edge(&sim.scene, 0..sim.scene.meshes().len() as MeshId),
+                )
+            });
             let set_options = DiscSetOptions {
                 slack: sim.slack,
                 acceleration,
@@ -914,21 +917,4 @@ fn point_disc(p: &EstimationPoint, radius: f32) -> Disc {
         radius: if p.normal == Vec3::ZERO { 0.0 } else { radius },
         mesh: Some(p.mesh),
     }
-}
-
-/// Mean edge length of the scene's triangles, the `typical_edge` of [`Acceleration::tuned_disc_index`] (section 2.7).
-fn mean_edge(scene: &Scene) -> f32 {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for (m, mesh) in scene.meshes().iter().enumerate() {
-        let positions = scene.world_positions(m as MeshId);
-        for idx in &mesh.indices {
-            for k in 0..3 {
-                let a = positions[idx[k] as usize];
-                let b = positions[idx[(k + 1) % 3] as usize];
-                sum += a.distance(b) as f64;
-                n += 1;
-            }
-        }
-    }
-    if n == 0 { 1.0 } else { (sum / n as f64) as f32 }
 }

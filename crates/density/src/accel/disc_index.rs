@@ -10,6 +10,16 @@
 //! traverse it, so segments run in parallel without contention, as the
 //! paper notes. Boxes can be refitted in place for discs that move
 //! rigidly, keeping the tree's topology.
+//!
+//! Beyond the paper, each node also bounds its discs' normals with a cone
+//! (an axis and the largest angle to it). A disc is crossed only from its
+//! front, against its normal, so a segment travelling within `90° − angle`
+//! of the axis (less a margin of a milliradian, far above the `f32`
+//! rounding of the ray–disc test's `d·n`) can cross none of the node's
+//! discs: the photons leaving a surface skip the discs round their origin
+//! without testing them one by one.
+
+use glam::DVec3;
 
 use super::InvariantError;
 use super::envelope::{Box3, SegmentEnvelope};
@@ -17,11 +27,68 @@ use super::envelope::{Box3, SegmentEnvelope};
 /// Largest allowed `max_depth` of the disc index (section 2.7; bounds the traversal stack).
 pub const MAX_DEPTH_LIMIT: u32 = 64;
 
+/// Angle (radians) added to a normal cone before it rejects a segment: a rejected segment's true `d·n` is then at least `|d| sin(10⁻³)`, thousands of times the `f32` rounding of the ray–disc test's back-face check.
+const CONE_MARGIN: f64 = 1e-3;
+
+/// The normals of a node's discs, all within an angle of `axis` (beyond the paper, see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct NormalCone {
+    /// Unit axis (zero when the normals have no useful axis).
+    axis: DVec3,
+    /// `sin(angle + margin)`: a segment with `d·axis ≥ min_cos |d|` travels along every normal; infinite when no segment does.
+    min_cos: f64,
+}
+
+impl NormalCone {
+    /// A cone that rejects nothing.
+    const ANY: Self = Self {
+        axis: DVec3::ZERO,
+        min_cos: f64::INFINITY,
+    };
+
+    /// The cone round the unit normals of `items` (discs without a box are left out).
+    fn of(items: &[u32], boxes: &[Option<Box3>], normals: &[DVec3]) -> Self {
+        let normal = |i: &u32| {
+            let i = *i as usize;
+            boxes[i].and(normals.get(i).copied())
+        };
+        let sum: DVec3 = items.iter().filter_map(normal).sum();
+        let len = sum.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return Self::ANY;
+        }
+        let axis = sum / len;
+        let mut angle = 0.0f64;
+        for n in items.iter().filter_map(normal) {
+            let cos = n.dot(axis) / n.length();
+            angle = angle.max(cos.clamp(-1.0, 1.0).acos());
+        }
+        let bound = angle + CONE_MARGIN;
+        if !(bound < std::f64::consts::FRAC_PI_2) {
+            return Self::ANY;
+        }
+        Self {
+            axis,
+            min_cos: bound.sin(),
+        }
+    }
+
+    /// Whether a segment travels along every normal of the cone, so that it crosses none of its discs from the front.
+    #[inline]
+    fn rejects(&self, s: &SegmentEnvelope) -> bool {
+        s.direction.dot(self.axis) >= self.min_cos * s.len
+    }
+}
+
 /// One node: its box and either two children (the left one right after it) or a run of `items`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
     /// Box of every disc below.
     bounds: Box3,
+    /// Cone of every disc normal below (beyond the paper).
+    cone: NormalCone,
+    /// First and one-past-last index into `items` of the discs below.
+    span: (u32, u32),
     /// Leaf: first item; inner node: index of the right child.
     first: u32,
     /// Leaf: number of items (at least 1); inner node: 0.
@@ -46,8 +113,13 @@ pub struct DiscIndex {
 }
 
 impl DiscIndex {
-    /// Builds the index over the discs that have a box (`boxes[i]` is disc `i`'s box, `None` for a disc nothing crosses) (section 2.7).
-    pub(crate) fn build(boxes: &[Option<Box3>], max_per_leaf: usize, max_depth: u32) -> Self {
+    /// Builds the index over the discs that have a box (`boxes[i]` is disc `i`'s box, `None` for a disc nothing crosses; `normals[i]` its unit normal) (section 2.7).
+    pub(crate) fn build(
+        boxes: &[Option<Box3>],
+        normals: &[DVec3],
+        max_per_leaf: usize,
+        max_depth: u32,
+    ) -> Self {
         let mut items: Vec<u32> = boxes
             .iter()
             .enumerate()
@@ -62,7 +134,7 @@ impl DiscIndex {
         };
         if !items.is_empty() {
             let n = items.len();
-            index.split(boxes, &mut items, 0, n, 0);
+            index.split(boxes, normals, &mut items, 0, n, 0);
         }
         index.items = items;
         index
@@ -72,6 +144,7 @@ impl DiscIndex {
     fn split(
         &mut self,
         boxes: &[Option<Box3>],
+        normals: &[DVec3],
         items: &mut [u32],
         start: usize,
         end: usize,
@@ -83,7 +156,7 @@ impl DiscIndex {
             .filter_map(|&i| boxes[i as usize])
             .fold(Box3::EMPTY, Box3::union);
         let (lo, hi) = slice.iter().filter_map(|&i| boxes[i as usize]).fold(
-            (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
             |(lo, hi), b| {
                 let c = b.centre();
                 (lo.min(c), hi.max(c))
@@ -92,6 +165,8 @@ impl DiscIndex {
         let node = self.nodes.len();
         self.nodes.push(Node {
             bounds,
+            cone: NormalCone::of(slice, boxes, normals),
+            span: (start as u32, end as u32),
             first: start as u32,
             count: slice.len() as u32,
             depth,
@@ -110,18 +185,20 @@ impl DiscIndex {
         let mid = slice.len() / 2;
         let key = |i: &u32| boxes[*i as usize].map_or(0.0, |b| b.centre()[axis]);
         slice.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
-        self.split(boxes, items, start, start + mid, depth + 1);
-        let right = self.split(boxes, items, start + mid, end, depth + 1);
+        self.split(boxes, normals, items, start, start + mid, depth + 1);
+        let right = self.split(boxes, normals, items, start + mid, end, depth + 1);
         self.nodes[node].first = right as u32;
         self.nodes[node].count = 0;
         node
     }
 
     /// Recomputes every node's box from the discs' new boxes, keeping the tree (section 2.6: a rigid mobile keeps its spatial coherence); `boxes` must say `Some` for the same discs as at build.
-    pub(crate) fn refit(&mut self, boxes: &[Option<Box3>]) {
+    pub(crate) fn refit(&mut self, boxes: &[Option<Box3>], normals: &[DVec3]) {
         self.refitted = true;
         for n in (0..self.nodes.len()).rev() {
             let node = self.nodes[n];
+            let (a, b) = (node.span.0 as usize, node.span.1 as usize);
+            self.nodes[n].cone = NormalCone::of(&self.items[a..b], boxes, normals);
             self.nodes[n].bounds = if node.count > 0 {
                 let (a, b) = (node.first as usize, (node.first + node.count) as usize);
                 self.items[a..b]
@@ -136,7 +213,7 @@ impl DiscIndex {
         }
     }
 
-    /// Calls `f` with every disc whose leaf the padded segment reaches (section 2.7), each disc at most once.
+    /// Calls `f` with every disc whose leaf the padded segment reaches (section 2.7), each disc at most once, less those of nodes whose normal cone the segment travels along (it crosses none of them from the front).
     #[inline]
     pub(crate) fn for_each_candidate(&self, s: &SegmentEnvelope, mut f: impl FnMut(u32)) {
         if self.nodes.is_empty() {
@@ -148,7 +225,7 @@ impl DiscIndex {
             top -= 1;
             let n = stack[top];
             let node = &self.nodes[n as usize];
-            if !s.meets_box(&node.bounds) {
+            if node.cone.rejects(s) || !s.meets_box(&node.bounds) {
                 continue;
             }
             if node.count > 0 {
@@ -162,6 +239,44 @@ impl DiscIndex {
                 top += 2;
             }
         }
+    }
+
+    /// Calls `f(first, count)` with every leaf the padded segment reaches whose normal cone it does not travel along, as [`DiscIndex::for_each_candidate`] does for their discs one by one.
+    #[inline]
+    pub(crate) fn for_each_leaf(&self, s: &SegmentEnvelope, mut f: impl FnMut(u32, u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [0u32; MAX_DEPTH_LIMIT as usize + 2];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = stack[top];
+            let node = &self.nodes[n as usize];
+            if node.cone.rejects(s) || !s.meets_box(&node.bounds) {
+                continue;
+            }
+            if node.count > 0 {
+                f(node.first, node.count);
+            } else {
+                stack[top] = node.first;
+                stack[top + 1] = n + 1;
+                top += 2;
+            }
+        }
+    }
+
+    /// The disc indices, leaf by leaf.
+    pub(crate) fn items(&self) -> &[u32] {
+        &self.items
+    }
+
+    /// Every leaf as `(first, count)` into [`DiscIndex::items`], in order.
+    pub(crate) fn leaves(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.nodes
+            .iter()
+            .filter(|n| n.count > 0)
+            .map(|n| (n.first, n.count))
     }
 
     /// Number of nodes of the disc index (section 2.7).
@@ -180,7 +295,11 @@ impl DiscIndex {
     }
 
     /// Checks the index (section 2.7): every disc with a box in exactly one leaf and the others in none, each node's box holding its discs' boxes and its children's, leaves no larger than `max_per_leaf` unless at `max_depth` or unsplittable (at build: a refit keeps the build's leaves), no node deeper than `max_depth`.
-    pub(crate) fn validate(&self, boxes: &[Option<Box3>]) -> Result<(), InvariantError> {
+    pub(crate) fn validate(
+        &self,
+        boxes: &[Option<Box3>],
+        normals: &[DVec3],
+    ) -> Result<(), InvariantError> {
         let fail = |message: String| InvariantError {
             structure: "disc index",
             message,
@@ -215,10 +334,31 @@ impl DiscIndex {
                     node.depth, self.max_depth
                 )));
             }
+            let (a, b) = (node.span.0 as usize, node.span.1 as usize);
+            if a > b || b > self.items.len() {
+                return Err(fail(format!("node {n} spans items {a}..{b}")));
+            }
+            if node.cone.min_cos.is_finite() {
+                // Every normal below within the cone's angle of its axis (the margin excluded).
+                let angle = node.cone.min_cos.clamp(-1.0, 1.0).asin() - CONE_MARGIN;
+                for &i in &self.items[a..b] {
+                    let (Some(Some(_)), Some(normal)) =
+                        (boxes.get(i as usize), normals.get(i as usize))
+                    else {
+                        continue;
+                    };
+                    let cos = normal.dot(node.cone.axis) / normal.length();
+                    if !(cos >= angle.cos() - 1e-9) {
+                        return Err(fail(format!(
+                            "node {n}'s normal cone misses disc {i}'s normal {normal}"
+                        )));
+                    }
+                }
+            }
             if node.count > 0 {
                 let (a, b) = (node.first as usize, (node.first + node.count) as usize);
-                if b > self.items.len() {
-                    return Err(fail(format!("leaf {n} runs past the items")));
+                if b > self.items.len() || node.span != (node.first, node.first + node.count) {
+                    return Err(fail(format!("leaf {n} runs past the items or its span")));
                 }
                 leaf_items += node.count as usize;
                 for &i in &self.items[a..b] {
@@ -248,6 +388,10 @@ impl DiscIndex {
                 let (l, r) = (n + 1, node.first as usize);
                 if r <= l || r >= self.nodes.len() {
                     return Err(fail(format!("node {n} has children {l} and {r}")));
+                }
+                let (left, right) = (self.nodes[l].span, self.nodes[r].span);
+                if left.0 != node.span.0 || left.1 != right.0 || right.1 != node.span.1 {
+                    return Err(fail(format!("node {n}'s span is not its children's")));
                 }
                 for c in [l, r] {
                     if self.nodes[c].depth != node.depth + 1 {

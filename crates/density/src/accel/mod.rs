@@ -23,7 +23,9 @@
 //! are kept (section 2.6: a rigid mobile stays coherent), only boxes are
 //! refitted.
 
+mod crossings;
 mod envelope;
+mod packed;
 
 pub mod disc_index;
 pub mod pretest;
@@ -34,12 +36,14 @@ use glam::DVec3;
 use lustre_geometry::{MeshId, Scene};
 use rayon::prelude::*;
 
+pub use crossings::Crossings;
 pub use disc_index::DiscIndex;
 pub use pretest::PreTest;
 use ray_cache::RayCache;
 pub use segment_grid::SegmentGrid;
 
 use envelope::{Box3, DiscEnvelope, SegmentEnvelope, check_disc, disc_envelope, segment_envelope};
+use packed::{PackedLeaves, SegmentLanes};
 use pretest::PreTests;
 
 use crate::detp::Disc;
@@ -81,20 +85,20 @@ pub enum Acceleration {
 }
 
 impl Default for Acceleration {
-    /// Disc indexing with leaves of 16 discs: the fastest full and incremental estimate of the `detp` bench at every radius (section 2.7).
+    /// Disc indexing with leaves of 32 discs: the fastest full estimate of the `detp` bench's leaf sweep at every radius (section 2.7), see [`Acceleration::tuned_disc_index`].
     fn default() -> Self {
         Self::DiscIndex {
-            max_per_leaf: 16,
+            max_per_leaf: 32,
             max_depth: 32,
         }
     }
 }
 
 impl Acceleration {
-    /// Disc indexing with the leaf size and depth tuned for discs of `radius` on a mesh of edge `typical_edge` (section 2.7, tables 2.2–2.4): `max_per_leaf = 8` when `r / e < 0.75`, else 16, and `max_depth = 32`. From the `detp` bench's leaf sweep (`leaf_r…` groups, Cornell box at 0.05 m edges, 100 000 photons; leaves of 1 to 64 discs): the fastest leaves were 8–16 at `r/e = 0.5` (8 and 16 within 0.1 %), 16 at `r/e = 1` and at `r/e = 2`, each within 5 % of 8 and 32. The optimum moves far less than the paper's 20 → 1 600 because this index partitions the discs instead of the space (no disc is copied into both children), and no leaf reached depth 32, so the depth limit of section 2.7 is not needed here.
+    /// Disc indexing with the leaf size and depth tuned for discs of `radius` on a mesh of edge `typical_edge` (section 2.7, tables 2.2–2.4): `max_per_leaf = 32` when `r / e < 4`, else 64, and `max_depth = 32`. From the `detp` bench's leaf sweep (`leaf_r…` groups, Cornell box at 0.05 m edges, 100 000 photons; leaves of 1 to 64 discs) with the leaves' discs tested eight at a time (the `packed` module): the fastest leaves were 32 at `r/e` = 0.5, 1 and 2 (64 within 3 %, 16 within 5–9 %); on the `dense_glossy` bench (one thread), its glossy discs (r = 0.213 m on a blob of 0.03 m edges) took 9 % less time with leaves of 64 than of 32, its diffuse discs (0.071 m) 3–7 % less with 32 than with 16 or 64. Before the packed test the optimum was 8–16. It moves far less than the paper's 20 → 1 600 because this index partitions the discs instead of the space (no disc is copied into both children), and no leaf reached depth 32, so the depth limit of section 2.7 is not needed here.
     pub fn tuned_disc_index(radius: f32, typical_edge: f32) -> Self {
         let ratio = radius / typical_edge;
-        let max_per_leaf = if ratio < 0.75 { 8 } else { 16 };
+        let max_per_leaf = if ratio < 4.0 { 32 } else { 64 };
         Self::DiscIndex {
             max_per_leaf,
             max_depth: 32,
@@ -143,6 +147,45 @@ impl Sink for Vec<u32> {
     }
 }
 
+/// Mean edge length of the triangles of `meshes` (world space), the `typical_edge` of [`Acceleration::tuned_disc_index`] (section 2.7); 1 without a triangle. Meshes the scene does not have are skipped.
+pub fn mean_edge(scene: &Scene, meshes: impl IntoIterator<Item = MeshId>) -> f32 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for m in meshes {
+        let Some(mesh) = scene.meshes().get(m as usize) else {
+            continue;
+        };
+        let positions = scene.world_positions(m);
+        for idx in &mesh.indices {
+            for k in 0..3 {
+                let a = positions[idx[k] as usize];
+                let b = positions[idx[(k + 1) % 3] as usize];
+                sum += a.distance(b) as f64;
+                n += 1;
+            }
+        }
+    }
+    if n == 0 { 1.0 } else { (sum / n as f64) as f32 }
+}
+
+/// Fails when segment indices would not fit in `u32`.
+fn check_segment_count(segments: &[RaySegment]) -> Result<()> {
+    if u32::try_from(segments.len()).is_err() {
+        return Err(DensityError::InvalidOption {
+            option: "segments",
+            message: format!("{} segments are more than 2^32", segments.len()),
+        });
+    }
+    Ok(())
+}
+
+/// The envelopes' unit normals, zero for a disc without an envelope (the disc index's normal cones).
+fn normals(envelopes: &[Option<DiscEnvelope>]) -> Vec<DVec3> {
+    envelopes
+        .iter()
+        .map(|e| e.map_or(DVec3::ZERO, |e| e.normal))
+        .collect()
+}
+
 /// Segments per parallel task of disc indexing.
 const SEGMENT_CHUNK: usize = 1024;
 /// Parallel runs of the ray cache per rayon thread.
@@ -171,6 +214,8 @@ pub struct DiscSet {
     order_bounds: Option<Box3>,
     /// The disc index (section 2.7), with [`Acceleration::DiscIndex`].
     index: Option<DiscIndex>,
+    /// The index's leaves packed for the branch-free test, without a pre-test (beyond the paper).
+    packed: Option<PackedLeaves>,
     /// The pre-test triangles (section 2.8).
     pretests: PreTests,
 }
@@ -230,7 +275,12 @@ impl DiscSet {
             Acceleration::DiscIndex {
                 max_per_leaf,
                 max_depth,
-            } => Some(DiscIndex::build(&boxes, max_per_leaf, max_depth)),
+            } => Some(DiscIndex::build(
+                &boxes,
+                &normals(&envelopes),
+                max_per_leaf,
+                max_depth,
+            )),
             _ => None,
         };
         let order_bounds = matches!(
@@ -239,7 +289,7 @@ impl DiscSet {
         )
         .then_some(bounds);
         let pretests = PreTests::new(options.pretest, &envelopes, near_limit);
-        Ok(Self {
+        let mut set = Self {
             discs,
             envelopes,
             boxes,
@@ -249,8 +299,23 @@ impl DiscSet {
             order,
             order_bounds,
             index,
+            packed: None,
             pretests,
-        })
+        };
+        set.pack();
+        Ok(set)
+    }
+
+    /// Packs the disc index's leaves when the ray–disc test runs without a pre-test (section 2.8's tests stay one disc at a time).
+    fn pack(&mut self) {
+        self.packed = match (&self.index, self.options.pretest) {
+            (Some(index), PreTest::None) => Some(PackedLeaves::new(
+                &self.discs,
+                index.items(),
+                index.leaves(),
+            )),
+            _ => None,
+        };
     }
 
     /// Checks the discs and computes their envelopes.
@@ -319,15 +384,21 @@ impl DiscSet {
                 max_depth,
             } = self.options.acceleration
             {
-                self.index = Some(DiscIndex::build(&self.boxes, max_per_leaf, max_depth));
+                self.index = Some(DiscIndex::build(
+                    &self.boxes,
+                    &normals(&self.envelopes),
+                    max_per_leaf,
+                    max_depth,
+                ));
             }
         } else {
             self.order_bounds = None;
             if let Some(index) = &mut self.index {
-                index.refit(&self.boxes);
+                index.refit(&self.boxes, &normals(&self.envelopes));
             }
         }
         self.pretests = PreTests::new(self.options.pretest, &self.envelopes, near_limit);
+        self.pack();
         Ok(())
     }
 
@@ -372,8 +443,14 @@ impl DiscSet {
     }
 
     /// Per disc, the ascending indices of the segments crossing it (section 1.2: the rays intersecting the disc).
-    pub fn crossings(&self, segments: &[RaySegment]) -> Result<Vec<Vec<u32>>> {
-        self.gather(segments)
+    pub fn crossings(&self, segments: &[RaySegment]) -> Result<Crossings> {
+        if let (Acceleration::DiscIndex { .. }, Some(index)) =
+            (self.options.acceleration, &self.index)
+        {
+            check_segment_count(segments)?;
+            return Ok(self.indexed_crossings(index, segments));
+        }
+        self.gather(segments).map(Crossings::from_lists)
     }
 
     /// [`DiscSet::accumulate`] over the live segments of a [`SegmentGrid`] (ids in place of indices: sums in ascending id), each disc looking only at the grid cells its box overlaps (beyond the paper; section 2.5.2, the mobile object's discs against all segments). Fails when `out` does not have one entry per disc, or the grid was built for a smaller slack.
@@ -388,9 +465,9 @@ impl DiscSet {
     }
 
     /// [`DiscSet::crossings`] over the live segments of a [`SegmentGrid`], by id (beyond the paper; section 2.5.2).
-    pub fn crossings_grid(&self, grid: &SegmentGrid) -> Result<Vec<Vec<u32>>> {
+    pub fn crossings_grid(&self, grid: &SegmentGrid) -> Result<Crossings> {
         self.check_grid(grid)?;
-        Ok(self.gridded(grid))
+        Ok(Crossings::from_lists(self.gridded(grid)))
     }
 
     /// Fails unless `len` is the number of discs.
@@ -446,12 +523,7 @@ impl DiscSet {
 
     /// What every disc gathers from its crossing segments, with the chosen acceleration.
     fn gather<S: Sink>(&self, segments: &[RaySegment]) -> Result<Vec<S>> {
-        if u32::try_from(segments.len()).is_err() {
-            return Err(DensityError::InvalidOption {
-                option: "segments",
-                message: format!("{} segments are more than 2^32", segments.len()),
-            });
-        }
+        check_segment_count(segments)?;
         Ok(match self.options.acceleration {
             Acceleration::BruteForce => self.brute_force(segments),
             Acceleration::RayCache { .. } => self.cached(segments),
@@ -547,11 +619,26 @@ impl DiscSet {
         out
     }
 
-    /// Disc indexing (section 2.7): each segment through the index in parallel, then the pairs bucketed by disc in segment order.
+    /// Disc indexing (section 2.7): the crossings, then each disc's sink fed in segment order.
     fn indexed<S: Sink>(&self, segments: &[RaySegment]) -> Vec<S> {
         let Some(index) = &self.index else {
             return self.brute_force(segments);
         };
+        let crossings = self.indexed_crossings(index, segments);
+        (0..self.discs.len())
+            .into_par_iter()
+            .map(|i| {
+                let mut sink = S::default();
+                for &j in &crossings[i] {
+                    sink.add(j, &segments[j as usize]);
+                }
+                sink
+            })
+            .collect()
+    }
+
+    /// Disc indexing (section 2.7): each segment through the index in parallel, then the pairs bucketed by disc in segment order.
+    fn indexed_crossings(&self, index: &DiscIndex, segments: &[RaySegment]) -> Crossings {
         let envelopes = self.segment_envelopes(segments);
         let pairs: Vec<Vec<(u32, u32)>> = envelopes
             .par_chunks(SEGMENT_CHUNK)
@@ -562,11 +649,20 @@ impl DiscSet {
                     let Some(e) = e else { continue };
                     let j = c * SEGMENT_CHUNK + k;
                     let s = &segments[j];
-                    index.for_each_candidate(e, |i| {
-                        if self.crosses(i as usize, Some(e), s) {
-                            pairs.push((i, j as u32));
-                        }
-                    });
+                    if let Some(packed) = &self.packed {
+                        let lanes = SegmentLanes::new(s, self.options.slack);
+                        index.for_each_leaf(e, |first, count| {
+                            packed.for_each_crossed(first, count, &lanes, |i| {
+                                pairs.push((i, j as u32));
+                            });
+                        });
+                    } else {
+                        index.for_each_candidate(e, |i| {
+                            if self.crosses(i as usize, Some(e), s) {
+                                pairs.push((i, j as u32));
+                            }
+                        });
+                    }
                 }
                 pairs
             })
@@ -585,16 +681,7 @@ impl DiscSet {
             ids[next[i as usize]] = j;
             next[i as usize] += 1;
         }
-        (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let mut sink = S::default();
-                for &j in &ids[start[i]..start[i + 1]] {
-                    sink.add(j, &segments[j as usize]);
-                }
-                sink
-            })
-            .collect()
+        Crossings::from_parts(start, ids)
     }
 
     /// Each disc against the segments of the grid cells its box overlaps (beyond the paper), in parallel over discs: each candidate tested once (a per-thread mailbox), the crossing ones then summed in id order.
@@ -706,7 +793,7 @@ impl DiscSet {
             }
         }
         if let Some(index) = &self.index {
-            index.validate(&self.boxes)?;
+            index.validate(&self.boxes, &normals(&self.envelopes))?;
         }
         self.pretests
             .validate(&self.envelopes)
