@@ -43,10 +43,12 @@ pub struct Region(Mask);
 /// Per primary ray, the cells of a coarse grid its path passes (beyond the paper, for figure 2.2 and section 2.5.2).
 #[derive(Debug, Clone)]
 pub struct PathCells {
-    /// The gridded box: the scene's box grown by a tenth of its largest extent on every side.
+    /// The box given at construction.
+    bounds: Aabb,
+    /// The gridded box: the box given at construction grown by a tenth of its largest extent on every side.
     lo: Vec3,
     hi: Vec3,
-    /// The box a region must lie in to be answered by cells: the scene's box grown by a twentieth, so that a
+    /// The box a region must lie in to be answered by cells: the given box grown by a twentieth, so that a
     /// segment's clipping to the gridded box is never close to a point it must keep.
     inner_lo: Vec3,
     inner_hi: Vec3,
@@ -62,7 +64,7 @@ pub struct PathCells {
 }
 
 impl PathCells {
-    /// The masks of every path of `rays` over a grid round `bounds` (the scene's box), for a crossing test with `slack`.
+    /// The masks of every path of `rays` over a grid round `bounds` (the scene's box, or the box the mobile objects can reach: the grid is finer the smaller it is, and only regions inside it are answered by cells), for a crossing test with `slack`.
     pub fn new(bounds: Aabb, slack: f32, rays: &RaySet) -> Self {
         let size = bounds.extent().max_element();
         let size = if size.is_finite() && size > 0.0 {
@@ -72,6 +74,7 @@ impl PathCells {
         };
         let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
         let mut cells = Self {
+            bounds,
             lo: bounds.min - Vec3::splat(0.1 * size),
             hi: bounds.max + Vec3::splat(0.1 * size),
             inner_lo: bounds.min - Vec3::splat(0.05 * size),
@@ -107,17 +110,27 @@ impl PathCells {
 
     /// The cells of the box `lo..=hi`; every cell when it is not wholly inside the grid's inner box (or not finite).
     pub fn region(&self, lo: Vec3, hi: Vec3) -> Region {
-        let (lo, hi) = (lo - Vec3::splat(self.pad), hi + Vec3::splat(self.pad));
-        let inside = lo.is_finite()
-            && hi.is_finite()
-            && lo.cmpge(self.inner_lo).all()
-            && hi.cmple(self.inner_hi).all();
-        if !inside {
+        if !self.covers(lo, hi) {
             return Region(ALL_CELLS);
         }
+        let (lo, hi) = (lo - Vec3::splat(self.pad), hi + Vec3::splat(self.pad));
         let mut mask = [0; ALL_CELLS.len()];
         self.mark_box(lo, hi, &mut mask);
         Region(mask)
+    }
+
+    /// The box the grid was built round.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Whether the box `lo..=hi` lies wholly inside the grid's inner box, so that its [`PathCells::region`] is cells rather than every cell.
+    pub fn covers(&self, lo: Vec3, hi: Vec3) -> bool {
+        let (lo, hi) = (lo - Vec3::splat(self.pad), hi + Vec3::splat(self.pad));
+        lo.is_finite()
+            && hi.is_finite()
+            && lo.cmpge(self.inner_lo).all()
+            && hi.cmple(self.inner_hi).all()
     }
 
     /// Whether the path of primary ray `primary` may pass through `region` (true for a path it has no mask for).

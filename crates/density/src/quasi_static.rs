@@ -5,7 +5,7 @@ use std::sync::{Mutex, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, DVec3, Vec3};
-use lustre_geometry::{MeshId, ObjectId, Rgb, Scene, triangle_area};
+use lustre_geometry::{Aabb, MeshId, ObjectId, Rgb, Scene, triangle_area};
 use lustre_photon::trace::scene_brdfs;
 use rayon::prelude::*;
 
@@ -295,9 +295,16 @@ impl QuasiStatic {
         let photosimulation = t0.elapsed();
         let points = EstimationPoints::new(&scene, &world);
         let slack = crate::accel::scene_slack(&scene);
-        let paths = world
-            .has_mobile()
-            .then(|| PathCells::new(scene.bounds(), slack, &rays));
+        let paths = world.has_mobile().then(|| {
+            let margin = match options.estimator {
+                Estimator::Detp { radius } => {
+                    options.glossy_radius.map_or(radius, |g| g.max(radius))
+                }
+                _ => 0.0,
+            } + slack;
+            let focus = reach_of_paths(&scene, mobile, margin).unwrap_or_else(|| scene.bounds());
+            PathCells::new(focus, slack, &rays)
+        });
         let state = match options.estimator {
             Estimator::ImpactCount => State::ImpactCount {
                 power: Vec::new(),
@@ -409,6 +416,16 @@ impl QuasiStatic {
         self.world.move_mobile(&self.scene);
         // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2).
         let moved = before.union(self.world.mobile_bounds());
+        if let Some(paths) = &self.paths
+            && !paths.covers(moved.min, moved.max)
+        {
+            // Moved off their paths' reach: cells over the whole scene from now on (every path when even those do
+            // not cover the move).
+            let bounds = self.scene.bounds();
+            if paths.bounds() != bounds {
+                self.paths = Some(PathCells::new(bounds, self.slack, &self.rays));
+            }
+        }
         let update = update_ray_set_where(
             &self.scene,
             &self.world,
@@ -892,6 +909,34 @@ fn add_impacts<'a>(power: &mut [DVec3], segments: impl Iterator<Item = &'a RaySe
             *p += sign * s.power.as_dvec3();
         }
     }
+}
+
+/// The box every point of the objects `mobile` stays in as they follow their paths (section 2.2.2: positions between keyframes interpolated linearly, rotations about the pivot), grown by `margin`; `None` when one of them has no path or no vertex. The pivot stays in its keyframes' box and every vertex within its rest distance from the pivot.
+fn reach_of_paths(scene: &Scene, mobile: &[ObjectId], margin: f32) -> Option<Aabb> {
+    let mut reach = Aabb::EMPTY;
+    for &object in mobile {
+        let path = &scene
+            .mobile_objects()
+            .iter()
+            .find(|m| m.object == object)?
+            .path;
+        let radius = scene
+            .objects()
+            .get(object as usize)?
+            .meshes
+            .iter()
+            .flat_map(|&m| &scene.meshes()[m as usize].positions)
+            .map(|p| p.distance(path.pivot()))
+            .reduce(f32::max)?;
+        let grow = Vec3::splat(radius * (1.0 + 1e-5) + margin);
+        for key in path.keyframes() {
+            reach = reach.union(Aabb {
+                min: key.translation - grow,
+                max: key.translation + grow,
+            });
+        }
+    }
+    (reach.min.is_finite() && reach.max.is_finite()).then_some(reach)
 }
 
 /// Whether each path (by index into the ray set) may pass through the box `lo..=hi`, by its cells in `paths`;

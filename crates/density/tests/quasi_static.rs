@@ -9,6 +9,7 @@ use lustre_density::{
     Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, photon_maps,
     photon_maps_radiance, trace_ray_set_in,
 };
+use lustre_geometry::animation::{Keyframe, ObjectPath, PathEnd};
 use lustre_geometry::meshing::subdivide;
 use lustre_geometry::{ObjectId, Rgb, Scene, builtin};
 use proptest::prelude::*;
@@ -606,4 +607,57 @@ fn glossy_radius_lists_follow_the_motion_under_artifact_control() {
         differ > compared / 2,
         "the glossy radius changed only {differ} of {compared}"
     );
+}
+
+/// The path cells over the reach of the mobile object's path (beyond the paper: a finer grid than one over the whole scene): frames along the small box's path, then one off it (the cells are rebuilt over the whole scene), each give the ray set a full trace of the pose gives and the irradiance a recomputation over it gives.
+#[test]
+fn frames_along_a_path_and_off_it_match_full_traces() {
+    let rest_scene = cornell(0.25);
+    let small = rest_scene.object_by_name("small-box").expect("object");
+    let positions =
+        &rest_scene.meshes()[rest_scene.objects()[small as usize].meshes[0] as usize].positions;
+    let (lo, hi) = positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let pivot = 0.5 * (lo + hi);
+    let keys = (0..=4)
+        .map(|k| {
+            let s = k as f32 / 4.0;
+            Keyframe::new(
+                s,
+                pivot + Vec3::new(-0.15 * s, 0.0, 0.1 * s),
+                Quat::from_rotation_y(0.6 * s),
+            )
+        })
+        .collect();
+    let path = ObjectPath::new(keys, PathEnd::Clamp)
+        .and_then(|p| p.with_pivot(pivot))
+        .expect("path");
+    let scene = rest_scene
+        .with_mobile("small-box", path.clone())
+        .expect("mobile");
+    let options = options(Estimator::Detp { radius: 0.15 });
+    let mut sim = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
+    let mut poses = path.frames(5);
+    poses.push(Affine3A::from_translation(Vec3::new(-0.6, 0.0, 0.0)) * poses[2]);
+    let mut fresh_world = World::new(&scene, &[small]).expect("world");
+    let mut fresh_scene = scene;
+    for (frame, &pose) in poses.iter().enumerate().skip(1) {
+        sim.set_pose(&[(small, pose)]).expect("frame");
+        fresh_scene.set_object_transform(small, pose).expect("pose");
+        fresh_world.move_mobile(&fresh_scene);
+        let full = trace_ray_set_in(&fresh_scene, &fresh_world, &options.rays).expect("full trace");
+        assert!(
+            sim.rays() == &full,
+            "frame {frame}: the updated ray set differs from a full trace"
+        );
+        let difference =
+            relative_difference(&sim.point_irradiance(), &sim.recompute_point_irradiance());
+        assert!(
+            difference < 1e-9,
+            "frame {frame}: incremental irradiance off by {difference}"
+        );
+    }
 }
