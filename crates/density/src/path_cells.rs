@@ -100,12 +100,15 @@ impl PathCells {
             .par_iter()
             .filter_map(|&i| rays.rays.get(i).map(|p| (i, self.path_mask(p))))
             .collect();
-        for (w, words) in self.words.iter_mut().enumerate() {
-            words.resize(rays.rays.len(), ALL_CELLS[w]);
-            for (i, mask) in &fresh {
-                words[*i] = mask[w];
-            }
-        }
+        self.words
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(w, words)| {
+                words.resize(rays.rays.len(), ALL_CELLS[w]);
+                for (i, mask) in &fresh {
+                    words[*i] = mask[w];
+                }
+            });
     }
 
     /// The cells of the box `lo..=hi`; every cell when it is not wholly inside the grid's inner box (or not finite).
