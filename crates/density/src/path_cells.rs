@@ -43,8 +43,6 @@ pub struct Region(Mask);
 /// Per primary ray, the cells of a coarse grid its path passes (beyond the paper, for figure 2.2 and section 2.5.2).
 #[derive(Debug, Clone)]
 pub struct PathCells {
-    /// The box given at construction.
-    bounds: Aabb,
     /// The gridded box: the box given at construction grown by a tenth of its largest extent on every side.
     lo: Vec3,
     hi: Vec3,
@@ -74,7 +72,6 @@ impl PathCells {
         };
         let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
         let mut cells = Self {
-            bounds,
             lo: bounds.min - Vec3::splat(0.1 * size),
             hi: bounds.max + Vec3::splat(0.1 * size),
             inner_lo: bounds.min - Vec3::splat(0.05 * size),
@@ -120,11 +117,6 @@ impl PathCells {
         let mut mask = [0; ALL_CELLS.len()];
         self.mark_box(lo, hi, &mut mask);
         Region(mask)
-    }
-
-    /// The box the grid was built round.
-    pub fn bounds(&self) -> Aabb {
-        self.bounds
     }
 
     /// Whether the box `lo..=hi` lies wholly inside the grid's inner box, so that its [`PathCells::region`] is cells rather than every cell.

@@ -230,6 +230,8 @@ pub struct QuasiStatic {
     /// The cells each path passes, so that a frame visits only the paths near the mobile objects (beyond the paper);
     /// `None` without mobile objects, whose simulation never moves.
     paths: Option<PathCells>,
+    /// Whether `paths` spans the reach of the mobile objects' paths rather than the whole scene.
+    paths_focused: bool,
     /// The static scene's triangles binned for the reachable areas of artifact control (section 1.2.1), per disc
     /// radius (the points' and the glossy vertices'), built on first use: the static scene never moves.
     static_grids: [OnceLock<(f32, TriangleGrid)>; 2],
@@ -302,9 +304,11 @@ impl QuasiStatic {
                 }
                 _ => 0.0,
             } + slack;
-            let focus = reach_of_paths(&scene, mobile, margin).unwrap_or_else(|| scene.bounds());
-            PathCells::new(focus, slack, &rays)
+            let focus = reach_of_paths(&scene, mobile, margin);
+            let cells = PathCells::new(focus.unwrap_or_else(|| scene.bounds()), slack, &rays);
+            (cells, focus.is_some())
         });
+        let (paths, paths_focused) = paths.map_or((None, false), |(p, f)| (Some(p), f));
         let state = match options.estimator {
             Estimator::ImpactCount => State::ImpactCount {
                 power: Vec::new(),
@@ -334,6 +338,7 @@ impl QuasiStatic {
             disc_sets: None,
             lobe_cache: LobeCache::default(),
             paths,
+            paths_focused,
             static_grids: Default::default(),
         };
         let t1 = Instant::now();
@@ -416,15 +421,16 @@ impl QuasiStatic {
         self.world.move_mobile(&self.scene);
         // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2).
         let moved = before.union(self.world.mobile_bounds());
-        if let Some(paths) = &self.paths
-            && !paths.covers(moved.min, moved.max)
+        if self.paths_focused
+            && self
+                .paths
+                .as_ref()
+                .is_some_and(|p| !p.covers(moved.min, moved.max))
         {
             // Moved off their paths' reach: cells over the whole scene from now on (every path when even those do
-            // not cover the move).
-            let bounds = self.scene.bounds();
-            if paths.bounds() != bounds {
-                self.paths = Some(PathCells::new(bounds, self.slack, &self.rays));
-            }
+            // not cover a move).
+            self.paths = Some(PathCells::new(self.scene.bounds(), self.slack, &self.rays));
+            self.paths_focused = false;
         }
         let update = update_ray_set_where(
             &self.scene,

@@ -609,7 +609,7 @@ fn glossy_radius_lists_follow_the_motion_under_artifact_control() {
     );
 }
 
-/// The path cells over the reach of the mobile object's path (beyond the paper: a finer grid than one over the whole scene): frames along the small box's path, then one off it (the cells are rebuilt over the whole scene), each give the ray set a full trace of the pose gives and the irradiance a recomputation over it gives.
+/// The path cells over the reach of the mobile object's path (beyond the paper: a finer grid than one over the whole scene): frames along the small box's path, then two off it (the cells are rebuilt over the whole scene), each give the ray set a full trace of the pose gives and the irradiance a recomputation over it gives.
 #[test]
 fn frames_along_a_path_and_off_it_match_full_traces() {
     let rest_scene = cornell(0.25);
@@ -641,7 +641,9 @@ fn frames_along_a_path_and_off_it_match_full_traces() {
     let options = options(Estimator::Detp { radius: 0.15 });
     let mut sim = QuasiStatic::new(scene.clone(), &[small], options).expect("first frame");
     let mut poses = path.frames(5);
+    // Off the path, twice (the cells are rebuilt over the whole scene once).
     poses.push(Affine3A::from_translation(Vec3::new(-0.6, 0.0, 0.0)) * poses[2]);
+    poses.push(Affine3A::from_translation(Vec3::new(-0.7, 0.0, 0.3)) * poses[2]);
     let mut fresh_world = World::new(&scene, &[small]).expect("world");
     let mut fresh_scene = scene;
     for (frame, &pose) in poses.iter().enumerate().skip(1) {
