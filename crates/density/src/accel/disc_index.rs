@@ -216,32 +216,15 @@ impl DiscIndex {
     /// Calls `f` with every disc whose leaf the padded segment reaches (section 2.7), each disc at most once, less those of nodes whose normal cone the segment travels along (it crosses none of them from the front).
     #[inline]
     pub(crate) fn for_each_candidate(&self, s: &SegmentEnvelope, mut f: impl FnMut(u32)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = [0u32; MAX_DEPTH_LIMIT as usize + 2];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let n = stack[top];
-            let node = &self.nodes[n as usize];
-            if node.cone.rejects(s) || !s.meets_box(&node.bounds) {
-                continue;
+        self.for_each_leaf(s, |first, count| {
+            let a = first as usize;
+            for &i in &self.items[a..a + count as usize] {
+                f(i);
             }
-            if node.count > 0 {
-                let a = node.first as usize;
-                for &i in &self.items[a..a + node.count as usize] {
-                    f(i);
-                }
-            } else {
-                stack[top] = node.first;
-                stack[top + 1] = n + 1;
-                top += 2;
-            }
-        }
+        });
     }
 
-    /// Calls `f(first, count)` with every leaf the padded segment reaches whose normal cone it does not travel along, as [`DiscIndex::for_each_candidate`] does for their discs one by one.
+    /// Calls `f(first, count)` with every leaf the padded segment reaches whose normal cone it does not travel along (section 2.7; [`DiscIndex::for_each_candidate`] gives their discs one by one).
     #[inline]
     pub(crate) fn for_each_leaf(&self, s: &SegmentEnvelope, mut f: impl FnMut(u32, u32)) {
         if self.nodes.is_empty() {
