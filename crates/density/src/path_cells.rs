@@ -10,8 +10,9 @@
 //! the scene that its path passes, and a pass visits only the paths whose
 //! masks meet the cells of its region: 64 bytes a path instead of all its
 //! segments, stored word by word (a word is one slice of the grid along
-//! `z`), so that a pass reads only the words its region has cells in. The masks are conservative: every point of a segment, followed
-//! as far as any of those tests follows it (its length, or its hit plus its
+//! `z`), so that a pass reads only the words its region has cells in. The
+//! masks are conservative: every point of a segment, followed as far as any
+//! of those tests follows it (its length, or its hit plus its
 //! artifact-control extension, plus the crossing test's slack), lies in a
 //! marked cell, so the passes find exactly the rays they found by visiting
 //! every path. A region not wholly inside the grid's box meets every path.

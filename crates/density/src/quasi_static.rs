@@ -288,8 +288,7 @@ impl QuasiStatic {
             };
             artifact.validate()?;
             // Followed far enough for the larger of the two discs (section 1.2.1, concave surfaces).
-            let reach = options.glossy_radius.map_or(radius, |g| g.max(radius));
-            options.rays.extension = artifact.max_extension * reach;
+            options.rays.extension = artifact.max_extension * largest_radius(&options, radius);
         }
         let world = World::new(&scene, mobile)?;
         let t0 = Instant::now();
@@ -297,18 +296,16 @@ impl QuasiStatic {
         let photosimulation = t0.elapsed();
         let points = EstimationPoints::new(&scene, &world);
         let slack = crate::accel::scene_slack(&scene);
-        let paths = world.has_mobile().then(|| {
-            let margin = match options.estimator {
-                Estimator::Detp { radius } => {
-                    options.glossy_radius.map_or(radius, |g| g.max(radius))
-                }
-                _ => 0.0,
-            } + slack;
-            let focus = reach_of_paths(&scene, mobile, margin);
-            let cells = PathCells::new(focus.unwrap_or_else(|| scene.bounds()), slack, &rays);
-            (cells, focus.is_some())
-        });
-        let (paths, paths_focused) = paths.map_or((None, false), |(p, f)| (Some(p), f));
+        // Cells over the box the mobile objects' paths reach, grown by the larger disc; the whole scene without one.
+        let margin = match options.estimator {
+            Estimator::Detp { radius } => largest_radius(&options, radius),
+            _ => 0.0,
+        } + slack;
+        let focus = reach_of_paths(&scene, mobile, margin);
+        let paths = world
+            .has_mobile()
+            .then(|| PathCells::new(focus.unwrap_or_else(|| scene.bounds()), slack, &rays));
+        let paths_focused = paths.is_some() && focus.is_some();
         let state = match options.estimator {
             Estimator::ImpactCount => State::ImpactCount {
                 power: Vec::new(),
@@ -915,6 +912,11 @@ fn add_impacts<'a>(power: &mut [DVec3], segments: impl Iterator<Item = &'a RaySe
             *p += sign * s.power.as_dvec3();
         }
     }
+}
+
+/// The larger of DETP's disc radius `radius` and the glossy discs' radius (section 2.10).
+fn largest_radius(options: &QuasiStaticOptions, radius: f32) -> f32 {
+    options.glossy_radius.map_or(radius, |g| g.max(radius))
 }
 
 /// The box every point of the objects `mobile` stays in as they follow their paths (section 2.2.2: positions between keyframes interpolated linearly, rotations about the pivot), grown by `margin`; `None` when one of them has no path or no vertex. The pivot stays in its keyframes' box and every vertex within its rest distance from the pivot.
