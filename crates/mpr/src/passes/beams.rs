@@ -13,7 +13,7 @@
 //! de-duplicates. CPU twin: [`beam_pixels_cpu`], lustre-beams'
 //! [`lustre_beams::Beam::arrival`] through the same BRDFs.
 //!
-//! Two choices here are for the software driver, not the paper. The pass's
+//! Three choices here are for the software driver, not the paper. The pass's
 //! settings are a read-only storage buffer, not a uniform block: lavapipe
 //! (Mesa 22.3) folds uniform values that steer a fragment shader's loops and
 //! branches into the shader and compiles it anew whenever a bind group
@@ -22,7 +22,12 @@
 //! whether inlining paid reads as a gain): the pass is drawn once per view,
 //! so a `glosbox` frame of 112 views spent about 10 s compiling. And the fragment
 //! stage calls the beam evaluation from one place for both traversals,
-//! since every call is inlined. The image is the same bit for bit.
+//! since every call is inlined. And the shader is compiled without the
+//! planar facets' volume (equation 5 and the split points) when no beam
+//! takes it ([`beams_wgsl_with`]): llvmpipe runs the code of a branch that
+//! no lane takes under an empty mask, and dropping the facets' code took
+//! the beam pass of a 640 × 480 `glosbox` walkthrough frame from 1.25 to
+//! 0.88 s. The image is the same bit for bit.
 
 use lustre_beams::{Beam, BeamSet, GlossyVolume, Scatter, SplitPoint};
 use lustre_geometry::sampling::Frame;
@@ -45,6 +50,37 @@ pub const BEAMS_WGSL: &str = include_str!("beams.wgsl");
 /// The beam pass as compiled: [`BEAMS_WGSL`] after the view block, the diffuse map lookups and the material module.
 pub fn beams_wgsl() -> String {
     with_materials(&with_diffuse_maps(&with_view(BEAMS_WGSL)))
+}
+
+/// The line of `beams.wgsl` that keeps the planar facets' volume (equation 5) in the shader.
+const FACET_VOLUMES_ON: &str = "const FACET_VOLUMES: bool = true;";
+
+/// [`beams_wgsl`] with the planar facets' volume (section 4.2.2, equation 5
+/// and its split points) compiled in or, with `facets` false, only the
+/// integrated Gaussian: the same values for beams of
+/// [`GlossyVolume::Integrated`], and a shader llvmpipe runs faster since it
+/// executes a branch no lane takes (module docs).
+pub fn beams_wgsl_with(facets: bool) -> Result<String> {
+    let source = beams_wgsl();
+    if !source.contains(FACET_VOLUMES_ON) {
+        return Err(MprError::InvalidSetting {
+            what: "beam pass",
+            message: format!("beams.wgsl lacks the line `{FACET_VOLUMES_ON}`"),
+        });
+    }
+    Ok(if facets {
+        source
+    } else {
+        source.replace(FACET_VOLUMES_ON, &FACET_VOLUMES_ON.replace("true", "false"))
+    })
+}
+
+/// Whether any glossy beam of `beams` takes the planar facets' volume.
+fn uses_facets(beams: &BeamSet) -> bool {
+    beams
+        .beams()
+        .iter()
+        .any(|b| b.distribution.is_some() && b.volume == GlossyVolume::Facets)
 }
 
 /// How a fragment finds the beams that may hold it.
@@ -250,6 +286,9 @@ fn storage<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu:
 #[derive(Debug)]
 pub struct BeamPass {
     pipeline: wgpu::RenderPipeline,
+    hdr_format: wgpu::TextureFormat,
+    /// Whether `pipeline` holds the planar facets' volume ([`beams_wgsl_with`]).
+    facets: bool,
     layout: wgpu::BindGroupLayout,
     materials: wgpu::Buffer,
     /// The receivers' diffuse maps (bindings 5 and 6).
@@ -286,9 +325,9 @@ impl BeamPass {
             }
         }
         check_layers(&materials, maps)?;
-        let (pipeline, layout, materials) = ctx.checked("beam pass creation", || {
+        let facets = uses_facets(beams);
+        let (pipeline, layout, materials) = ctx.checked_result("beam pass creation", || {
             let device = &ctx.device;
-            let module = scene_module(ctx, "beams", &beams_wgsl());
             let read_only = |binding: u32| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::FRAGMENT,
@@ -312,25 +351,16 @@ impl BeamPass {
                     maps_entries[1],
                 ],
             });
-            let pipeline = scene_pipeline(
-                ctx,
-                &ScenePipeline {
-                    label: "beams",
-                    module: &module,
-                    layouts: &[&layout],
-                    extra_vertex_buffers: &[],
-                    target: additive_target(hdr_format),
-                    depth_compare: wgpu::CompareFunction::Equal,
-                    depth_write: false,
-                },
-            );
+            let pipeline = Self::pipeline(ctx, hdr_format, &layout, facets)?;
             let materials = storage(ctx, "beam-materials", &materials);
-            (pipeline, layout, materials)
+            Ok((pipeline, layout, materials))
         })?;
         let (bind_group, byte_size) =
             Self::upload(ctx, &layout, &materials, maps, beams, traversal)?;
         Ok(Self {
             pipeline,
+            hdr_format,
+            facets,
             layout,
             materials,
             maps: maps.clone(),
@@ -339,6 +369,28 @@ impl BeamPass {
             byte_size,
             traversal,
         })
+    }
+
+    /// The pass's pipeline, compiled with or without the planar facets' volume ([`beams_wgsl_with`]).
+    fn pipeline(
+        ctx: &GpuContext,
+        hdr_format: wgpu::TextureFormat,
+        layout: &wgpu::BindGroupLayout,
+        facets: bool,
+    ) -> Result<wgpu::RenderPipeline> {
+        let module = scene_module(ctx, "beams", &beams_wgsl_with(facets)?);
+        Ok(scene_pipeline(
+            ctx,
+            &ScenePipeline {
+                label: "beams",
+                module: &module,
+                layouts: &[layout],
+                extra_vertex_buffers: &[],
+                target: additive_target(hdr_format),
+                depth_compare: wgpu::CompareFunction::Equal,
+                depth_write: false,
+            },
+        ))
     }
 
     fn upload(
@@ -411,6 +463,13 @@ impl BeamPass {
 
     /// Replaces the beams (the scatterers or lights moved: beams are rebuilt on the CPU every frame, section 4.3), keeping the traversal.
     pub fn set_beams(&mut self, ctx: &GpuContext, beams: &BeamSet) -> Result<()> {
+        let facets = uses_facets(beams);
+        if facets != self.facets {
+            self.pipeline = ctx.checked_result("beam pass pipeline", || {
+                Self::pipeline(ctx, self.hdr_format, &self.layout, facets)
+            })?;
+            self.facets = facets;
+        }
         let (bind_group, byte_size) = Self::upload(
             ctx,
             &self.layout,

@@ -33,6 +33,13 @@ const SPLIT_PAPER: u32 = 1u;
 
 const VOLUME_FACETS: u32 = 0u;
 
+// Whether the shader holds the paper's planar facets (equation 5 and the
+// split points of figures 11 and 12) beside the integrated volume. beams.rs
+// compiles it without them when no beam uses them: llvmpipe runs a branch
+// that no lane takes under an empty mask, and the facets' code was about
+// 30 % of the pass there.
+const FACET_VOLUMES: bool = true;
+
 const PI: f32 = 3.14159265358979;
 
 // 8-point Gauss-Legendre nodes (positive half) and weights.
@@ -378,7 +385,7 @@ fn scatter_volume(bi: u32, ft: FluxTriangle, p: vec3f) -> f32 {
     let a = v[0];
     let b = v[1];
     let c = v[2];
-    if beams[bi].volume != VOLUME_FACETS {
+    if !FACET_VOLUMES || beams[bi].volume != VOLUME_FACETS {
         return min(abs(fan_edge(a, b, variance) + fan_edge(b, c, variance) + fan_edge(c, a, variance)), 1.0);
     }
     let orient = perp_dot(b - a, c - a);
