@@ -19,6 +19,7 @@ use lustre_geometry::Camera;
 use lustre_geometry::light::hammersley_centred;
 
 use crate::diffuse_map::DiffuseMaps;
+use crate::light_group::LightGroup;
 use crate::passes::accumulate::AccumulatePass;
 use crate::passes::beams::{BeamPass, Traversal};
 
@@ -265,6 +266,9 @@ pub struct FrameGraph {
     views: Mutex<ViewBuffer>,
     /// Timestamps between the passes ([`FrameGraph::with_pass_timing`]).
     timer: Option<PassTimer>,
+    /// Jittered samples of the emitters' own radiance drawn apart from the
+    /// accumulated frames ([`FrameGraph::with_emission_samples`]; 0: none apart).
+    emission_samples: u32,
 }
 
 impl FrameGraph {
@@ -284,7 +288,55 @@ impl FrameGraph {
             tonemap: TonemapPass::new(ctx, output_format)?,
             views: Mutex::new(ViewBuffer::new(ctx, 8)),
             timer: None,
+            emission_samples: 0,
         })
+    }
+
+    /// Under [`FrameGraph::render_accumulated`] with fewer jittered frames
+    /// than `samples`, the emitters seen directly are drawn apart from them,
+    /// through `samples` jittered cameras of their own (each a depth
+    /// pre-pass and the emission pass, added with weight `1/samples`): an
+    /// emitter's edge is the frame's sharpest contrast, and the box filter
+    /// of section 7's accumulation over `N` offsets leaves its edge pixels'
+    /// coverage quantised to `1/N`. Only where no view of the frame but the
+    /// camera's shows an emitter (no mirror, slab or interface faces, every
+    /// glossy image hiding emitters, [`crate::View::shows_emitters`]);
+    /// otherwise the emitters stay in the jittered frames. 0 (the default)
+    /// keeps them there always.
+    pub fn with_emission_samples(mut self, samples: u32) -> Self {
+        self.emission_samples = samples;
+        self
+    }
+
+    /// Whether `render_accumulated` with `samples` frames draws the emitters
+    /// apart ([`FrameGraph::with_emission_samples`]): more emission samples
+    /// than frames, an emission pass, and only the camera's view showing emitters.
+    fn emission_apart(&self, terms: GraphTerms, samples: u32) -> Option<&EmissionPass> {
+        let only_camera_shows_emitters = self.specular.as_ref().is_none_or(|specular| {
+            specular.faces().iter().all(|f| {
+                matches!(
+                    f.kind,
+                    crate::passes::specular::SpecularKind::Glossy(g) if g.hide_emitters
+                )
+            })
+        });
+        (self.emission_samples > samples
+            && samples > 1
+            && terms.emission
+            && only_camera_shows_emitters)
+            .then_some(self.emission.as_ref())
+            .flatten()
+    }
+
+    /// The jittered samples the emitters seen directly get under
+    /// [`FrameGraph::render_accumulated`] with `samples` frames of `terms`:
+    /// [`FrameGraph::with_emission_samples`]' count where they are drawn apart, else `samples`.
+    pub fn emission_samples(&self, terms: GraphTerms, samples: u32) -> u32 {
+        if self.emission_apart(terms, samples).is_some() {
+            self.emission_samples
+        } else {
+            samples
+        }
     }
 
     /// Times every pass of each frame on the GPU where the device writes timestamps inside encoders (else unchanged); [`FrameGraph::pass_times`] reads the last frame's.
@@ -576,7 +628,7 @@ impl FrameGraph {
             Some(specular) => specular.view_tree(root, ctx.clip_method())?,
             None => ViewTree::single(root),
         };
-        let slots = self.write_views(ctx, &mut views, &tree, frame.targets)?;
+        let slots = self.write_views(ctx, &mut views, &tree, frame)?;
         if let Some((inputs, pass)) = passes.splat {
             pass.prepare(&ctx.queue, inputs.filtering);
         }
@@ -662,8 +714,14 @@ impl FrameGraph {
             ..passes
         };
         let shadowed = self.shadowed(&jittered_passes);
-        let jittered_light =
-            self.light_passes(frame.graph_terms, &jittered_passes, shadowed.as_ref());
+        // Emitters drawn apart leave the jittered frames' passes (their
+        // constant terms stay: `draw_window` switches them with the frame's terms).
+        let emission_apart = self.emission_apart(frame.graph_terms, samples);
+        let jittered_terms = GraphTerms {
+            emission: frame.graph_terms.emission && emission_apart.is_none(),
+            ..frame.graph_terms
+        };
+        let jittered_light = self.light_passes(jittered_terms, &jittered_passes, shadowed.as_ref());
         let mut views = self.views.lock().unwrap_or_else(|e| e.into_inner());
         for s in 0..samples {
             before_sample(s)?;
@@ -672,7 +730,7 @@ impl FrameGraph {
                     .camera
                     .with_pixel_offset(hammersley_centred(s, samples), width, height);
             let tree = self.view_tree_interleaved(ctx, &camera, s, samples)?;
-            let slots = self.write_views(ctx, &mut views, &tree, frame.targets)?;
+            let slots = self.write_views(ctx, &mut views, &tree, frame)?;
             if let Some((inputs, pass)) = passes.splat {
                 pass.prepare(&ctx.queue, inputs.filtering);
             }
@@ -697,6 +755,17 @@ impl FrameGraph {
                     accumulate.encode(&ctx.device, encoder, frame.targets, weight, s == 0);
                 });
                 if s + 1 == samples {
+                    if let Some(emission) = emission_apart {
+                        // Ordered after this submit's views (write_buffer
+                        // applies at submit), each sample its own submit.
+                        ctx.queue.submit([encoder.finish()]);
+                        self.encode_emission_samples(ctx, frame, emission, &mut views, accumulate)?;
+                        encoder =
+                            ctx.device
+                                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                                    label: Some("after-emission"),
+                                });
+                    }
                     if splat_once {
                         // The splats once through the pixel centres, at every
                         // level of the specular recursion, into a cleared HDR
@@ -781,14 +850,17 @@ impl FrameGraph {
     }
 
     /// Writes the tree's views and gives each slot its region
-    /// ([`ViewTree::regions`]) in `targets`.
+    /// ([`ViewTree::regions`]) in the frame's targets and the group of the
+    /// frame's direct lights it draws ([`LightGroup::for_path`]).
     fn write_views(
         &self,
         ctx: &GpuContext,
         views: &mut ViewBuffer,
         tree: &ViewTree,
-        targets: &RenderTargets,
+        frame: &FrameInputs<'_>,
     ) -> Result<Vec<ViewSlot>> {
+        let targets = frame.targets;
+        let lights = frame.direct.map_or(0, DirectLights::len);
         let mut slots = views.write(ctx, &tree.views)?;
         if let Some(specular) = &self.specular {
             let regions = tree.regions(specular.faces(), targets.width, targets.height);
@@ -796,7 +868,70 @@ impl FrameGraph {
                 slot.scissor = region;
             }
         }
+        for (slot, path) in slots.iter_mut().zip(&tree.paths) {
+            slot.lights = LightGroup::for_path(*path, lights);
+        }
         Ok(slots)
+    }
+
+    /// The emitters' own radiance through [`FrameGraph::with_emission_samples`]
+    /// jittered cameras in one submission: per sample a depth pre-pass and
+    /// the emission pass weighted `1/samples`, both inside the rectangle the
+    /// emitters may cover ([`EmissionPass::screen_rect`]), summed in the
+    /// cleared HDR target, then added to [`RenderTargets::accumulation`]
+    /// over the rectangles' union.
+    /// Only the camera's view: [`FrameGraph::emission_apart`] holds that no other shows emitters.
+    fn encode_emission_samples(
+        &self,
+        ctx: &GpuContext,
+        frame: &FrameInputs<'_>,
+        emission: &EmissionPass,
+        views: &mut ViewBuffer,
+        accumulate: &AccumulatePass,
+    ) -> Result<()> {
+        let samples = self.emission_samples;
+        let targets = frame.targets;
+        let (width, height) = (targets.width, targets.height);
+        // Every sample's camera, and the pixels its emitters may cover.
+        let mut cameras = Vec::new();
+        let mut rects = Vec::new();
+        for j in 0..samples {
+            let view = View::from_camera(&frame.camera.with_pixel_offset(
+                hammersley_centred(j, samples),
+                width,
+                height,
+            ));
+            if let Some(rect) = emission.screen_rect(view.view_projection(), width, height) {
+                cameras.push(view);
+                rects.push(rect);
+            }
+        }
+        let Some(union) = rects.iter().copied().reduce(crate::view::union_rects) else {
+            return Ok(());
+        };
+        let slots = views.write(ctx, &cameras)?;
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("emission-samples"),
+            });
+        clear_hdr(&mut encoder, targets);
+        let weight = 1.0 / samples as f32;
+        for (mut slot, rect) in slots.into_iter().zip(rects) {
+            slot.scissor = rect;
+            self.timed(&mut encoder, "depth", |encoder| {
+                self.depth
+                    .encode(encoder, frame.scene, targets, views, slot, true);
+            });
+            self.timed(&mut encoder, "emission", |encoder| {
+                emission.encode_weighted(encoder, frame.scene, targets, views, slot, weight);
+            });
+        }
+        self.timed(&mut encoder, "accumulate", |encoder| {
+            accumulate.encode_in(&ctx.device, encoder, targets, 1.0, false, Some(union));
+        });
+        ctx.queue.submit([encoder.finish()]);
+        Ok(())
     }
 
     /// The splats alone, through the pixel centres at every level of the
@@ -813,7 +948,7 @@ impl FrameGraph {
         accumulate: &AccumulatePass,
     ) -> Result<()> {
         let tree = self.view_tree(ctx, frame.camera)?;
-        let slots = self.write_views(ctx, views, &tree, frame.targets)?;
+        let slots = self.write_views(ctx, views, &tree, frame)?;
         let splat_light: [&dyn LightPass; 1] = [pass];
         self.encode_light(
             ctx,

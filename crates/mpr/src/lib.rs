@@ -47,6 +47,7 @@ mod error;
 pub mod frame;
 pub mod ibr;
 pub mod kernel_texture;
+pub mod light_group;
 pub mod material;
 pub mod pass_timing;
 pub mod passes;

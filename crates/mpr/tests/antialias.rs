@@ -3,7 +3,9 @@
 //! pass through [`FrameGraph::render_accumulated`], against its exact
 //! coverage of each pixel (the projected quad clipped to the pixel square,
 //! the box filter of the reference) and against the fraction of the jitter
-//! pattern's points inside it; one sample is the unjittered frame, bit for bit.
+//! pattern's points inside it; one sample is the unjittered frame, bit for
+//! bit. Emitters drawn apart through more jittered cameras than the frames
+//! (`FrameGraph::with_emission_samples`) follow the larger pattern.
 
 mod support;
 
@@ -126,6 +128,18 @@ fn pattern_coverage(polygon: &[DVec2], x: u32, y: u32, n: u32) -> f64 {
 
 /// The emission pass alone through `render_accumulated` with `samples`; HDR radiance.
 fn render(ctx: &GpuContext, scene: &Scene, camera: &Camera, samples: u32) -> Vec<[f32; 4]> {
+    render_with_emission_samples(ctx, scene, camera, samples, 0)
+}
+
+/// [`render`] with the emitters drawn apart through `emission` jittered
+/// cameras ([`FrameGraph::with_emission_samples`]).
+fn render_with_emission_samples(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    samples: u32,
+    emission: u32,
+) -> Vec<[f32; 4]> {
     let targets = RenderTargets::new(ctx, SIZE, SIZE).unwrap();
     let buffers = SceneBuffers::upload(ctx, scene).unwrap();
     let format = wgpu::TextureFormat::Rgba8Unorm;
@@ -133,6 +147,7 @@ fn render(ctx: &GpuContext, scene: &Scene, camera: &Camera, samples: u32) -> Vec
         .unwrap()
         .with_emission(ctx, targets.hdr_format(), scene)
         .unwrap()
+        .with_emission_samples(emission)
         .with_accumulation(ctx, targets.hdr_format())
         .unwrap();
     let output = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -275,6 +290,60 @@ fn accumulated_edges_match_the_exact_pixel_coverage_of_the_light() {
         "mean error {:.4} at N = 64 vs {:.4} at N = 4",
         mean_errors[3],
         mean_errors[1]
+    );
+}
+
+#[test]
+fn emitters_drawn_apart_follow_their_own_larger_pattern() {
+    let Some(ctx) = gpu_or_skip("emitters_drawn_apart_follow_their_own_larger_pattern") else {
+        return;
+    };
+    let scene = builtin("cornell").unwrap();
+    let camera = scene.camera().with_aspect(1.0);
+    let (polygon, le) = light_polygon(&scene, &camera);
+    // Four jittered frames, the emitters through 64 cameras of their own.
+    let (frames, apart) = (4u32, 64u32);
+    let graph_check = FrameGraph::new(&ctx, wgpu::TextureFormat::Rgba8Unorm)
+        .unwrap()
+        .with_emission_samples(apart);
+    assert_eq!(
+        graph_check.emission_samples(lustre_mpr::GraphTerms::ALL, frames),
+        frames,
+        "without an emission pass nothing is drawn apart"
+    );
+    let hdr = render_with_emission_samples(&ctx, &scene, &camera, frames, apart);
+    let plain = render(&ctx, &scene, &camera, frames);
+    let (mut partial, mut off_pattern, mut sum_apart, mut sum_plain) = (0, 0, 0.0, 0.0);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let i = (y * SIZE + x) as usize;
+            let value = f64::from(hdr[i][0]) / f64::from(le);
+            let exact = coverage(&polygon, x, y);
+            let pattern = pattern_coverage(&polygon, x, y, apart);
+            let off = (value - pattern).abs();
+            assert!(
+                off <= 1.0 / f64::from(apart) + 1e-5,
+                "pixel ({x}, {y}) is {value}, the 64-point pattern covers {pattern}"
+            );
+            off_pattern += usize::from(off > 1e-5);
+            if exact <= 0.0 || exact >= 1.0 {
+                assert!((value - exact).abs() <= 1e-5, "pixel ({x}, {y}) is {value}");
+                continue;
+            }
+            partial += 1;
+            sum_apart += (value - exact).abs();
+            sum_plain += (f64::from(plain[i][0]) / f64::from(le) - exact).abs();
+        }
+    }
+    let (mean_apart, mean_plain) = (sum_apart / partial as f64, sum_plain / partial as f64);
+    eprintln!(
+        "{partial} partly covered pixels: mean |value - coverage| {mean_apart:.4} apart, \
+         {mean_plain:.4} in the 4 frames; {off_pattern} off the pattern's count"
+    );
+    assert!(partial >= 20 && off_pattern * 20 <= partial);
+    assert!(
+        mean_apart * 8.0 <= mean_plain,
+        "apart {mean_apart:.4}, in the frames {mean_plain:.4}"
     );
 }
 

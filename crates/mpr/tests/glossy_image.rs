@@ -6,14 +6,19 @@
 //! samples were mapped to (CPU: the lobe integrated over the emitter per
 //! pixel, in closed form with erf). Frosted glass: the sheared slab view
 //! with no shear is the clear slab's image, and the blur of an emitter seen
-//! through it is the paraxial `(η − 1) m` lobe's.
+//! through it is the paraxial `(η − 1) m` lobe's. Paired lights
+//! (`lustre_mpr::light_group`): with vanishing shears the sheared views
+//! that each draw one group of the lights, weighted, sum to the image of
+//! every light, under shadow volumes and under shadow maps.
 
 mod support;
 
 use glam::{Vec2, Vec3};
+use lustre_geometry::light::PointLight;
 use lustre_geometry::material::{ConductorFresnel, MaterialModel, MicrofacetDistribution};
-use lustre_geometry::{Bvh, Camera, Material, Mesh, Object, Plane, Ray, Rgb, Scene};
+use lustre_geometry::{Bvh, Camera, Light, Material, Mesh, Object, Plane, Ray, Rgb, Scene};
 use lustre_mpr::frame::{AccumulatedSplats, FrameInputs};
+use lustre_mpr::light_group::GlossyLights;
 use lustre_mpr::passes::glossy_image::{
     Fog, GlossySettings, ShearModel, fog_factor, microfacet_shears, shear_slopes,
 };
@@ -235,6 +240,7 @@ fn zero_shear_and_one_sample_is_the_mirror_image() {
         hide_emitters: false,
         shear: ShearModel::Isotropic,
         frosted_alpha: 0.0,
+        lights: GlossyLights::All,
     };
     let expected = render(&ctx, &mirror, &GlossySettings::default());
     let image = render(&ctx, &glossy, &settings);
@@ -292,6 +298,7 @@ fn nested_glossy_images_of_two_samples_each_are_the_nested_mirror_images() {
         hide_emitters: false,
         shear: ShearModel::Isotropic,
         frosted_alpha: 0.0,
+        lights: GlossyLights::All,
     };
     let expected = render_to_depth(&ctx, &expected_scene, &GlossySettings::default(), 2);
     let image = render_to_depth(&ctx, &glossy_scene, &settings, 2);
@@ -330,6 +337,7 @@ fn accumulated_frames_share_the_shears_out() {
         hide_emitters: false,
         shear: ShearModel::Isotropic,
         frosted_alpha: 0.0,
+        lights: GlossyLights::All,
     };
     let to_f64 = |image: Vec<Vec3>| image.iter().map(|v| f64::from(v.x)).collect::<Vec<_>>();
     let one = to_f64(render_to_depth(&ctx, &scene, &settings, 1));
@@ -384,6 +392,7 @@ fn microfacet_shears_draw_their_weighted_images() {
         hide_emitters: false,
         shear: ShearModel::Microfacet,
         frosted_alpha: 0.0,
+        lights: GlossyLights::All,
     };
     let gpu: Vec<f64> = render(&ctx, &scene, &settings)
         .iter()
@@ -467,6 +476,7 @@ fn fog_fades_the_image_towards_the_fog_radiance_with_distance_from_the_face() {
         hide_emitters: false,
         shear: ShearModel::Isotropic,
         frosted_alpha: 0.0,
+        lights: GlossyLights::All,
     };
     let unfogged = render(&ctx, &mirror, &GlossySettings::default());
     let image = render(&ctx, &glossy, &settings);
@@ -598,6 +608,7 @@ fn the_blur_of_a_small_emitter_is_as_wide_as_the_mapped_lobe() {
         hide_emitters: false,
         shear: ShearModel::Isotropic,
         frosted_alpha: 0.0,
+        lights: GlossyLights::All,
     };
     let gpu: Vec<f64> = render(&ctx, &scene, &settings)
         .iter()
@@ -759,6 +770,7 @@ fn frosted_glass_without_shear_is_the_clear_slab_and_blurs_as_its_lobe() {
         hide_emitters: true,
         shear: ShearModel::Isotropic,
         frosted_alpha: frost,
+        lights: GlossyLights::All,
     };
     let unsheared = render(&ctx, &scene, &one);
     let lit = clear.iter().filter(|v| v.x > 0.0).count();
@@ -841,4 +853,201 @@ fn frosted_glass_without_shear_is_the_clear_slab_and_blurs_as_its_lobe() {
         assert!((w_gpu / w_lobe - 1.0).abs() < 0.03, "axis {axis}");
         assert!((mean_gpu - mean_lobe).abs() < 0.5, "axis {axis}");
     }
+}
+
+/// A glossy floor of roughness `alpha` under `lights`, a white diffuse back
+/// wall and a diffuse block between them that shadows wall and floor
+/// differently from each light; camera looking down at the floor.
+fn lit_floor_scene(alpha: f32, lights: &[Light]) -> (Scene, Camera) {
+    let camera = Camera::look_at(
+        Vec3::new(0.3, 1.4, 1.9),
+        Vec3::new(-0.2, 0.2, -0.8),
+        Vec3::Y,
+        60.0,
+    );
+    let materials = vec![
+        Material::new("floor", rough_mirror(alpha, 0.7)),
+        Material::diffuse("wall", Rgb::splat(0.8)),
+        Material::diffuse("block", Rgb::new(0.7, 0.3, 0.2)),
+    ];
+    let block = |y0: f32, y1: f32| {
+        let (x0, x1, z0, z1) = (-0.4, 0.2, -1.4, -1.0);
+        let c = [
+            Vec3::new(x0, y0, z1),
+            Vec3::new(x1, y0, z1),
+            Vec3::new(x1, y1, z1),
+            Vec3::new(x0, y1, z1),
+            Vec3::new(x0, y0, z0),
+            Vec3::new(x1, y0, z0),
+            Vec3::new(x1, y1, z0),
+            Vec3::new(x0, y1, z0),
+        ];
+        let faces = [
+            [0, 1, 2],
+            [0, 2, 3],
+            [5, 4, 7],
+            [5, 7, 6],
+            [4, 0, 3],
+            [4, 3, 7],
+            [1, 5, 6],
+            [1, 6, 2],
+            [3, 2, 6],
+            [3, 6, 7],
+        ];
+        Mesh::flat("block", &c, &faces, 2)
+    };
+    let meshes = vec![
+        quad(
+            "floor",
+            [
+                Vec3::new(-2.0, 0.0, 2.0),
+                Vec3::new(2.0, 0.0, 2.0),
+                Vec3::new(2.0, 0.0, -2.0),
+                Vec3::new(-2.0, 0.0, -2.0),
+            ],
+            0,
+        ),
+        quad(
+            "back",
+            [
+                Vec3::new(-2.0, 0.0, -2.0),
+                Vec3::new(2.0, 0.0, -2.0),
+                Vec3::new(2.0, 2.0, -2.0),
+                Vec3::new(-2.0, 2.0, -2.0),
+            ],
+            1,
+        ),
+        block(0.0, 0.8),
+    ];
+    let objects = Object::one_per_mesh(&meshes);
+    let scene = Scene::new(
+        "lit-floor",
+        meshes,
+        materials,
+        objects,
+        lights.to_vec(),
+        camera,
+    )
+    .unwrap();
+    (scene, camera)
+}
+
+/// The direct light of `lights` through glossy images under `settings`
+/// (depth 1, one frame), with shadow volumes or shadow maps: HDR radiance.
+fn render_lit(
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    settings: &GlossySettings,
+    volumes: bool,
+) -> Vec<Vec3> {
+    let hdr = ctx.hdr_format();
+    let mut graph = FrameGraph::new(ctx, OUTPUT_FORMAT)
+        .unwrap()
+        .with_direct(ctx, hdr)
+        .unwrap()
+        .with_glossy_images(
+            ctx,
+            hdr,
+            scene,
+            SpecularSettings {
+                max_depth: 1,
+                limit_radiance: Vec3::ZERO,
+                clip: None,
+            },
+            settings,
+        )
+        .unwrap();
+    if volumes {
+        graph = graph.with_shadow_volumes(ctx, hdr, scene, lights).unwrap();
+    }
+    let camera = camera.with_aspect(1.0);
+    support::direct_frame(ctx, &graph, scene, &camera, lights, SIZE)
+        .0
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect()
+}
+
+#[test]
+fn paired_lights_sum_to_every_light_over_the_shears() {
+    let Some(ctx) = gpu_or_skip("paired_lights_sum_to_every_light_over_the_shears") else {
+        return;
+    };
+    // Four point lights where one area light's jittered points would be,
+    // and four sheared views of vanishing shear: paired, view p draws one
+    // light weighted 4, so the four views' average is the sum of the four
+    // lights, as drawing every light in every view gives.
+    let lights: Vec<Light> = [(-0.6, -0.3), (0.5, -0.4), (-0.4, 0.6), (0.6, 0.5)]
+        .iter()
+        .map(|&(x, z)| {
+            Light::Point(PointLight {
+                position: Vec3::new(x, 1.8, z),
+                intensity: Rgb::splat(0.5),
+            })
+        })
+        .collect();
+    let settings = |alpha_samples: u32, lights: GlossyLights| GlossySettings {
+        samples: alpha_samples,
+        depth: 1,
+        fog: Fog::Off,
+        fog_radiance: Vec3::ZERO,
+        hide_emitters: true,
+        shear: ShearModel::Isotropic,
+        frosted_alpha: 0.0,
+        lights,
+    };
+    // (every light, paired) drawn through glossy images of `samples` shears.
+    let both = |scene: &Scene, camera: &Camera, samples: u32, volumes: bool| {
+        [GlossyLights::All, GlossyLights::Paired].map(|mode| {
+            render_lit(
+                &ctx,
+                scene,
+                camera,
+                &lights,
+                &settings(samples, mode),
+                volumes,
+            )
+        })
+    };
+    let (still, camera) = lit_floor_scene(1e-6, &lights);
+    for volumes in [true, false] {
+        let [all, paired] = both(&still, &camera, 4, volumes);
+        let max = all.iter().map(|v| v.max_element()).fold(0.0f32, f32::max);
+        assert!(max > 0.0, "the scene must be lit");
+        let wrong = all
+            .iter()
+            .zip(&paired)
+            .filter(|(a, p)| {
+                (**a - **p).abs().max_element() > 2e-3 * a.max_element().max(1e-2 * max)
+            })
+            .count();
+        // Shears of 1e-6 move no pixel centre across an edge but a handful.
+        assert!(wrong <= 10, "volumes {volumes}: {wrong} pixels differ");
+    }
+    // With real shears each view draws another light: the image differs
+    // from drawing every light, pixel by pixel, but not in its total.
+    let (rough, camera) = lit_floor_scene(0.15, &lights);
+    let [all, paired] = both(&rough, &camera, 8, true);
+    let differ = all
+        .iter()
+        .zip(&paired)
+        .filter(|(a, p)| (**a - **p).abs().max_element() > 1e-2 * a.max_element().max(1e-3))
+        .count();
+    assert!(
+        differ > 100,
+        "paired views must draw fewer lights: {differ} pixels differ"
+    );
+    let total = |image: &[Vec3]| {
+        image
+            .iter()
+            .map(|v| f64::from(v.x + v.y + v.z))
+            .sum::<f64>()
+    };
+    let ratio = total(&paired) / total(&all);
+    assert!(
+        (ratio - 1.0).abs() < 0.02,
+        "total light paired / all: {ratio}"
+    );
 }

@@ -196,7 +196,8 @@ impl GpuFrame {
         };
         let mut graph = FrameGraph::new(&ctx, OUTPUT_FORMAT)?
             .with_pass_timing(&ctx)
-            .with_emission(&ctx, targets.hdr_format(), scene)?;
+            .with_emission(&ctx, targets.hdr_format(), scene)?
+            .with_emission_samples(args.emission_samples);
         if lighting.splatting {
             graph = graph.with_splats(&ctx, targets.hdr_format(), lighting.kernel)?;
         }
@@ -439,6 +440,9 @@ impl GpuFrame {
     pub fn set_pose(&mut self, scene: &Scene, corners: &[[f32; 3]]) -> anyhow::Result<()> {
         self.graph.set_gouraud_radiance(&self.ctx, corners)?;
         self.scene_buffers = SceneBuffers::upload(&self.ctx, scene)?;
+        if let Some(emission) = self.graph.emission.as_mut() {
+            emission.set_emitters(scene);
+        }
         Ok(())
     }
 

@@ -63,6 +63,7 @@ use lustre_mpr::frame::SplatInputs;
 use lustre_mpr::ibr::{
     IbrSettings, KernelSizing, Modulation, ReflectedResolution, ReflectedSource,
 };
+use lustre_mpr::light_group::GlossyLights;
 use lustre_mpr::passes::beams::Traversal;
 use lustre_mpr::passes::diffuse_texture::{DiffuseAtlas, DiffuseTextureOptions};
 use lustre_mpr::passes::direct::DirectLights;
@@ -540,6 +541,16 @@ pub enum GlossyShearArg {
     Microfacet,
 }
 
+/// Which jittered lights the sheared views of a glossy image draw (`lustre_mpr::light_group`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum GlossyLightsArg {
+    /// Every light in every sheared view (the paper's loop as written).
+    All,
+    /// One group of the lights per sheared view, paired with its shear and
+    /// weighted by the group count (the accumulation buffer jittering both at once).
+    Paired,
+}
+
 /// Glossy lobe model on the GPU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum GlossyArg {
@@ -761,6 +772,14 @@ pub struct RenderArgs {
     /// face's centroid with the estimator's weights (exact at any incidence there).
     #[arg(long, value_enum, default_value_t = GlossyShearArg::Isotropic)]
     pub glossy_shear: GlossyShearArg,
+    /// With `--glossy-images`: which of the jittered lights (`--light-samples`
+    /// per area light) each sheared view draws: all of them, or one group of
+    /// gcd(lights, images) paired with its shear, each light weighted by the
+    /// group count, so the image averages the same light with a fraction of
+    /// the passes (a glossy floor under 16 light samples and 16 images: one
+    /// light per sheared view instead of 16).
+    #[arg(long, value_enum, default_value_t = GlossyLightsArg::Paired)]
+    pub glossy_lights: GlossyLightsArg,
     /// With `--glossy-images`: frosted glass (Diefenbach & Badler 1997,
     /// section 3, figure 3): every glass slab's images sheared as if one of
     /// its faces were rough with this Beckmann α (there is no rough
@@ -816,6 +835,14 @@ pub struct RenderArgs {
     /// the splat fill) instead of once through the pixel centres.
     #[arg(long)]
     pub aa_splats: bool,
+    /// With `--aa N` below this: the emitters seen directly drawn apart
+    /// through this many jittered cameras of their own (a depth pre-pass and
+    /// the emission pass each), since their edges are the frame's sharpest
+    /// contrast and N samples leave an edge pixel's coverage in steps of 1/N;
+    /// only where no mirror, glass or emitter-showing glossy image can show
+    /// an emitter (else they stay in the N frames). 0: always in the N frames.
+    #[arg(long, default_value_t = DEFAULT_EMISSION_SAMPLES)]
+    pub emission_samples: u32,
     /// With `--aa N` and `--light-samples K > 1`: move the K light positions
     /// within their strata in every jittered frame (N K positions in all,
     /// each frame redrawing K shadow cubes; Diefenbach & Badler 1997, section
@@ -990,6 +1017,9 @@ pub const DEFAULT_GLOSSY_DEPTH: u32 = 2;
 /// time on lavapipe: with 16 light samples on `cornell` at 256×256 relMSE
 /// 0.0027 with 1, 0.0019 with 4 jittered frames (BENCHMARKS.md).
 pub const DEFAULT_AA: u32 = 4;
+
+/// `--emission-samples`' default: the emitters' edges through 64 jittered cameras.
+pub const DEFAULT_EMISSION_SAMPLES: u32 = 64;
 
 /// Milliseconds since `start`.
 fn ms(start: Instant) -> f64 {
@@ -1415,6 +1445,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "depth": glossy_images.depth,
             "fog": format!("{:?}", glossy_images.fog),
             "shear": format!("{:?}", glossy_images.shear),
+            "lights": format!("{:?}", glossy_images.lights),
             "frosted_glass": glossy_images.frosted_alpha,
             "imaged_surfaces": imaged.iter().filter(|&&i| i).count(),
         })),
@@ -1447,6 +1478,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     })));
     info["radiance_maps"] = radiance_maps.unwrap_or_default();
     info["composed"] = json!(composed);
+    // The jittered cameras the emitters seen directly were drawn through (`--emission-samples`).
+    info["emission_samples"] =
+        json!(graph.emission_samples(gpu.inputs(&camera).graph_terms, args.aa));
     info["terms"] = json!(drawn_terms);
     info["term_images"] = json!(term_image_files);
     info["splat_resolution"] = json!(splat_resolution.map(|r| format!("{r:?}")));
@@ -1630,6 +1664,10 @@ pub fn render_settings(args: &RenderArgs) -> anyhow::Result<(u32, GlossySettings
             GlossyShearArg::Microfacet => ShearModel::Microfacet,
         },
         frosted_alpha: args.frosted_glass,
+        lights: match args.glossy_lights {
+            GlossyLightsArg::All => GlossyLights::All,
+            GlossyLightsArg::Paired => GlossyLights::Paired,
+        },
     };
     if args.glossy_images.is_some_and(|n| n > 0) && !args.may_draw_glossy_images() {
         bail!(

@@ -97,6 +97,21 @@ impl AccumulatePass {
         weight: f32,
         first: bool,
     ) {
+        self.encode_in(device, encoder, targets, weight, first, None);
+    }
+
+    /// [`AccumulatePass::encode`] over the pixels `[x, y, w, h]` of
+    /// `scissor` only (the whole target with `None`): a frame whose HDR
+    /// target is zero elsewhere adds nothing there.
+    pub fn encode_in(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &RenderTargets,
+        weight: f32,
+        first: bool,
+        scissor: Option<[u32; 4]>,
+    ) {
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("accumulate"),
             layout: &self.layout,
@@ -133,6 +148,9 @@ impl AccumulatePass {
             b: f64::from(weight),
             a: f64::from(weight),
         });
+        if let Some([x, y, w, h]) = scissor {
+            pass.set_scissor_rect(x, y, w, h);
+        }
         pass.set_bind_group(0, &bind_group, &[]);
         pass.draw(0..3, 0..1);
     }

@@ -40,7 +40,9 @@ use lustre_geometry::{Bvh, Camera, Ray, Rgb, Scene};
 
 use crate::diffuse_map::{DiffuseMaps, WHITE_LAYER};
 use crate::material::{GlossyModel, GpuMaterial, scene_materials};
-use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
+use crate::passes::redraw::{
+    ScenePipeline, scene_module, scene_pipeline, weighted_additive_target,
+};
 use crate::passes::shadow::{ShadowCube, ShadowPass, ShadowSettings};
 use crate::passes::shadow_volume::SHAD_ZERO;
 use crate::scene_buffers::SceneBuffers;
@@ -701,7 +703,7 @@ impl DirectPass {
                             module: &module,
                             layouts: &[&light_layout],
                             extra_vertex_buffers: &[],
-                            target: additive_target(hdr_format),
+                            target: weighted_additive_target(hdr_format),
                             depth_compare: wgpu::CompareFunction::Equal,
                             depth_write: false,
                         },
@@ -785,9 +787,13 @@ impl DirectPass {
             return;
         }
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
-        for slot in &lights.slots {
-            pass.set_pipeline(&self.pipelines(slot).shadow_mapped);
-            pass.set_bind_group(1, &slot.bind_group, &[]);
+        pass.set_blend_constant(slot.lights.blend_constant());
+        for (i, light) in lights.slots.iter().enumerate() {
+            if !slot.lights.draws(i) {
+                continue;
+            }
+            pass.set_pipeline(&self.pipelines(light).shadow_mapped);
+            pass.set_bind_group(1, &light.bind_group, &[]);
             pass.draw(0..scene.vertex_count, 0..1);
         }
     }
@@ -831,6 +837,7 @@ impl DirectPass {
         pass.set_pipeline(&self.pipelines(light).under_stencil);
         views.bind(pass, 0, slot);
         pass.set_stencil_reference(SHAD_ZERO);
+        pass.set_blend_constant(slot.lights.blend_constant());
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_bind_group(1, &light.bind_group, &[]);
         pass.draw(0..scene.vertex_count, 0..1);
@@ -865,6 +872,7 @@ impl DirectPass {
         pass.set_pipeline(&self.pipelines(light).under_stencil);
         views.bind(pass, 0, slot);
         pass.set_stencil_reference(SHAD_ZERO);
+        pass.set_blend_constant(slot.lights.blend_constant());
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.surface_indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.set_bind_group(1, &light.bind_group, &[]);

@@ -3,11 +3,13 @@
 //! target after an equal-depth redraw of the scene. CPU twin:
 //! [`emission_pass_cpu`].
 
-use glam::Vec2;
+use glam::{DVec2, Mat4, Vec2, Vec3};
 use lustre_geometry::{Bvh, Camera, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
+use crate::passes::redraw::{
+    ScenePipeline, scene_module, scene_pipeline, weighted_additive_target,
+};
 use crate::scene_buffers::SceneBuffers;
 use crate::shaders::with_view;
 use crate::target::RenderTargets;
@@ -24,6 +26,28 @@ pub struct EmissionPass {
     bind_group: wgpu::BindGroup,
     /// Whether any material emits (otherwise [`EmissionPass::encode`] records nothing).
     emissive: bool,
+    /// The world corners of every emissive triangle ([`EmissionPass::set_emitters`]), for [`EmissionPass::screen_rect`].
+    emitters: Vec<Vec3>,
+}
+
+/// The world corners of `scene`'s triangles whose material emits.
+fn emitter_corners(scene: &Scene) -> Vec<Vec3> {
+    let mut corners = Vec::new();
+    for surface in scene.surfaces() {
+        let emits = scene
+            .materials()
+            .get(surface.material as usize)
+            .is_some_and(|m| m.is_emissive());
+        if !emits {
+            continue;
+        }
+        let positions = scene.world_positions(surface.mesh);
+        let mesh = &scene.meshes()[surface.mesh as usize];
+        for &t in &surface.triangles {
+            corners.extend(mesh.indices[t as usize].map(|i| positions[i as usize]));
+        }
+    }
+    corners
 }
 
 impl EmissionPass {
@@ -61,7 +85,7 @@ impl EmissionPass {
                     module: &module,
                     layouts: &[&layout],
                     extra_vertex_buffers: &[],
-                    target: additive_target(hdr_format),
+                    target: weighted_additive_target(hdr_format),
                     depth_compare: wgpu::CompareFunction::Equal,
                     depth_write: false,
                 },
@@ -83,8 +107,41 @@ impl EmissionPass {
                 pipeline,
                 bind_group,
                 emissive,
+                emitters: emitter_corners(scene),
             }
         })
+    }
+
+    /// Takes the emitters' corners from `scene` again (its objects moved; the materials must be those the pass was built with).
+    pub fn set_emitters(&mut self, scene: &Scene) {
+        self.emitters = emitter_corners(scene);
+    }
+
+    /// The pixels `[x, y, w, h]` of a `width × height` target that the
+    /// emitters can cover under `view_projection`: the bounding rectangle of
+    /// their projected corners and a pixel all round, the whole target when
+    /// a corner lies behind the eye, `None` when nothing emits or the
+    /// rectangle is empty.
+    pub fn screen_rect(&self, view_projection: Mat4, width: u32, height: u32) -> Option<[u32; 4]> {
+        if !self.emissive || self.emitters.is_empty() {
+            return None;
+        }
+        let full = [0, 0, width, height];
+        let m = view_projection.as_dmat4();
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for c in &self.emitters {
+            let p = m * c.as_dvec3().extend(1.0);
+            if p.w <= 1e-9 {
+                return Some(full);
+            }
+            let ndc = DVec2::new(p.x / p.w, p.y / p.w);
+            lo = lo.min(ndc);
+            hi = hi.max(ndc);
+        }
+        let rect =
+            crate::view::intersect_rects(crate::view::ndc_to_pixels(lo, hi, width, height), full);
+        (rect[2] > 0 && rect[3] > 0).then_some(rect)
     }
 
     /// Records the pass after the depth pre-pass: adds `Le` where an emitter is visible from its emitting side.
@@ -99,11 +156,35 @@ impl EmissionPass {
         if !self.emissive || scene.vertex_count == 0 {
             return;
         }
+        self.encode_weighted(encoder, scene, targets, views, slot, 1.0);
+    }
+
+    /// [`EmissionPass::encode`] with `Le` weighted by `weight` (the blend
+    /// constant): one of several jittered samples summed in the HDR target.
+    pub fn encode_weighted(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        targets: &RenderTargets,
+        views: &ViewBuffer,
+        slot: ViewSlot,
+        weight: f32,
+    ) {
+        if !self.emissive || scene.vertex_count == 0 {
+            return;
+        }
         let mut pass = crate::passes::redraw::begin_over_depth(encoder, targets, "emission");
         pass.set_pipeline(&self.pipeline);
         if !views.bind_in(&mut pass, 0, slot, targets) {
             return;
         }
+        let w = f64::from(weight);
+        pass.set_blend_constant(wgpu::Color {
+            r: w,
+            g: w,
+            b: w,
+            a: w,
+        });
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.draw(0..scene.vertex_count, 0..1);

@@ -96,6 +96,7 @@ use lustre_geometry::Scene;
 use lustre_geometry::SurfaceKind;
 use wgpu::util::DeviceExt;
 
+use crate::light_group::GlossyLights;
 pub use crate::passes::glossy_lobe::{
     GlossyLobe, fog_factor, glossy_lobe, microfacet_shears, phong_alpha, shear_slopes,
 };
@@ -149,6 +150,8 @@ pub struct GlossySettings {
     /// face of every glass slab, 0 for clear glass. There is no rough
     /// dielectric material; this makes every slab of the scene frosted.
     pub frosted_alpha: f32,
+    /// Which jittered lights each sheared view draws ([`crate::light_group`]).
+    pub lights: GlossyLights,
 }
 
 /// How a glossy image's shears are drawn from its lobe.
@@ -173,6 +176,7 @@ impl Default for GlossySettings {
             hide_emitters: true,
             shear: ShearModel::Isotropic,
             frosted_alpha: 0.0,
+            lights: GlossyLights::default(),
         }
     }
 }
@@ -266,6 +270,7 @@ pub fn glossy_faces(scene: &Scene, settings: &GlossySettings) -> Vec<SpecularFac
                     hide_emitters: settings.hide_emitters,
                     shear: settings.shear,
                     through_slab: None,
+                    lights: settings.lights,
                 }),
                 factor: lobe.factor,
                 corners,
@@ -307,6 +312,7 @@ pub fn frosted(
                         hide_emitters: false,
                         shear: ShearModel::Isotropic,
                         through_slab: Some((shift, thickness)),
+                        lights: settings.lights,
                     }),
                     ..face
                 }

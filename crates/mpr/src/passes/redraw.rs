@@ -130,6 +130,28 @@ pub fn additive_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
     }
 }
 
+/// Additive blending weighted by the blend constant, `dst + C · src` on
+/// colour (a group of jittered lights standing for all of them,
+/// [`crate::light_group`]); alpha keeps `OVER`. Every pass drawn with it sets
+/// its constant ([`crate::light_group::LightGroup::blend_constant`]).
+pub const WEIGHTED_ADDITIVE: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::Constant,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    },
+    alpha: wgpu::BlendComponent::OVER,
+};
+
+/// [`additive_target`] weighted by the blend constant ([`WEIGHTED_ADDITIVE`]).
+pub fn weighted_additive_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
+    wgpu::ColorTargetState {
+        format,
+        blend: Some(WEIGHTED_ADDITIVE),
+        write_mask: wgpu::ColorWrites::ALL,
+    }
+}
+
 /// Begins a pass that adds into `targets.hdr` with `targets.depth` attached
 /// read-only (depth and stencil loaded, neither written).
 pub fn begin_over_depth<'e>(

@@ -424,6 +424,11 @@ impl ShadowVolumes {
         );
         let drawn = self.drawn.lock().unwrap_or_else(|e| e.into_inner());
         for (i, &volume) in drawn.iter().enumerate() {
+            // Inside a glossy image, only the view's group of lights
+            // (weighted by the blend constant, `crate::light_group`).
+            if !slot.lights.draws(i) {
+                continue;
+            }
             let buffers = &self.buffers[volume];
             self.pass
                 .record_begin(&mut render, slot.stencil_reference)?;

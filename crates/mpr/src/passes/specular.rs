@@ -32,6 +32,7 @@ use std::ops::Range;
 
 use glam::Vec3;
 
+use crate::light_group::GlossyLights;
 use crate::passes::glossy_image::{
     GlossyImagePass, GlossySample, GlossySettings, ShearModel, frosted, glossy_faces,
     microfacet_shears, shear_slopes,
@@ -142,6 +143,8 @@ pub struct GlossyImage {
     /// frosted glass slab ([`SpecularKind::Slab`]'s), whose images are
     /// sheared slab views (section 3's frosted glass).
     pub through_slab: Option<(f32, f32)>,
+    /// Which jittered lights its sheared views draw ([`crate::light_group`]).
+    pub lights: GlossyLights,
 }
 
 /// One planar specular face: a mirror, or a face of a glass slab.
@@ -314,6 +317,23 @@ pub struct ViewTree {
     pub limit_faces: Vec<Vec<usize>>,
     /// Per view: which sheared image of a glossy face it draws, if it is one.
     pub samples: Vec<Option<GlossySample>>,
+    /// Per view: the sample path of the outermost glossy image it lies in
+    /// (itself or an ancestor), which [`crate::view::LightGroup::paired`]
+    /// pairs with a group of the jittered lights; `None` outside glossy images.
+    pub paths: Vec<Option<GlossyPath>>,
+}
+
+/// Sample path `index` of the `of` shears of the outermost glossy image a
+/// view lies in (section 3): the shear index that image drew it with, which
+/// images nested in it inherit ([`nested_shear_index`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GlossyPath {
+    /// The outer image's shear index, `0..of`.
+    pub index: u32,
+    /// Its shear count `N`.
+    pub of: u32,
+    /// Which jittered lights the path's views draw.
+    pub lights: GlossyLights,
 }
 
 impl ViewTree {
@@ -366,6 +386,7 @@ impl ViewTree {
             children: vec![Vec::new()],
             limit_faces: vec![Vec::new()],
             samples: vec![None],
+            paths: vec![None],
         }
     }
 
@@ -404,7 +425,7 @@ impl ViewTree {
         max_depth: u32,
         clip: ClipMethod,
         frame: Option<(u32, u32)>,
-        path: Option<u32>,
+        path: Option<GlossyPath>,
     ) -> Result<()> {
         let view = self.views[index];
         for (f, face) in faces.iter().enumerate() {
@@ -420,7 +441,7 @@ impl ViewTree {
                 continue;
             }
             // (view, its glossy sample, the path index its subtree inherits)
-            let children: Vec<(View, Option<GlossySample>, Option<u32>)> = match face.kind {
+            let children: Vec<(View, Option<GlossySample>, Option<GlossyPath>)> = match face.kind {
                 SpecularKind::Mirror => vec![(view.reflected(&face.plane, clip), None, path)],
                 SpecularKind::Slab { shift, thickness } => vec![(
                     view.through_slab(&face.plane, shift, thickness, clip),
@@ -447,8 +468,8 @@ impl ViewTree {
                         // the outer image, so its N samples are N paths through
                         // both lobes (module docs of `glossy_image`).
                         (Some(p), _) => {
-                            let i = nested_shear_index(p, n_all);
-                            vec![(p, all[i as usize])]
+                            let i = nested_shear_index(p.index, n_all);
+                            vec![(p.index, all[i as usize])]
                         }
                         (None, Some((s, n))) if n > 1 && n_all >= n => (0..n_all)
                             .skip((s % n) as usize)
@@ -484,7 +505,13 @@ impl ViewTree {
                                 count,
                                 weight: weight * per,
                             };
-                            (sheared, Some(sample), Some(global))
+                            // The outermost image's path is inherited as is.
+                            let child_path = path.unwrap_or(GlossyPath {
+                                index: global,
+                                of: n_all,
+                                lights: glossy.lights,
+                            });
+                            (sheared, Some(sample), Some(child_path))
                         })
                         .collect()
                 }
@@ -509,6 +536,7 @@ impl ViewTree {
                 self.children.push(Vec::new());
                 self.limit_faces.push(Vec::new());
                 self.samples.push(sample);
+                self.paths.push(child_path);
                 self.children[index].push((f, child));
                 self.grow(child, faces, max_depth, clip, frame, child_path)?;
             }
@@ -528,16 +556,7 @@ impl ViewTree {
 /// outer ones that pairs neither large with large nor like angles.
 pub fn nested_shear_index(path: u32, n: u32) -> u32 {
     let n = n.max(1);
-    let gcd = |mut a: u32, mut b: u32| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    let mut k = ((0.618 * n as f32) as u32).max(1);
-    while gcd(k, n) != 1 {
-        k += 1;
-    }
+    let k = crate::light_group::coprime_step(n, 0.618);
     ((u64::from(path % n) * u64::from(k)) % u64::from(n)) as u32
 }
 
