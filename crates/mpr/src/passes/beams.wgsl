@@ -474,6 +474,26 @@ fn beam_arrival(bi: u32, p: vec3f, normal: vec3f) -> Arrival {
     return out;
 }
 
+// Whether P lies where beam_arrival may give light: in front of the
+// generator plane, its flux triangle defined, inside the support. The
+// traversal asks it before a beam counts as found, so that the evaluation
+// runs only for beams that may light some fragment of the block: llvmpipe
+// runs a loop's body as often as its busiest lane needs, but every branch
+// inside it whatever the lanes take.
+fn beam_supports(bi: u32, p: vec3f) -> bool {
+    if !in_front(bi, p) {
+        return false;
+    }
+    let ft = flux_triangle(bi, false, p);
+    if !ft.ok {
+        return false;
+    }
+    if beams[bi].flux.w > 0.0 {
+        return inside(flux_triangle(bi, true, p));
+    }
+    return inside(ft);
+}
+
 // One beam's radiance towards the eye: f_r(-d, wo) E, every lobe's kd scaled
 // by the receiver's diffuse map tint (1 without a map: f_r exactly).
 fn beam_radiance(bi: u32, p: vec3f, n: vec3f, basis: mat3x3f, wo_local: vec3f, mi: u32, tint: vec3f) -> vec3f {
@@ -520,17 +540,18 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
         var found = false;
         loop {
             if k < k_end {
-                if !hierarchy {
-                    bi = k;
-                    k += 1u;
-                    found = true;
-                    break;
+                var candidate = k;
+                var counted = true;
+                if hierarchy {
+                    let item = items[k];
+                    candidate = item.beam;
+                    let s = dot(beams[item.beam].wavefront.xyz, p);
+                    counted = s >= item.lo && s < item.hi;
                 }
-                let item = items[k];
                 k += 1u;
-                let s = dot(beams[item.beam].wavefront.xyz, p);
-                if s >= item.lo && s < item.hi {
-                    bi = item.beam;
+                // A beam that cannot light P adds nothing: skipped here.
+                if counted && beam_supports(candidate, p) {
+                    bi = candidate;
                     found = true;
                     break;
                 }
