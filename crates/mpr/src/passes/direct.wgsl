@@ -211,12 +211,11 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4f {
     let basis = material_basis(n);
     let wi = material_to_local(basis, wi_world);
     let wo = material_to_local(basis, wo_world);
-    var f: vec3f;
+    // One BRDF evaluation: the tint is exactly 1 without a map, and
+    // kd * 1 is kd, so this is material_brdf_at bit for bit there
+    // (llvmpipe runs both sides of a branch, so two evaluations cost two).
     let layer = materials[in.material].diffuse_map.x;
-    if layer != 0u {
-        f = material_brdf_tinted(in.material, wi, wo, diffuse_tint_grad(layer, in.uv, duv_dx, duv_dy));
-    } else {
-        f = material_brdf_at(in.material, wi, wo);
-    }
+    let tint = diffuse_tint_grad(layer, in.uv, duv_dx, duv_dy);
+    let f = material_brdf_tinted(in.material, wi, wo, tint);
     return vec4f(f * intensity * (cos_i * v / (d * d)), 0.0);
 }
