@@ -757,7 +757,7 @@ impl FrameGraph {
                 if s + 1 == samples {
                     if let Some(emission) = emission_apart {
                         // Ordered after this submit's views (write_buffer
-                        // applies at submit), each sample its own submit.
+                        // applies at submit): the samples' views replace them.
                         ctx.queue.submit([encoder.finish()]);
                         self.encode_emission_samples(ctx, frame, emission, &mut views, accumulate)?;
                         encoder =
@@ -879,8 +879,8 @@ impl FrameGraph {
     /// the emission pass weighted `1/samples`, both inside the rectangle the
     /// emitters may cover ([`EmissionPass::screen_rect`]), summed in the
     /// cleared HDR target, then added to [`RenderTargets::accumulation`]
-    /// over the rectangles' union.
-    /// Only the camera's view: [`FrameGraph::emission_apart`] holds that no other shows emitters.
+    /// over the rectangles' union. Only the camera's view:
+    /// [`FrameGraph::emission_apart`] holds that no other shows emitters.
     fn encode_emission_samples(
         &self,
         ctx: &GpuContext,

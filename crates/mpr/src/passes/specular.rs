@@ -318,7 +318,7 @@ pub struct ViewTree {
     /// Per view: which sheared image of a glossy face it draws, if it is one.
     pub samples: Vec<Option<GlossySample>>,
     /// Per view: the sample path of the outermost glossy image it lies in
-    /// (itself or an ancestor), which [`crate::view::LightGroup::paired`]
+    /// (itself or an ancestor), which [`crate::light_group::LightGroup::for_path`]
     /// pairs with a group of the jittered lights; `None` outside glossy images.
     pub paths: Vec<Option<GlossyPath>>,
 }
