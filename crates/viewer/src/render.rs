@@ -1021,6 +1021,9 @@ pub const DEFAULT_AA: u32 = 4;
 /// `--emission-samples`' default: the emitters' edges through 64 jittered cameras.
 pub const DEFAULT_EMISSION_SAMPLES: u32 = 64;
 
+/// The most `--emission-samples` (one view block each in the frame's view buffer).
+pub const MAX_EMISSION_SAMPLES: u32 = 4096;
+
 /// Milliseconds since `start`.
 fn ms(start: Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
@@ -1058,6 +1061,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     if args.aa == 0 {
         bail!("--aa 0: at least one sample per pixel is needed");
+    }
+    if args.emission_samples > MAX_EMISSION_SAMPLES {
+        bail!(
+            "--emission-samples {}: at most {MAX_EMISSION_SAMPLES} (256 already leaves a light's \
+             edge within 1/256 of its coverage)",
+            args.emission_samples
+        );
     }
     if args.restriction == RestrictionArg::Stencil
         && matches!(

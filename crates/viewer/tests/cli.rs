@@ -278,6 +278,17 @@ fn render_refuses_bad_options_before_writing_anything() {
             vec![
                 "render",
                 "glosbox",
+                "--emission-samples",
+                "5000",
+                "--out",
+                out,
+            ],
+            "--emission-samples 5000: at most 4096",
+        ),
+        (
+            vec![
+                "render",
+                "glosbox",
                 "--technique",
                 "splat-direct",
                 "--beam-roughness",
