@@ -879,7 +879,7 @@ impl FrameGraph {
     /// the emission pass weighted `1/samples`, both inside the rectangle the
     /// emitters may cover ([`EmissionPass::screen_rect`]), summed in the
     /// cleared HDR target, then added to [`RenderTargets::accumulation`]
-    /// over the rectangles' union. Only the camera's view:
+    /// over that rectangle. Only the camera's view:
     /// [`FrameGraph::emission_apart`] holds that no other shows emitters.
     fn encode_emission_samples(
         &self,
@@ -892,23 +892,26 @@ impl FrameGraph {
         let samples = self.emission_samples;
         let targets = frame.targets;
         let (width, height) = (targets.width, targets.height);
-        // Every sample's camera, and the pixels its emitters may cover.
-        let mut cameras = Vec::new();
-        let mut rects = Vec::new();
-        for j in 0..samples {
-            let view = View::from_camera(&frame.camera.with_pixel_offset(
-                hammersley_centred(j, samples),
-                width,
-                height,
-            ));
-            if let Some(rect) = emission.screen_rect(view.view_projection(), width, height) {
-                cameras.push(view);
-                rects.push(rect);
-            }
-        }
-        let Some(union) = rects.iter().copied().reduce(crate::view::union_rects) else {
+        // The pixels the emitters may cover, once through the pixel centres:
+        // a sample's jitter moves every projected point by under half a
+        // pixel, and the rectangle has a pixel of margin all round.
+        let centre = frame
+            .camera
+            .with_pixel_offset(glam::Vec2::splat(0.5), width, height);
+        let Some(rect) =
+            emission.screen_rect(View::from_camera(&centre).view_projection(), width, height)
+        else {
             return Ok(());
         };
+        let cameras: Vec<View> = (0..samples)
+            .map(|j| {
+                View::from_camera(&frame.camera.with_pixel_offset(
+                    hammersley_centred(j, samples),
+                    width,
+                    height,
+                ))
+            })
+            .collect();
         let slots = views.write(ctx, &cameras)?;
         let mut encoder = ctx
             .device
@@ -917,7 +920,7 @@ impl FrameGraph {
             });
         clear_hdr(&mut encoder, targets);
         let weight = 1.0 / samples as f32;
-        for (mut slot, rect) in slots.into_iter().zip(rects) {
+        for mut slot in slots {
             slot.scissor = rect;
             self.timed(&mut encoder, "depth", |encoder| {
                 self.depth
@@ -928,7 +931,7 @@ impl FrameGraph {
             });
         }
         self.timed(&mut encoder, "accumulate", |encoder| {
-            accumulate.encode_in(&ctx.device, encoder, targets, 1.0, false, Some(union));
+            accumulate.encode_in(&ctx.device, encoder, targets, 1.0, false, Some(rect));
         });
         ctx.queue.submit([encoder.finish()]);
         Ok(())

@@ -87,13 +87,7 @@ impl LightGroup {
 
     /// The blend constant the direct pass draws this group's lights with (`src · C + dst`).
     pub fn blend_constant(&self) -> wgpu::Color {
-        let w = self.weight();
-        wgpu::Color {
-            r: w,
-            g: w,
-            b: w,
-            a: w,
-        }
+        crate::passes::redraw::uniform_constant(self.weight())
     }
 }
 

@@ -445,15 +445,6 @@ pub fn ndc_to_pixels(lo: glam::DVec2, hi: glam::DVec2, width: u32, height: u32) 
     ]
 }
 
-/// The smallest pixel rectangle `[x, y, w, h]` holding two non-empty ones.
-pub fn union_rects(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
-    let x0 = a[0].min(b[0]);
-    let y0 = a[1].min(b[1]);
-    let x1 = (a[0].saturating_add(a[2])).max(b[0].saturating_add(b[2]));
-    let y1 = (a[1].saturating_add(a[3])).max(b[1].saturating_add(b[3]));
-    [x0, y0, x1 - x0, y1 - y0]
-}
-
 /// The intersection of two pixel rectangles `[x, y, w, h]` (empty: zero size).
 pub fn intersect_rects(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
     let x0 = a[0].max(b[0]);

@@ -142,12 +142,7 @@ impl AccumulatePass {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_blend_constant(wgpu::Color {
-            r: f64::from(weight),
-            g: f64::from(weight),
-            b: f64::from(weight),
-            a: f64::from(weight),
-        });
+        pass.set_blend_constant(crate::passes::redraw::uniform_constant(f64::from(weight)));
         if let Some([x, y, w, h]) = scissor {
             pass.set_scissor_rect(x, y, w, h);
         }

@@ -153,9 +153,6 @@ impl EmissionPass {
         views: &ViewBuffer,
         slot: ViewSlot,
     ) {
-        if !self.emissive || scene.vertex_count == 0 {
-            return;
-        }
         self.encode_weighted(encoder, scene, targets, views, slot, 1.0);
     }
 
@@ -178,13 +175,7 @@ impl EmissionPass {
         if !views.bind_in(&mut pass, 0, slot, targets) {
             return;
         }
-        let w = f64::from(weight);
-        pass.set_blend_constant(wgpu::Color {
-            r: w,
-            g: w,
-            b: w,
-            a: w,
-        });
+        pass.set_blend_constant(crate::passes::redraw::uniform_constant(f64::from(weight)));
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.draw(0..scene.vertex_count, 0..1);

@@ -673,13 +673,9 @@ impl GlossyImagePass {
         });
         views.bind(&mut pass, 0, child);
         pass.set_bind_group(1, &bind_group, &[]);
-        let weight = f64::from(sample.weight);
-        pass.set_blend_constant(wgpu::Color {
-            r: weight,
-            g: weight,
-            b: weight,
-            a: weight,
-        });
+        pass.set_blend_constant(crate::passes::redraw::uniform_constant(f64::from(
+            sample.weight,
+        )));
         pass.draw(0..3, 0..1);
     }
 

@@ -143,6 +143,16 @@ pub const WEIGHTED_ADDITIVE: wgpu::BlendState = wgpu::BlendState {
     alpha: wgpu::BlendComponent::OVER,
 };
 
+/// The blend constant `(w, w, w, w)`: one weight for every channel.
+pub fn uniform_constant(w: f64) -> wgpu::Color {
+    wgpu::Color {
+        r: w,
+        g: w,
+        b: w,
+        a: w,
+    }
+}
+
 /// [`additive_target`] weighted by the blend constant ([`WEIGHTED_ADDITIVE`]).
 pub fn weighted_additive_target(format: wgpu::TextureFormat) -> wgpu::ColorTargetState {
     wgpu::ColorTargetState {
