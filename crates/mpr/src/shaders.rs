@@ -10,6 +10,26 @@ pub const VIEW_WGSL: &str = include_str!("shaders/common/view.wgsl");
 /// The depth pre-pass's own WGSL (`src/passes/depth.wgsl`); compiled after [`VIEW_WGSL`].
 pub const DEPTH_WGSL: &str = include_str!("passes/depth.wgsl");
 
+/// `source` with its switch `line` (`const NAME: bool = true;`) set to
+/// `false`, so the code behind it compiles away: llvmpipe runs a branch no
+/// lane takes under an empty mask, so a pass that never needs a feature is
+/// compiled without it. Fails naming `file` (the pass's WGSL) and `what`
+/// when the source lacks the line.
+pub fn switched_off(
+    source: String,
+    line: &str,
+    what: &'static str,
+    file: &str,
+) -> crate::Result<String> {
+    if !source.contains(line) {
+        return Err(crate::MprError::InvalidSetting {
+            what,
+            message: format!("{file} lacks the line `{line}`"),
+        });
+    }
+    Ok(source.replace(line, &line.replace("true", "false")))
+}
+
 /// A scene pass's own WGSL after the shared [`VIEW_WGSL`].
 pub fn with_view(pass: &str) -> String {
     format!("{VIEW_WGSL}\n{pass}")

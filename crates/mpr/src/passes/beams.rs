@@ -46,7 +46,7 @@ use crate::material::{GlossyModel, scene_materials};
 use crate::passes::direct::{check_layers, cpu_brdfs, primary_hits};
 use crate::passes::redraw::{ScenePipeline, additive_target, scene_module, scene_pipeline};
 use crate::scene_buffers::SceneBuffers;
-use crate::shaders::{with_diffuse_maps, with_materials, with_view};
+use crate::shaders::{switched_off, with_diffuse_maps, with_materials, with_view};
 use crate::target::RenderTargets;
 use crate::view::{ViewBuffer, ViewSlot};
 use crate::{GpuContext, MprError, Result};
@@ -69,17 +69,9 @@ const FACET_VOLUMES_ON: &str = "const FACET_VOLUMES: bool = true;";
 /// executes a branch no lane takes (module docs).
 pub fn beams_wgsl_with(facets: bool) -> Result<String> {
     let source = beams_wgsl();
-    if !source.contains(FACET_VOLUMES_ON) {
-        return Err(MprError::InvalidSetting {
-            what: "beam pass",
-            message: format!("beams.wgsl lacks the line `{FACET_VOLUMES_ON}`"),
-        });
-    }
-    Ok(if facets {
-        source
-    } else {
-        source.replace(FACET_VOLUMES_ON, &FACET_VOLUMES_ON.replace("true", "false"))
-    })
+    // Built either way, so that a renamed switch fails for both.
+    let off = switched_off(source.clone(), FACET_VOLUMES_ON, "beam pass", "beams.wgsl")?;
+    Ok(if facets { source } else { off })
 }
 
 /// Whether any glossy beam of `beams` takes the planar facets' volume.

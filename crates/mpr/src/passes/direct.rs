@@ -573,13 +573,7 @@ const WINDOWS_ON: &str = "const WINDOWS: bool = true;";
 /// volumes (Diefenbach & Badler 1997, section 4.1); without [`WINDOWS_ON`]
 /// for lights that pass no window.
 fn switched_off(source: String, line: &str) -> Result<String> {
-    if !source.contains(line) {
-        return Err(MprError::InvalidSetting {
-            what: "direct pass",
-            message: format!("direct.wgsl lacks the line `{line}`"),
-        });
-    }
-    Ok(source.replace(line, &line.replace("true", "false")))
+    crate::shaders::switched_off(source, line, "direct pass", "direct.wgsl")
 }
 
 /// The pipelines of one window switch: shadow-mapped, and under the
