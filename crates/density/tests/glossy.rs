@@ -8,14 +8,15 @@ use lustre_brdf::models::Phong;
 use lustre_brdf::{BoxedBrdf, Brdf, from_model};
 use lustre_density::glossy::{
     GlossyMode, GlossyVertex, GlossyVertices, IncidentRay, RayList, UpdateStats, glossy_meshes,
-    ray_difference,
+    ray_difference, twin_rays,
 };
 use lustre_density::quadtree::{
     QuadTree, QuadTreeOptions, Summary, SummaryTree, hemisphere_to_square, square_to_hemisphere,
     summary_degradation,
 };
 use lustre_density::{
-    DensityError, Disc, RaySegment, RaySet, RaySetOptions, diffuse_radiance, trace_ray_set,
+    DensityError, Disc, PrimaryRay, RaySegment, RaySet, RaySetOptions, diffuse_radiance,
+    trace_ray_set,
 };
 use lustre_geometry::sampling::{Frame, Pcg32, sample_uniform_hemisphere};
 use lustre_geometry::{Bvh, MaterialModel, Rgb, Scene, builtin};
@@ -1026,4 +1027,135 @@ fn invalid_options_are_errors() {
     assert!(s.update(&segments, &[]).is_err());
     assert_eq!(s, before);
     assert!(s.rays().is_none());
+}
+
+/// An Old Ray and a New Ray with the same direction and power (a re-traced path's first segment, ending elsewhere) cancel at every disc both cross: the updated stores equal, store for store, those built from scratch on the ray set after the frame, with far fewer insertions and removals than the rays crossing the discs, and a vertex only such pairs cross is not listed as changed.
+#[test]
+fn twin_old_and_new_rays_cancel_before_the_store() {
+    let (scene, _, rays) = shared();
+    let meshes = glossy_meshes(scene);
+    let segments: Vec<RaySegment> = rays.segments().copied().collect();
+    // Old: 6,000 held segments that end on a surface; New: each of the first 4,000 again, ending halfway
+    // (its twin), and 1,000 segments of another trace.
+    let old: Vec<RaySegment> = segments
+        .iter()
+        .filter(|s| s.hit.is_some())
+        .take(6_000)
+        .copied()
+        .collect();
+    let mut new: Vec<RaySegment> = old[..4_000]
+        .iter()
+        .map(|s| {
+            let mut twin = *s;
+            let hit = twin.hit.as_mut().unwrap();
+            hit.distance *= 0.5;
+            hit.position = s.origin + s.direction * hit.distance;
+            twin
+        })
+        .collect();
+    new.extend_from_slice(&other_trace(scene)[..1_000]);
+    let (old_twin, new_twin) = twin_rays(&old, &new);
+    assert!(
+        old_twin[..4_000]
+            .iter()
+            .enumerate()
+            .all(|(i, t)| *t == Some(i as u32))
+    );
+    assert!(
+        new_twin[..4_000]
+            .iter()
+            .enumerate()
+            .all(|(i, t)| *t == Some(i as u32))
+    );
+    assert!(old_twin[4_000..].iter().all(Option::is_none));
+    // A key two New Rays share has no twin: the pairing stays one to one.
+    let doubled = [new[0], new[0]];
+    assert_eq!(
+        twin_rays(&old[..1], &doubled),
+        (vec![None], vec![None, None])
+    );
+    // The ray set after a frame: every segment less the Old Rays, with `added`.
+    let after = |added: &[&[RaySegment]]| RaySet {
+        rays: vec![PrimaryRay {
+            light: 0,
+            index: 0,
+            segments: segments
+                .iter()
+                .filter(|s| s.hit.is_none())
+                .chain(segments.iter().filter(|s| s.hit.is_some()).skip(6_000))
+                .chain(added.iter().copied().flatten())
+                .copied()
+                .collect(),
+        }],
+        emitted_per_light: rays.emitted_per_light.clone(),
+    };
+    for mode in [
+        GlossyMode::List,
+        GlossyMode::QuadTree {
+            options: QuadTreeOptions::default(),
+            tolerance: 0.01,
+        },
+    ] {
+        let built = GlossyVertices::build(scene, rays, 0.3, mode, &meshes).unwrap();
+        // What every vertex's own test sees of a frame: its crossings, the twins (by index) crossing it
+        // both, the vertices crossed and those crossed by such twins alone.
+        let seen = |old: &[RaySegment], new: &[RaySegment]| {
+            let (mut crossing, mut twins, mut touched, mut untouched) = (0, 0, 0, 0);
+            for &m in &meshes {
+                for v in built.vertices(m).iter().flatten() {
+                    let n = old
+                        .iter()
+                        .chain(new)
+                        .filter(|s| v.incident(s).is_some())
+                        .count();
+                    let both = (0..4_000)
+                        .filter(|&i| v.incident(&old[i]).is_some() && v.incident(&new[i]).is_some())
+                        .count();
+                    crossing += n;
+                    twins += both;
+                    touched += usize::from(n > 0);
+                    untouched += usize::from(n > 0 && n == 2 * both);
+                }
+            }
+            (crossing, twins, touched, untouched)
+        };
+        let mut updated = built.clone();
+        let (stats, listed) = updated.update_listing(&old, &new).unwrap();
+        let rebuilt = GlossyVertices::build(scene, &after(&[&new]), 0.3, mode, &meshes).unwrap();
+        assert!(
+            updated == rebuilt,
+            "{mode:?}: the updated stores differ from the rebuilt ones"
+        );
+        let (crossing, twins, touched, untouched) = seen(&old, &new);
+        assert!(
+            twins > 200,
+            "{mode:?}: only {twins} twins cross a disc both"
+        );
+        assert_eq!(stats.missing, 0);
+        assert_eq!(
+            stats.removed + stats.inserted,
+            crossing - 2 * twins,
+            "{mode:?}"
+        );
+        assert_eq!(listed.len(), touched - untouched, "{mode:?}");
+        // One pair whose ends both lie beyond every disc it crosses moves back: no vertex changes.
+        let vertices = || meshes.iter().flat_map(|&m| built.vertices(m)).flatten();
+        let i = (0..4_000)
+            .find(|&i| {
+                vertices().any(|v| v.incident(&old[i]).is_some())
+                    && vertices()
+                        .all(|v| v.incident(&old[i]).is_some() == v.incident(&new[i]).is_some())
+            })
+            .expect("a twin crossing the same discs");
+        let (stats, listed) = updated.update_listing(&new[i..=i], &old[i..=i]).unwrap();
+        assert_eq!(stats, UpdateStats::default(), "{mode:?}");
+        assert!(listed.is_empty(), "{mode:?}: {listed:?}");
+        let mut moved = new.clone();
+        moved[i] = old[i];
+        let rebuilt = GlossyVertices::build(scene, &after(&[&moved]), 0.3, mode, &meshes).unwrap();
+        assert!(
+            updated == rebuilt,
+            "{mode:?}: the stores differ after the second frame"
+        );
+    }
 }
