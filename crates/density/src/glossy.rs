@@ -42,17 +42,17 @@
 //! about [`BYTES_PER_STORED_RAY`] a stored one), and beyond it the net change
 //! is applied.
 //!
-//! Beyond the paper, an Old Ray and a New Ray of one frame that carry the
-//! same direction and power ([`twin_rays`]: a re-traced path's first changed
-//! segment keeps its origin, direction and power and only ends elsewhere)
-//! are the same incident ray at every disc both cross, so there they cancel
-//! before the store sees them: an exact store gets the same multiset, bit for
-//! bit, with about a quarter fewer insertions and removals on a dense glossy
-//! model, and a vertex whose rays all cancel keeps its radiance. Summarised
-//! stores get every ray, as the formula of section 2.10.1 asks.
+//! Beyond the paper, an Old Ray and a New Ray of one frame with the same
+//! origin, direction and power ([`crate::twin_segments`]: a re-traced path's
+//! first changed segment keeps them and only ends elsewhere) are the same
+//! incident ray at every disc both cross, so there they cancel before the
+//! store sees them ([`DiscSet::net_crossings`], which also traverses such a
+//! pair once): an exact store gets the same multiset, bit for bit, with about
+//! a quarter fewer insertions and removals on a dense glossy model, and a
+//! vertex whose rays all cancel keeps its radiance. Summarised stores get
+//! every ray, as the formula of section 2.10.1 asks.
 
 use std::cmp::Ordering;
-use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 use lustre_brdf::{BoxedBrdf, Brdf};
@@ -642,6 +642,8 @@ pub struct GlossyVertices {
     discs: DiscSet,
     /// The disc of each vertex in `discs`, `[mesh][vertex]`.
     disc_of: Vec<Vec<Option<u32>>>,
+    /// Whether the stores are summaries ([`GlossyMode::Summarised`]), which take every Old and New Ray.
+    summarised: bool,
 }
 
 impl PartialEq for GlossyVertices {
@@ -787,6 +789,7 @@ impl GlossyVertices {
                 .collect(),
             discs: set,
             disc_of,
+            summarised: matches!(mode, GlossyMode::Summarised(_)),
         })
     }
 
@@ -823,10 +826,13 @@ impl GlossyVertices {
         new: &[RaySegment],
         eye: Option<Vec3>,
     ) -> Result<(UpdateStats, Vec<(MeshId, u32)>)> {
-        // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept.
-        let old_crossing = self.discs.crossings(old)?;
-        let new_crossing = self.discs.crossings(new)?;
-        let (old_twin, new_twin) = twin_rays(old, new);
+        // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept,
+        // less the twins that cancel there for an exact store (module docs).
+        let (old_crossing, new_crossing) = if self.summarised {
+            (self.discs.crossings(old)?, self.discs.crossings(new)?)
+        } else {
+            self.discs.net_crossings(old, new)?
+        };
         let per_vertex: Vec<(UpdateStats, (MeshId, u32))> = self
             .meshes
             .par_iter_mut()
@@ -846,17 +852,9 @@ impl GlossyVertices {
                 if old_in.is_empty() && new_in.is_empty() {
                     return None;
                 }
-                // An Old Ray whose twin also crosses this disc is the same incident ray removed and inserted
-                // again: an exact store skips both (module docs).
-                let exact = !matches!(v.store, Store::Summary(_));
-                let mut old_kept = untwinned(old_in, &old_twin, new_in, exact).peekable();
-                let mut new_kept = untwinned(new_in, &new_twin, old_in, exact).peekable();
-                if old_kept.peek().is_none() && new_kept.peek().is_none() {
-                    return None;
-                }
                 v.update_crossing(
-                    old_kept.map(|&i| &old[i as usize]),
-                    new_kept.map(|&i| &new[i as usize]),
+                    old_in.iter().map(|&i| &old[i as usize]),
+                    new_in.iter().map(|&i| &new[i as usize]),
                     eye,
                 )
                 .map(|stats| stats.map(|stats| (stats, id)))
@@ -988,47 +986,6 @@ impl GlossyVertices {
             })
             .collect()
     }
-}
-
-/// For each Old Ray its twin among the New Rays, and for each New Ray its twin among the Old Rays: the one
-/// segment of the other kind with the same direction and power bits (the same [`IncidentRay`] at every disc
-/// both cross), where no other Old or New Ray shares them, so that the pairing is one to one.
-pub fn twin_rays(old: &[RaySegment], new: &[RaySegment]) -> (Vec<Option<u32>>, Vec<Option<u32>>) {
-    let key = |s: &RaySegment| -> RayKey {
-        let (d, p) = (s.direction, s.power);
-        [d.x, d.y, d.z, p.x, p.y, p.z].map(f32::to_bits)
-    };
-    // Per key: how many Old and New Rays carry it, and the last of each.
-    let mut seen: HashMap<RayKey, [(u32, u32); 2]> = HashMap::with_capacity(old.len() + new.len());
-    for (side, segments) in [old, new].into_iter().enumerate() {
-        for (i, s) in segments.iter().enumerate() {
-            let entry = &mut seen.entry(key(s)).or_default()[side];
-            *entry = (entry.0 + 1, i as u32);
-        }
-    }
-    let twins = |side: usize, segments: &[RaySegment]| {
-        segments
-            .iter()
-            .map(|s| match seen[&key(s)] {
-                [(1, o), (1, n)] => Some(if side == 0 { n } else { o }),
-                _ => None,
-            })
-            .collect()
-    };
-    (twins(0, old), twins(1, new))
-}
-
-/// The segments `ids` crossing a disc less those whose twin (`twins`, by segment) is among `other`, the
-/// disc's crossing segments of the other kind; all of them unless `cancel`.
-fn untwinned<'a>(
-    ids: &'a [u32],
-    twins: &'a [Option<u32>],
-    other: &'a [u32],
-    cancel: bool,
-) -> impl Iterator<Item = &'a u32> {
-    ids.iter().filter(move |&&i| {
-        !cancel || twins[i as usize].is_none_or(|t| other.binary_search(&t).is_err())
-    })
 }
 
 /// The BRDF of `material` among `brdfs` (one per material); an error when there is none.

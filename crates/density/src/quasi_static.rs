@@ -637,9 +637,8 @@ impl QuasiStatic {
                     return Ok(());
                 };
                 let (fixed, moving) = sums.split_at_mut(first_mobile);
-                // E(x, t) = E(x, t-1) + E(x; N^t) - E(x; O^t) (equation 2.4).
-                fixed_set.accumulate(&update.old, -1.0, fixed)?;
-                fixed_set.accumulate(&update.new, 1.0, fixed)?;
+                // E(x, t) = E(x, t-1) + E(x; N^t) - E(x; O^t) (equation 2.4), without the twins' terms that cancel.
+                fixed_set.accumulate_net(&update.old, &update.new, fixed)?;
                 // Mobile vertices: the initial algorithm over every ray (section 2.5.2).
                 moving.fill(DVec3::ZERO);
                 moving_set.accumulate(&all, 1.0, moving)?;

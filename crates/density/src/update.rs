@@ -1,5 +1,7 @@
 //! PHOTOSIMULATION RECALCULUS (section 2.3, figure 2.2): after the mobile objects move, every ray that hit one of them, or hits one now, is traced again from that ray on; its old path goes to OldRays, the new one to NewRays.
 
+use std::collections::HashMap;
+
 use lustre_geometry::{Ray, Scene};
 use rayon::prelude::*;
 
@@ -77,6 +79,40 @@ pub fn update_ray_set_where(
         update.new.extend(new);
     }
     Ok(update)
+}
+
+/// For each Old Ray its twin among the New Rays, and for each New Ray its twin among the Old Rays: the one
+/// segment of the other kind with the same origin, direction and power bits (a re-traced path's first
+/// changed segment, which keeps them and only ends elsewhere), where no other Old or New Ray shares them,
+/// so that the pairing is one to one (beyond the paper: such a pair crosses the same discs but near its
+/// ends, and there its two contributions cancel).
+pub fn twin_segments(
+    old: &[RaySegment],
+    new: &[RaySegment],
+) -> (Vec<Option<u32>>, Vec<Option<u32>>) {
+    let key = |s: &RaySegment| {
+        let (o, d, p) = (s.origin, s.direction, s.power);
+        [o.x, o.y, o.z, d.x, d.y, d.z, p.x, p.y, p.z].map(f32::to_bits)
+    };
+    // Per key: how many Old and New Rays carry it, and the last of each.
+    let mut seen: HashMap<[u32; 9], [(u32, u32); 2]> =
+        HashMap::with_capacity(old.len() + new.len());
+    for (side, segments) in [old, new].into_iter().enumerate() {
+        for (i, s) in segments.iter().enumerate() {
+            let entry = &mut seen.entry(key(s)).or_default()[side];
+            *entry = (entry.0 + 1, i as u32);
+        }
+    }
+    let twins = |side: usize, segments: &[RaySegment]| {
+        segments
+            .iter()
+            .map(|s| match seen[&key(s)] {
+                [(1, o), (1, n)] => Some(if side == 0 { n } else { o }),
+                _ => None,
+            })
+            .collect()
+    };
+    (twins(0, old), twins(1, new))
 }
 
 /// Figure 2.2's test: the ray intersected the mobile object, or intersects it now before its current end. (The artifact-control extension is measured against the static scene only, so it never changes while the ray is kept.)

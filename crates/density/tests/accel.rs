@@ -6,7 +6,7 @@ use glam::{DVec3, Vec3};
 use lustre_density::accel::{InvariantError, scene_discs, scene_slack};
 use lustre_density::{
     Acceleration, DensityError, Disc, DiscSet, DiscSetOptions, PreTest, RaySegment, RaySetOptions,
-    SegmentGrid, SegmentHit, segment_meets_box, trace_ray_set,
+    SegmentGrid, SegmentHit, segment_meets_box, trace_ray_set, twin_segments,
 };
 use lustre_geometry::meshing::subdivide;
 use lustre_geometry::{Aabb, Bvh, Rgb, Scene, builtin};
@@ -338,6 +338,114 @@ fn random_scene(
     (discs, segments)
 }
 
+/// [`DiscSet::net_crossings`] and [`DiscSet::accumulate_net`] with every acceleration × pre-test against
+/// brute force on a random scene whose New Rays are twins of Old Rays (ending shorter, farther, on another
+/// mesh or with another extension) and random segments, with one Old Ray repeated (no twin); the number of
+/// (disc, twin pair) crossings that cancelled.
+fn check_net(
+    seed: u64,
+    n_discs: usize,
+    n_segments: usize,
+    kind: u32,
+    slack: f32,
+    scale: f32,
+    offset: f32,
+) -> Result<usize, String> {
+    let (discs, mut old) = random_scene(seed, n_discs, n_segments, kind, scale, offset);
+    let mut rng = Rng(seed ^ 0x9e37_79b9);
+    let mut new: Vec<RaySegment> = Vec::new();
+    for s in &old {
+        if rng.chance(0.6) {
+            let mut twin = *s;
+            let length = s.hit.map_or(rng.range(0.0, 3.0) * scale, |h| h.distance);
+            let distance = length * [0.3, 0.999_999, 1.000_001, 1.7][rng.below(4) as usize];
+            twin.hit = (!rng.chance(0.1))
+                .then(|| hit(s.origin, s.direction, distance, rng.below(3) as u32));
+            twin.extension = [0.0, 0.01, 0.2][rng.below(3) as usize] * scale;
+            new.push(twin);
+        }
+    }
+    new.extend(random_segments(
+        &mut rng,
+        &discs,
+        n_segments / 4,
+        scale,
+        Vec3::ZERO,
+    ));
+    old.push(old[0]);
+    let (old_twin, new_twin) = twin_segments(&old, &new);
+    if old_twin[0].is_some() || old_twin[old.len() - 1].is_some() {
+        return Err("a repeated Old Ray has a twin".into());
+    }
+    // Brute force: each disc's crossings less the twins crossing it both.
+    let net = |a: &[RaySegment], b: &[RaySegment], twins: &[Option<u32>]| -> Vec<Vec<u32>> {
+        discs
+            .iter()
+            .map(|d| {
+                (0..a.len() as u32)
+                    .filter(|&j| d.is_crossed_by(&a[j as usize], slack))
+                    .filter(|&j| {
+                        twins[j as usize].is_none_or(|k| !d.is_crossed_by(&b[k as usize], slack))
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let (want_old, want_new) = (net(&old, &new, &old_twin), net(&new, &old, &new_twin));
+    let cancelled = discs
+        .iter()
+        .map(|d| {
+            (0..old.len())
+                .filter(|&j| {
+                    old_twin[j].is_some_and(|k| {
+                        d.is_crossed_by(&old[j], slack) && d.is_crossed_by(&new[k as usize], slack)
+                    })
+                })
+                .count()
+        })
+        .sum();
+    let sum = |ids: &[u32], segments: &[RaySegment]| {
+        ids.iter().fold(DVec3::ZERO, |acc, &j| {
+            acc + segments[j as usize].power.as_dvec3()
+        })
+    };
+    let lists = |c: &lustre_density::Crossings| c.iter().map(<[u32]>::to_vec).collect::<Vec<_>>();
+    for acceleration in accelerations() {
+        for pretest in PreTest::ALL {
+            let label = format!("{acceleration:?} {pretest:?}");
+            let options = DiscSetOptions {
+                slack,
+                acceleration,
+                pretest,
+            };
+            let set = DiscSet::new(discs.clone(), options).map_err(|e| e.to_string())?;
+            let (a, b) = set.net_crossings(&old, &new).map_err(|e| e.to_string())?;
+            if lists(&a) != want_old || lists(&b) != want_new {
+                return Err(format!("{label}: net crossings differ from brute force"));
+            }
+            let mut out = initial(discs.len());
+            set.accumulate_net(&old, &new, &mut out)
+                .map_err(|e| e.to_string())?;
+            for (i, o) in out.iter().enumerate() {
+                let mut want = initial(discs.len())[i];
+                want += -1.0 * sum(&want_old[i], &old);
+                want += 1.0 * sum(&want_new[i], &new);
+                if bits(*o) != bits(want) {
+                    return Err(format!("{label}: disc {i} sum {o} != {want}"));
+                }
+            }
+        }
+    }
+    Ok(cancelled)
+}
+
+/// One scene of [`check_net`] with many discs: twins cancel on many of them.
+#[test]
+fn net_crossings_cancel_twins_as_brute_force_does() {
+    let cancelled = check_net(7, 40, 400, 2, 1e-4, 1.0, 0.0).unwrap();
+    assert!(cancelled > 50, "only {cancelled} twin crossings cancelled");
+}
+
 /// The disc index's normal cones (a leaf whose discs all face one way is skipped by segments travelling along that way) against brute force where the back-face test is closest to its rounding: flat discs that share one normal, crossed by segments within a hair of their plane from either side, and discs on a sphere crossed by segments leaving it along each normal and arriving against it.
 #[test]
 fn normal_cones_keep_grazing_and_leaving_segments_exact() {
@@ -473,6 +581,22 @@ proptest! {
             pretest: PreTest::None,
         }).unwrap();
         prop_assert!(set.validate_ray_cache(&segments).is_ok());
+    }
+
+    /// A frame's net crossings (twins, the Old and New Rays with the same origin, direction and power, left
+    /// out of the discs they both cross) and sums, with every acceleration × pre-test, against brute force.
+    #[test]
+    fn net_crossings_match_brute_force(
+        seed in any::<u64>(),
+        n_discs in 0usize..40,
+        n_segments in 1usize..120,
+        kind in 0u32..4,
+        slack in prop::sample::select(vec![0.0f32, 1e-4, 0.01]),
+        scale in prop::sample::select(vec![1.0f32, 1e-3, 50.0]),
+        offset in prop::sample::select(vec![0.0f32, 100.0, -3000.0]),
+    ) {
+        let checked = check_net(seed, n_discs, n_segments, kind, slack * scale, scale, offset);
+        prop_assert_eq!(checked.map(|_| ()), Ok(()));
     }
 
     /// A segment grid over random bounds (often smaller than the discs' region) gives the brute-force pairs and sums, before and after removing and re-inserting segments.

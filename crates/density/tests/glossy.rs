@@ -8,7 +8,7 @@ use lustre_brdf::models::Phong;
 use lustre_brdf::{BoxedBrdf, Brdf, from_model};
 use lustre_density::glossy::{
     GlossyMode, GlossyVertex, GlossyVertices, IncidentRay, RayList, UpdateStats, glossy_meshes,
-    ray_difference, twin_rays,
+    ray_difference,
 };
 use lustre_density::quadtree::{
     QuadTree, QuadTreeOptions, Summary, SummaryTree, hemisphere_to_square, square_to_hemisphere,
@@ -16,7 +16,7 @@ use lustre_density::quadtree::{
 };
 use lustre_density::{
     DensityError, Disc, PrimaryRay, RaySegment, RaySet, RaySetOptions, diffuse_radiance,
-    trace_ray_set,
+    trace_ray_set, twin_segments,
 };
 use lustre_geometry::sampling::{Frame, Pcg32, sample_uniform_hemisphere};
 use lustre_geometry::{Bvh, MaterialModel, Rgb, Scene, builtin};
@@ -1054,7 +1054,7 @@ fn twin_old_and_new_rays_cancel_before_the_store() {
         })
         .collect();
     new.extend_from_slice(&other_trace(scene)[..1_000]);
-    let (old_twin, new_twin) = twin_rays(&old, &new);
+    let (old_twin, new_twin) = twin_segments(&old, &new);
     assert!(
         old_twin[..4_000]
             .iter()
@@ -1071,7 +1071,7 @@ fn twin_old_and_new_rays_cancel_before_the_store() {
     // A key two New Rays share has no twin: the pairing stays one to one.
     let doubled = [new[0], new[0]];
     assert_eq!(
-        twin_rays(&old[..1], &doubled),
+        twin_segments(&old[..1], &doubled),
         (vec![None], vec![None, None])
     );
     // The ray set after a frame: every segment less the Old Rays, with `added`.

@@ -31,6 +31,35 @@ impl Crossings {
         Self { start, ids }
     }
 
+    /// From `(disc, segment)` pairs over `discs` discs, in the order given (chunk by chunk): each disc's
+    /// segments in the order its pairs come.
+    pub(crate) fn from_pairs(discs: usize, pairs: &[Vec<(u32, u32)>]) -> Self {
+        let mut start = vec![0usize; discs + 1];
+        for &(i, _) in pairs.iter().flatten() {
+            start[i as usize + 1] += 1;
+        }
+        for i in 0..discs {
+            start[i + 1] += start[i];
+        }
+        let mut next = start.clone();
+        let mut ids = vec![0u32; start[discs]];
+        for &(i, j) in pairs.iter().flatten() {
+            ids[next[i as usize]] = j;
+            next[i as usize] += 1;
+        }
+        Self::from_parts(start, ids)
+    }
+
+    /// Sorts each disc's segments into ascending order.
+    pub(crate) fn sort_each(&mut self) {
+        for w in self.start.windows(2) {
+            let list = &mut self.ids[w[0]..w[1]];
+            if !list.is_sorted() {
+                list.sort_unstable();
+            }
+        }
+    }
+
     /// Number of discs.
     pub fn len(&self) -> usize {
         self.start.len() - 1

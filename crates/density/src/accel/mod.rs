@@ -11,7 +11,7 @@
 //!
 //! | paper | item |
 //! |---|---|
-//! | 1.2 DETP, 2.4.1 first frame, 2.4.2 `E += est(NewRays) − est(OldRays)` | [`DiscSet::accumulate`] |
+//! | 1.2 DETP, 2.4.1 first frame, 2.4.2 `E += est(NewRays) − est(OldRays)` | [`DiscSet::accumulate`], [`DiscSet::accumulate_net`] (beyond the paper: twins' terms that cancel left out, [`DiscSet::net_crossings`]) |
 //! | 1.2.1, 2.6 ray cache, reuse of the point ordering | [`Acceleration::RayCache`], [`DiscSet::validate_ray_cache`], [`ray_cache`] |
 //! | 2.7 disc indexing, tables 2.2–2.4 | [`Acceleration::DiscIndex`], [`DiscIndex`], [`Acceleration::tuned_disc_index`] |
 //! | 2.8 pre-intersection tests, table 2.5 | [`PreTest`] |
@@ -49,6 +49,7 @@ use pretest::PreTests;
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::ray_set::RaySegment;
+use crate::update::twin_segments;
 
 /// An invariant of an acceleration structure that does not hold (what the `validate` methods report).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -165,6 +166,31 @@ pub fn mean_edge(scene: &Scene, meshes: impl IntoIterator<Item = MeshId>) -> f32
         }
     }
     if n == 0 { 1.0 } else { (sum / n as f64) as f32 }
+}
+
+/// The crossings `a` and `b` of a frame's Old and New Rays less, at each disc, the twins (`a_twin`,
+/// `b_twin`: [`twin_segments`]) that both cross it.
+fn cancel_twins(
+    a: &Crossings,
+    b: &Crossings,
+    a_twin: &[Option<u32>],
+    b_twin: &[Option<u32>],
+) -> (Crossings, Crossings) {
+    let keep = |ids: &[u32], twins: &[Option<u32>], other: &[u32]| -> Vec<u32> {
+        ids.iter()
+            .copied()
+            .filter(|&i| twins[i as usize].is_none_or(|t| other.binary_search(&t).is_err()))
+            .collect()
+    };
+    let net = |x: &Crossings, twins: &[Option<u32>], y: &Crossings| {
+        Crossings::from_lists(
+            x.iter()
+                .zip(y.iter())
+                .map(|(p, q)| keep(p, twins, q))
+                .collect(),
+        )
+    };
+    (net(a, a_twin, b), net(b, b_twin, a))
 }
 
 /// Fails when segment indices would not fit in `u32`.
@@ -453,6 +479,51 @@ impl DiscSet {
         self.gather(segments).map(Crossings::from_lists)
     }
 
+    /// [`DiscSet::crossings`] of a frame's Old and New Rays, less the twins ([`twin_segments`]) at each disc
+    /// they both cross, where their two contributions cancel (beyond the paper: section 2.4.2's
+    /// `est(NewRays) − est(OldRays)` without the terms that cancel). With disc indexing each twin pair is
+    /// traversed once, its two ends tested together, and the segments of either kind that cross a disc
+    /// their twin does not are exactly those `is_crossed_by` accepts.
+    pub fn net_crossings(
+        &self,
+        old: &[RaySegment],
+        new: &[RaySegment],
+    ) -> Result<(Crossings, Crossings)> {
+        check_segment_count(old)?;
+        check_segment_count(new)?;
+        let (old_twin, new_twin) = twin_segments(old, new);
+        if let (Acceleration::DiscIndex { .. }, Some(index), Some(packed)) =
+            (self.options.acceleration, &self.index, &self.packed)
+        {
+            return Ok(self.indexed_net_crossings(index, packed, old, new, &old_twin));
+        }
+        let (a, b) = (self.crossings(old)?, self.crossings(new)?);
+        Ok(cancel_twins(&a, &b, &old_twin, &new_twin))
+    }
+
+    /// `out[i] += sign · Σ φ_j` over [`DiscSet::net_crossings`]: the Old Rays' sum with `sign = −1`, then the New Rays' with `+1`, each in ascending segment index from zero in `f64` (section 2.4.2, equation 2.4, `E(x, t) = E(x, t−1) + E(x; N^t) − E(x; O^t)`, without the twins' terms that cancel). Fails when `out` does not have one entry per disc.
+    pub fn accumulate_net(
+        &self,
+        old: &[RaySegment],
+        new: &[RaySegment],
+        out: &mut [DVec3],
+    ) -> Result<()> {
+        self.check_out(out.len())?;
+        let (a, b) = self.net_crossings(old, new)?;
+        let sum = |ids: &[u32], segments: &[RaySegment]| {
+            let mut sink = DVec3::default();
+            for &j in ids {
+                sink.add(j, &segments[j as usize]);
+            }
+            sink
+        };
+        out.par_iter_mut().enumerate().for_each(|(i, o)| {
+            *o += -1.0 * sum(&a[i], old);
+            *o += 1.0 * sum(&b[i], new);
+        });
+        Ok(())
+    }
+
     /// [`DiscSet::accumulate`] over the live segments of a [`SegmentGrid`] (ids in place of indices: sums in ascending id), each disc looking only at the grid cells its box overlaps (beyond the paper; section 2.5.2, the mobile object's discs against all segments). Fails when `out` does not have one entry per disc, or the grid was built for a smaller slack.
     pub fn accumulate_grid(&self, grid: &SegmentGrid, sign: f64, out: &mut [DVec3]) -> Result<()> {
         self.check_out(out.len())?;
@@ -667,21 +738,93 @@ impl DiscSet {
                 pairs
             })
             .collect();
-        let n = self.discs.len();
-        let mut start = vec![0usize; n + 1];
-        for &(i, _) in pairs.iter().flatten() {
-            start[i as usize + 1] += 1;
+        Crossings::from_pairs(self.discs.len(), &pairs)
+    }
+
+    /// [`DiscSet::net_crossings`] by disc indexing: every Old Ray in parallel, a twin pair's two ends tested
+    /// together, then the New Rays without a twin.
+    fn indexed_net_crossings(
+        &self,
+        index: &DiscIndex,
+        packed: &PackedLeaves,
+        old: &[RaySegment],
+        new: &[RaySegment],
+        old_twin: &[Option<u32>],
+    ) -> (Crossings, Crossings) {
+        let slack = self.options.slack;
+        let (old_env, new_env) = (self.segment_envelopes(old), self.segment_envelopes(new));
+        // A pair is traversed together when both ends have an envelope, through the one reaching farther
+        // (same origin and direction, so it holds the other's every candidate); otherwise each on its own.
+        let joint: Vec<Option<u32>> = old_twin
+            .iter()
+            .enumerate()
+            .map(|(j, t)| t.filter(|&k| old_env[j].is_some() && new_env[k as usize].is_some()))
+            .collect();
+        let mut paired = vec![false; new.len()];
+        for &k in joint.iter().flatten() {
+            paired[k as usize] = true;
         }
-        for i in 0..n {
-            start[i + 1] += start[i];
-        }
-        let mut next = start.clone();
-        let mut ids = vec![0u32; start[n]];
-        for &(i, j) in pairs.iter().flatten() {
-            ids[next[i as usize]] = j;
-            next[i as usize] += 1;
-        }
-        Crossings::from_parts(start, ids)
+        type Pairs = (Vec<(u32, u32)>, Vec<(u32, u32)>);
+        let from_old: Vec<Pairs> = old_env
+            .par_chunks(SEGMENT_CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let (mut a, mut b) = (Vec::new(), Vec::new());
+                for (n, e) in chunk.iter().enumerate() {
+                    let Some(e) = e else { continue };
+                    let j = c * SEGMENT_CHUNK + n;
+                    let lanes = SegmentLanes::new(&old[j], slack);
+                    match joint[j] {
+                        Some(k) => {
+                            let twin = SegmentLanes::new(&new[k as usize], slack);
+                            let far = match &new_env[k as usize] {
+                                Some(f) if f.t_hi > e.t_hi => f,
+                                _ => e,
+                            };
+                            index.for_each_leaf(far, |first, count| {
+                                packed.for_each_crossed_by_one(
+                                    first,
+                                    count,
+                                    &lanes,
+                                    &twin,
+                                    |i| a.push((i, j as u32)),
+                                    |i| b.push((i, k)),
+                                );
+                            });
+                        }
+                        None => index.for_each_leaf(e, |first, count| {
+                            packed
+                                .for_each_crossed(first, count, &lanes, |i| a.push((i, j as u32)));
+                        }),
+                    }
+                }
+                (a, b)
+            })
+            .collect();
+        let from_new: Vec<Vec<(u32, u32)>> = new_env
+            .par_chunks(SEGMENT_CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut b = Vec::new();
+                for (n, e) in chunk.iter().enumerate() {
+                    let k = c * SEGMENT_CHUNK + n;
+                    let Some(e) = e.as_ref().filter(|_| !paired[k]) else {
+                        continue;
+                    };
+                    let lanes = SegmentLanes::new(&new[k], slack);
+                    index.for_each_leaf(e, |first, count| {
+                        packed.for_each_crossed(first, count, &lanes, |i| b.push((i, k as u32)));
+                    });
+                }
+                b
+            })
+            .collect();
+        let (old_pairs, mut new_pairs): (Vec<_>, Vec<_>) = from_old.into_iter().unzip();
+        new_pairs.extend(from_new);
+        let mut b = Crossings::from_pairs(self.discs.len(), &new_pairs);
+        // The twins' New Rays came in their Old Rays' order.
+        b.sort_each();
+        (Crossings::from_pairs(self.discs.len(), &old_pairs), b)
     }
 
     /// Each disc against the segments of the grid cells its box overlaps (beyond the paper), in parallel over discs: each candidate tested once (a per-thread mailbox), the crossing ones then summed in id order.

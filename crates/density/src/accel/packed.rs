@@ -99,16 +99,49 @@ impl PackedLeaves {
         segment: &SegmentLanes,
         mut f: impl FnMut(u32),
     ) {
+        for block in self.leaf_blocks(first, count) {
+            let [crossed] = crossed_lanes(block, [segment]);
+            for_each_lane(crossed, |lane| f(block.item[lane]));
+        }
+    }
+
+    /// For two segments with the same origin and direction (a re-traced path's first segment before and
+    /// after, [`crate::update::twin_segments`]), calls `only_a` with every disc of the leaf that `a` crosses and
+    /// `b` does not, and `only_b` with every one that `b` crosses and `a` does not; each test as
+    /// [`PackedLeaves::for_each_crossed`] makes it, the part that does not depend on the segment's end once.
+    #[inline]
+    pub(crate) fn for_each_crossed_by_one(
+        &self,
+        first: u32,
+        count: u32,
+        a: &SegmentLanes,
+        b: &SegmentLanes,
+        mut only_a: impl FnMut(u32),
+        mut only_b: impl FnMut(u32),
+    ) {
+        debug_assert!(a.origin == b.origin && a.direction == b.direction);
+        for block in self.leaf_blocks(first, count) {
+            let [by_a, by_b] = crossed_lanes(block, [a, b]);
+            for_each_lane(by_a & !by_b, |lane| only_a(block.item[lane]));
+            for_each_lane(by_b & !by_a, |lane| only_b(block.item[lane]));
+        }
+    }
+
+    /// The blocks of the leaf starting at item `first` with `count` discs.
+    #[inline]
+    fn leaf_blocks(&self, first: u32, count: u32) -> &[Block] {
         let start = self.first_block[first as usize] as usize;
-        let blocks = (count as usize).div_ceil(LANES);
-        for block in &self.blocks[start..start + blocks] {
-            let crossed = segment.crosses(block);
-            if crossed != 0 {
-                for lane in 0..LANES {
-                    if crossed & (1 << lane) != 0 {
-                        f(block.item[lane]);
-                    }
-                }
+        &self.blocks[start..start + (count as usize).div_ceil(LANES)]
+    }
+}
+
+/// Calls `f` with each lane whose bit is set in `mask`.
+#[inline]
+fn for_each_lane(mask: u32, mut f: impl FnMut(usize)) {
+    if mask != 0 {
+        for lane in 0..LANES {
+            if mask & (1 << lane) != 0 {
+                f(lane);
             }
         }
     }
@@ -144,33 +177,36 @@ impl SegmentLanes {
             hit_mesh: segment.hit.map(|hit| hit.mesh),
         }
     }
+}
 
-    /// Bit `lane` set when the segment crosses that lane's disc: `is_crossed_by`'s operations, lane by lane.
-    #[inline]
-    fn crosses(&self, b: &Block) -> u32 {
-        let (o, d) = (self.origin, self.direction);
-        let (mesh, ends) = (self.hit_mesh.unwrap_or(0), self.hit_mesh.is_some());
-        let mut ok = [false; LANES];
-        for l in 0..LANES {
-            let (cx, cy, cz) = (b.centre[0][l], b.centre[1][l], b.centre[2][l]);
-            let (nx, ny, nz) = (b.normal[0][l], b.normal[1][l], b.normal[2][l]);
-            let denom = (d.x * nx) + (d.y * ny) + (d.z * nz);
-            let t = ((cx - o.x) * nx + (cy - o.y) * ny + (cz - o.z) * nz) / denom;
-            let (px, py, pz) = (o.x + t * d.x, o.y + t * d.y, o.z + t * d.z);
-            let (ex, ey, ez) = (px - cx, py - cy, pz - cz);
-            let dist2 = (ex * ex) + (ey * ey) + (ez * ez);
+/// Per segment, bit `lane` set when it crosses that lane's disc: `is_crossed_by`'s operations, lane by
+/// lane. The segments share their origin and direction (those of the first), so the plane crossing and
+/// its distance from the centre are computed once; only the end each reaches is their own.
+#[inline]
+fn crossed_lanes<const N: usize>(b: &Block, segments: [&SegmentLanes; N]) -> [u32; N] {
+    let (o, d) = (segments[0].origin, segments[0].direction);
+    let mut ok = [[false; LANES]; N];
+    for l in 0..LANES {
+        let (cx, cy, cz) = (b.centre[0][l], b.centre[1][l], b.centre[2][l]);
+        let (nx, ny, nz) = (b.normal[0][l], b.normal[1][l], b.normal[2][l]);
+        let denom = (d.x * nx) + (d.y * ny) + (d.z * nz);
+        let t = ((cx - o.x) * nx + (cy - o.y) * ny + (cz - o.z) * nz) / denom;
+        let (px, py, pz) = (o.x + t * d.x, o.y + t * d.y, o.z + t * d.z);
+        let (ex, ey, ez) = (px - cx, py - cy, pz - cz);
+        let dist2 = (ex * ex) + (ey * ey) + (ez * ez);
+        let on_plane = (denom < 0.0) & (t >= 0.0) & (dist2 <= b.radius2[l]);
+        for (ok, s) in ok.iter_mut().zip(segments) {
+            let (mesh, ends) = (s.hit_mesh.unwrap_or(0), s.hit_mesh.is_some());
             let same = ends & b.has_mesh[l] & (b.mesh[l] == mesh);
-            let limit = if same {
-                self.limit_same
-            } else {
-                self.limit_other
-            };
-            ok[l] = (denom < 0.0) & (t >= 0.0) & (t <= limit) & (dist2 <= b.radius2[l]);
+            let limit = if same { s.limit_same } else { s.limit_other };
+            ok[l] = on_plane & (t <= limit);
         }
+    }
+    ok.map(|ok| {
         let mut bits = 0;
         for (l, &ok) in ok.iter().enumerate() {
             bits |= u32::from(ok) << l;
         }
         bits
-    }
+    })
 }
