@@ -12,7 +12,7 @@
 //! | 2.2.2: a static scene and mobile objects (several allowed) | [`World`] |
 //! | 2.3, figure 2.1: primary rays from the lights, each owning its reflections | [`RaySet`], [`PrimaryRay`], [`RaySegment`], [`trace_ray_set`], [`trace_ray_set_in`] |
 //! | 2.3, figure 2.2: PHOTOSIMULATION RECALCULUS, OldRays and NewRays | [`update_ray_set`], [`RayUpdate`] |
-//! | beyond the paper, for figure 2.2 and 2.5.2: per path, the cells of a coarse grid it passes, so that a frame visits only the paths near the mobile objects | [`path_cells::PathCells`], [`update_ray_set_where`] |
+//! | beyond the paper, for figure 2.2 and 2.5.2: per path, the cells of a coarse grid it passes, so that a frame visits only the paths near the mobile objects | [`path_cells::PathCells`], [`update_ray_set_paths`] |
 //! | 2.4.2, equations 2.4–2.15: `E_t = E_{t-1} + E(N^t) − E(O^t)` on static vertices | [`QuasiStatic::set_pose`] |
 //! | 2.5.1, figure 2.4: Impact Count's per-triangle `Add`/`Substract` | [`Estimator::ImpactCount`] |
 //! | 2.5.2: the full estimate on the mobile objects' vertices | [`QuasiStatic::set_pose`] |
@@ -105,7 +105,7 @@ pub use radiance::{
 pub use ray_set::{
     PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set, trace_ray_set_in,
 };
-pub use update::{RayUpdate, twin_segments, update_ray_set, update_ray_set_where};
+pub use update::{RayUpdate, twin_segments, update_ray_set, update_ray_set_paths};
 pub use vertex_lit::vertex_lit_scene;
 pub use world::{World, WorldHit};
 

@@ -141,6 +141,31 @@ impl PathCells {
             .any(|(words, &r)| r != 0 && words[primary] & r != 0)
     }
 
+    /// The ascending indices, below `count`, of the paths that [`PathCells::may_meet`] `region`: the masks
+    /// read word by word, in parallel over runs of paths, so that a pass afterwards visits only those.
+    pub fn paths_meeting(&self, region: &Region, count: usize) -> Vec<usize> {
+        /// Paths per parallel task.
+        const RUN: usize = 1 << 14;
+        let words: Vec<(&[u64], u64)> = self
+            .words
+            .iter()
+            .zip(&region.0)
+            .filter(|&(_, &r)| r != 0)
+            .map(|(w, &r)| (w.as_slice(), r))
+            .collect();
+        let masked = self.words[0].len().min(count);
+        let mut out: Vec<usize> = (0..masked.div_ceil(RUN))
+            .into_par_iter()
+            .flat_map_iter(|run| {
+                let words = &words;
+                (run * RUN..((run + 1) * RUN).min(masked))
+                    .filter(move |&i| words.iter().any(|&(w, r)| w[i] & r != 0))
+            })
+            .collect();
+        out.extend(masked..count);
+        out
+    }
+
     /// The cells a path passes.
     fn path_mask(&self, path: &PrimaryRay) -> Mask {
         let mut mask = [0; ALL_CELLS.len()];
@@ -308,6 +333,16 @@ mod tests {
                 meeting += usize::from(meets);
                 total += 1;
             }
+            // The list of a pass: the same paths, in order; those without a mask (past its end) too.
+            let listed: Vec<usize> = (0..rays.rays.len())
+                .filter(|&i| cells.may_meet(i, &region))
+                .collect();
+            assert_eq!(cells.paths_meeting(&region, rays.rays.len()), listed);
+            let longer = cells.paths_meeting(&region, rays.rays.len() + 2);
+            assert_eq!(
+                longer[listed.len()..],
+                [rays.rays.len(), rays.rays.len() + 1]
+            );
         }
         // The grid prunes: far fewer paths kept than visited, and not many more than those that meet.
         assert!(kept < total / 2, "kept {kept} of {total}");

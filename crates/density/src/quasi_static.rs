@@ -18,9 +18,9 @@ use crate::glossy::{GlossyMode, GlossyVertices, glossy_meshes};
 use crate::path_cells::PathCells;
 use crate::points::{EstimationPoint, EstimationPoints};
 use crate::radiance::{ImpactMap, TriangleImpacts};
-use crate::ray_set::{RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
+use crate::ray_set::{PrimaryRay, RaySegment, RaySet, RaySetOptions, trace_ray_set_in};
 use crate::triangle_grid::TriangleGrid;
-use crate::update::{RayUpdate, update_ray_set_where};
+use crate::update::{RayUpdate, update_ray_set, update_ray_set_paths};
 use crate::world::World;
 
 /// The density estimator a [`QuasiStatic`] keeps up to date (section 3.3).
@@ -429,13 +429,16 @@ impl QuasiStatic {
             self.paths = Some(PathCells::new(self.scene.bounds(), self.slack, &self.rays));
             self.paths_focused = false;
         }
-        let update = update_ray_set_where(
-            &self.scene,
-            &self.world,
-            &mut self.rays,
-            &self.options.rays,
-            &path_filter(self.paths.as_ref(), moved.min, moved.max),
-        )?;
+        let update = match paths_near(self.paths.as_ref(), moved.min, moved.max, &self.rays) {
+            Some(near) => update_ray_set_paths(
+                &self.scene,
+                &self.world,
+                &mut self.rays,
+                &self.options.rays,
+                &near,
+            )?,
+            None => update_ray_set(&self.scene, &self.world, &mut self.rays, &self.options.rays)?,
+        };
         if let Some(paths) = &mut self.paths {
             paths.refresh(&self.rays, &update.primaries);
         }
@@ -481,7 +484,7 @@ impl QuasiStatic {
 
     /// Bytes held by the ray set (primary rays and their segments, section 2.3) and by everything else kept between frames (estimator state, points, glossy lists are not counted); the ray set's share per emitted photon is the paper's memory per photon.
     pub fn memory_bytes(&self) -> (usize, usize) {
-        let rays = self.rays.rays.capacity() * size_of::<crate::PrimaryRay>()
+        let rays = self.rays.rays.capacity() * size_of::<PrimaryRay>()
             + self
                 .rays
                 .rays
@@ -607,19 +610,25 @@ impl QuasiStatic {
         let all: Vec<RaySegment> = match (&self.state, region) {
             (State::Detp { .. }, Some((lo, hi))) => {
                 let slack = self.slack;
-                let visit = path_filter(self.paths.as_ref(), lo, hi);
-                self.rays
-                    .rays
-                    .par_iter()
-                    .enumerate()
-                    .filter(|(i, _)| visit(*i))
-                    .flat_map_iter(|(_, r)| {
-                        r.segments
-                            .iter()
-                            .filter(move |s| segment_meets_box(s, slack, lo, hi))
-                            .copied()
-                    })
-                    .collect()
+                fn meeting(
+                    r: &PrimaryRay,
+                    slack: f32,
+                    lo: Vec3,
+                    hi: Vec3,
+                ) -> impl Iterator<Item = RaySegment> + '_ {
+                    r.segments
+                        .iter()
+                        .filter(move |s| segment_meets_box(s, slack, lo, hi))
+                        .copied()
+                }
+                let near = |r| meeting(r, slack, lo, hi);
+                match paths_near(self.paths.as_ref(), lo, hi, &self.rays) {
+                    Some(list) => list
+                        .par_iter()
+                        .flat_map_iter(|&i| near(&self.rays.rays[i]))
+                        .collect(),
+                    None => self.rays.rays.par_iter().flat_map_iter(near).collect(),
+                }
             }
             _ => Vec::new(),
         };
@@ -946,19 +955,10 @@ fn reach_of_paths(scene: &Scene, mobile: &[ObjectId], margin: f32) -> Option<Aab
     (reach.min.is_finite() && reach.max.is_finite()).then_some(reach)
 }
 
-/// Whether each path (by index into the ray set) may pass through the box `lo..=hi`, by its cells in `paths`;
-/// every path when there are no masks.
-fn path_filter(
-    paths: Option<&PathCells>,
-    lo: Vec3,
-    hi: Vec3,
-) -> impl Fn(usize) -> bool + Sync + '_ {
-    let cells = paths.map(|p| (p, p.region(lo, hi)));
-    move |i| {
-        cells
-            .as_ref()
-            .is_none_or(|(p, region)| p.may_meet(i, region))
-    }
+/// The ascending indices of the paths of `rays` that may pass through the box `lo..=hi`, by their cells in
+/// `paths`; `None` (every path) when there are no masks.
+fn paths_near(paths: Option<&PathCells>, lo: Vec3, hi: Vec3, rays: &RaySet) -> Option<Vec<usize>> {
+    paths.map(|p| p.paths_meeting(&p.region(lo, hi), rays.rays.len()))
 }
 
 /// The DETP disc of an estimation point (section 1.2); a degenerate point gets a zero radius, which no ray crosses.

@@ -6,7 +6,7 @@ use lustre_geometry::{Ray, Scene};
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::ray_set::{RaySegment, RaySet, RaySetOptions, Tracer};
+use crate::ray_set::{PrimaryRay, RaySegment, RaySet, RaySetOptions, Tracer};
 use crate::world::World;
 
 /// The rays a frame's recalculation replaced (section 2.4.2: `O^t = S^{t-1} - S^t`, equation 2.6) and those that replaced them (`N^t = S^t - S^{t-1}`, equation 2.5).
@@ -27,18 +27,36 @@ pub fn update_ray_set(
     rays: &mut RaySet,
     options: &RaySetOptions,
 ) -> Result<RayUpdate> {
-    update_ray_set_where(scene, world, rays, options, &|_| true)
+    update_paths(scene, world, rays, options, None)
 }
 
-/// [`update_ray_set`] visiting only the primary rays `visit` accepts (by index): the others must be paths none of
-/// whose segments hit the mobile objects before their move or meet them after it, such as those a
-/// [`crate::path_cells::PathCells`] region round both poses rules out (beyond the paper: figure 2.2 visits every ray).
-pub fn update_ray_set_where(
+/// [`update_ray_set`] visiting only the primary rays `paths` lists (ascending indices; those past the ray set
+/// are ignored): the others must be paths none of whose segments hit the mobile objects before their move or
+/// meet them after it, such as those a [`crate::path_cells::PathCells`] region round both poses rules out
+/// ([`crate::path_cells::PathCells::paths_meeting`]; beyond the paper: figure 2.2 visits every ray).
+pub fn update_ray_set_paths(
     scene: &Scene,
     world: &World,
     rays: &mut RaySet,
     options: &RaySetOptions,
-    visit: &(dyn Fn(usize) -> bool + Sync),
+    paths: &[usize],
+) -> Result<RayUpdate> {
+    update_paths(scene, world, rays, options, Some(paths))
+}
+
+/// A recalculated primary ray: its index, its OldRays and its NewRays.
+type Recalculated = (usize, Vec<RaySegment>, Vec<RaySegment>);
+
+/// Primary rays per parallel task of the update.
+const PATH_RUN: usize = 1 << 12;
+
+/// [`update_ray_set_paths`], every path when `paths` is `None`.
+fn update_paths(
+    scene: &Scene,
+    world: &World,
+    rays: &mut RaySet,
+    options: &RaySetOptions,
+    paths: Option<&[usize]>,
 ) -> Result<RayUpdate> {
     let tracer = Tracer::new(
         scene,
@@ -47,38 +65,60 @@ pub fn update_ray_set_where(
         world.epsilon(),
         options,
     )?;
-    let changed: Vec<(usize, Vec<RaySegment>, Vec<RaySegment>)> = rays
+    // Runs of paths in parallel, each visiting its listed paths in order.
+    let changed: Vec<Vec<Recalculated>> = rays
         .rays
-        .par_iter_mut()
+        .par_chunks_mut(PATH_RUN)
         .enumerate()
-        .filter(|(i, _)| visit(*i))
-        .filter_map(|(i, primary)| {
-            let k = primary
-                .segments
-                .iter()
-                .position(|s| must_recalculate(world, s))?;
-            let old = primary.segments.split_off(k);
-            let first = old[0];
-            let ray = Ray::new(first.origin, first.direction);
-            tracer.follow(
-                primary.light,
-                primary.index,
-                k as u32,
-                ray,
-                first.power,
-                &mut primary.segments,
-            );
-            let new = primary.segments[k..].to_vec();
-            Some((i, old, new))
+        .map(|(run, chunk)| {
+            let base = run * PATH_RUN;
+            let listed: Box<dyn Iterator<Item = usize>> = match paths {
+                Some(paths) => {
+                    let a = paths.partition_point(|&i| i < base);
+                    let b = paths.partition_point(|&i| i < base + chunk.len());
+                    Box::new(paths[a..b].iter().copied())
+                }
+                None => Box::new(base..base + chunk.len()),
+            };
+            listed
+                .filter_map(|i| recalculate(world, &tracer, i, &mut chunk[i - base]))
+                .collect()
         })
         .collect();
     let mut update = RayUpdate::default();
-    for (i, old, new) in changed {
+    for (i, old, new) in changed.into_iter().flatten() {
         update.primaries.push(i);
         update.old.extend(old);
         update.new.extend(new);
     }
     Ok(update)
+}
+
+/// Figure 2.2 on primary ray `i`: from its first segment that must be recalculated on, its old path (the
+/// OldRays) and the path traced again (the NewRays); `None` when no segment must be.
+fn recalculate(
+    world: &World,
+    tracer: &Tracer,
+    i: usize,
+    primary: &mut PrimaryRay,
+) -> Option<Recalculated> {
+    let k = primary
+        .segments
+        .iter()
+        .position(|s| must_recalculate(world, s))?;
+    let old = primary.segments.split_off(k);
+    let first = old[0];
+    let ray = Ray::new(first.origin, first.direction);
+    tracer.follow(
+        primary.light,
+        primary.index,
+        k as u32,
+        ray,
+        first.power,
+        &mut primary.segments,
+    );
+    let new = primary.segments[k..].to_vec();
+    Some((i, old, new))
 }
 
 /// For each Old Ray its twin among the New Rays, and for each New Ray its twin among the Old Rays: the one
