@@ -36,6 +36,20 @@ fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Mesh {
     Mesh::flat(name, &corners, &[[0, 1, 2], [0, 2, 3]], material)
 }
 
+/// The 4 m × 4 m floor at `y = 0`, facing up, of material 0.
+fn floor_quad() -> Mesh {
+    quad(
+        "floor",
+        [
+            Vec3::new(-2.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, -2.0),
+            Vec3::new(-2.0, 0.0, -2.0),
+        ],
+        0,
+    )
+}
+
 fn rough_mirror(alpha: f32, reflectance: f32) -> MaterialModel {
     MaterialModel::RoughConductor {
         distribution: MicrofacetDistribution::Beckmann,
@@ -72,16 +86,7 @@ fn floor_scene_with_back(
         materials[2] = Material::new("back", back);
     }
     let mut meshes = vec![
-        quad(
-            "floor",
-            [
-                Vec3::new(-2.0, 0.0, 2.0),
-                Vec3::new(2.0, 0.0, 2.0),
-                Vec3::new(2.0, 0.0, -2.0),
-                Vec3::new(-2.0, 0.0, -2.0),
-            ],
-            0,
-        ),
+        floor_quad(),
         quad(
             "emitter",
             [
@@ -897,16 +902,7 @@ fn lit_floor_scene(alpha: f32, lights: &[Light]) -> (Scene, Camera) {
         Mesh::flat("block", &c, &faces, 2)
     };
     let meshes = vec![
-        quad(
-            "floor",
-            [
-                Vec3::new(-2.0, 0.0, 2.0),
-                Vec3::new(2.0, 0.0, 2.0),
-                Vec3::new(2.0, 0.0, -2.0),
-                Vec3::new(-2.0, 0.0, -2.0),
-            ],
-            0,
-        ),
+        floor_quad(),
         quad(
             "back",
             [
