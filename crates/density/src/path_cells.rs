@@ -37,9 +37,10 @@ type Mask = [u64; CELLS_PER_AXIS * CELLS_PER_AXIS * CELLS_PER_AXIS / 64];
 /// Every cell.
 const ALL_CELLS: Mask = [u64::MAX; CELLS_PER_AXIS * CELLS_PER_AXIS * CELLS_PER_AXIS / 64];
 
-/// The cells of a region a pass looks at ([`PathCells::region`]).
+/// The cells of a region a pass looks at ([`PathCells::region`]), or everywhere: a region the grid does not cover
+/// meets every path, those whose paths lie wholly outside the grid (an empty mask) included.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Region(Mask);
+pub struct Region(Option<Mask>);
 
 /// Per primary ray, the cells of a coarse grid its path passes (beyond the paper, for figure 2.2 and section 2.5.2).
 #[derive(Debug, Clone)]
@@ -109,15 +110,15 @@ impl PathCells {
             });
     }
 
-    /// The cells of the box `lo..=hi`; every cell when it is not wholly inside the grid's inner box (or not finite).
+    /// The cells of the box `lo..=hi`; everywhere when it is not wholly inside the grid's inner box (or not finite).
     pub fn region(&self, lo: Vec3, hi: Vec3) -> Region {
         if !self.covers(lo, hi) {
-            return Region(ALL_CELLS);
+            return Region(None);
         }
         let (lo, hi) = (lo - Vec3::splat(self.pad), hi + Vec3::splat(self.pad));
         let mut mask = [0; ALL_CELLS.len()];
         self.mark_box(lo, hi, &mut mask);
-        Region(mask)
+        Region(Some(mask))
     }
 
     /// Whether the box `lo..=hi` lies wholly inside the grid's inner box, so that its [`PathCells::region`] is cells rather than every cell.
@@ -129,15 +130,19 @@ impl PathCells {
             && hi.cmple(self.inner_hi).all()
     }
 
-    /// Whether the path of primary ray `primary` may pass through `region` (true for a path it has no mask for).
+    /// Whether the path of primary ray `primary` may pass through `region` (true for a path it has no mask for, and
+    /// for every path when the region is everywhere).
     pub fn may_meet(&self, primary: usize, region: &Region) -> bool {
+        let Some(cells) = &region.0 else {
+            return true;
+        };
         if self.words[0].len() <= primary {
             return true;
         }
         // Only the words the region has cells in are read.
         self.words
             .iter()
-            .zip(&region.0)
+            .zip(cells)
             .any(|(words, &r)| r != 0 && words[primary] & r != 0)
     }
 
@@ -146,10 +151,13 @@ impl PathCells {
     pub fn paths_meeting(&self, region: &Region, count: usize) -> Vec<usize> {
         /// Paths per parallel task.
         const RUN: usize = 1 << 14;
+        let Some(cells) = &region.0 else {
+            return (0..count).collect();
+        };
         let words: Vec<(&[u64], u64)> = self
             .words
             .iter()
-            .zip(&region.0)
+            .zip(cells)
             .filter(|&(_, &r)| r != 0)
             .map(|(w, &r)| (w.as_slice(), r))
             .collect();
@@ -364,6 +372,29 @@ mod tests {
         // Partly outside the scene's grown box: every path.
         let region = cells.region(Vec3::splat(0.9), Vec3::splat(1.3));
         assert!((0..rays.rays.len()).all(|i| cells.may_meet(i, &region)));
+        // Even a path wholly outside the grid, whose mask is empty, when the region reaches where it is.
+        let far = PrimaryRay {
+            light: 0,
+            index: 0,
+            segments: vec![RaySegment::new(Vec3::splat(5.0), Vec3::X, None, Rgb::ONE)],
+        };
+        let mut beyond = rays.clone();
+        beyond.rays.push(far);
+        let outside = PathCells::new(bounds, 0.0, &beyond);
+        let last = beyond.rays.len() - 1;
+        assert!(outside.words.iter().all(|w| w[last] == 0));
+        let region = outside.region(Vec3::splat(4.0), Vec3::splat(8.0));
+        assert!(segment_meets_box(
+            &beyond.rays[last].segments[0],
+            0.0,
+            Vec3::splat(4.0),
+            Vec3::splat(8.0)
+        ));
+        assert!(outside.may_meet(last, &region));
+        assert_eq!(
+            outside.paths_meeting(&region, beyond.rays.len()),
+            (0..beyond.rays.len()).collect::<Vec<_>>()
+        );
         // A path moved into a corner the others may not reach is found there after a refresh, not before.
         let corner = (Vec3::splat(-1.0), Vec3::splat(-0.95));
         let moved = RaySegment::new(Vec3::splat(-0.99), Vec3::X, None, Rgb::ONE);
