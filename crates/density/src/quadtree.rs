@@ -177,6 +177,12 @@ impl Cell {
         bx + 2 * by
     }
 
+    /// [`Cell::child_of`] for the point whose [`deepest_cell`] is `deepest`: the same child, read from the point's bits at this level.
+    fn child_toward(self, deepest: (u32, u32)) -> usize {
+        let shift = MAX_DEPTH - 1 - self.depth;
+        (((deepest.0 >> shift) & 1) + 2 * ((deepest.1 >> shift) & 1)) as usize
+    }
+
     /// Corners of the cell in the square.
     fn bounds(self) -> (Vec2, Vec2) {
         let s = 1.0 / (1u64 << self.depth) as f32;
@@ -192,6 +198,13 @@ impl Cell {
         }
         c == self
     }
+}
+
+/// The integer coordinates of the cell of depth [`MAX_DEPTH`] that holds `uv` (in the unit square). Shifted right by `MAX_DEPTH − d`, they are the cell of depth `d` that [`Cell::child_of`]'s descent reaches: `uv` is scaled by a power of two exactly, the floor of a floor divided by a power of two is the floor of the point scaled by it, and the side `1` is clamped into the last cell as there.
+fn deepest_cell(uv: Vec2) -> (u32, u32) {
+    let n = 1u64 << MAX_DEPTH;
+    let at = |x: f32| ((x as f64 * n as f64) as u64).min(n - 1) as u32;
+    (at(uv.x), at(uv.y))
 }
 
 /// A ray in the tree with its square coordinates.
@@ -376,6 +389,7 @@ impl Node {
 
     /// Inserts into the leaf `entry` maps to, in key order, leaving the sums and the shape for [`Node::normalise`].
     fn insert_raw(&mut self, mut cell: Cell, entry: Entry) {
+        let deepest = deepest_cell(entry.uv);
         let mut node = self;
         loop {
             node.dirty = true;
@@ -387,7 +401,7 @@ impl Node {
                     return;
                 }
                 Kind::Inner(children) => {
-                    let i = cell.child_of(entry.uv);
+                    let i = cell.child_toward(deepest);
                     cell = cell.child(i);
                     node = &mut children[i];
                 }
@@ -397,6 +411,7 @@ impl Node {
 
     /// Removes one copy of `entry` from the leaf it maps to, leaving the sums and the shape for [`Node::normalise`]; `false` when it is not there.
     fn remove_raw(&mut self, mut cell: Cell, entry: &Entry) -> bool {
+        let deepest = deepest_cell(entry.uv);
         let mut node = self;
         loop {
             node.dirty = true;
@@ -412,7 +427,7 @@ impl Node {
                     };
                 }
                 Kind::Inner(children) => {
-                    let i = cell.child_of(entry.uv);
+                    let i = cell.child_toward(deepest);
                     cell = cell.child(i);
                     node = &mut children[i];
                 }
@@ -1082,5 +1097,46 @@ impl fmt::Display for DegradationTable {
             writeln!(f)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The descent by a point's deepest cell takes the children [`Cell::child_of`] takes, at every depth, for points on and beside cell edges and the square's sides.
+    #[test]
+    fn descent_by_the_deepest_cell_is_child_of() {
+        let mut points = vec![0.0f32, 1.0, 0.5, 0.25, 0.75, 1.0 / 3.0];
+        for depth in 1..=MAX_DEPTH {
+            for k in [1u32, 3, 5, (1 << depth) - 1] {
+                let edge = k as f32 / (1u64 << depth) as f32;
+                points.extend([edge, edge.next_down(), edge.next_up()]);
+            }
+        }
+        let mut state = 12345u64;
+        for _ in 0..2000 {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            points.push((state >> 40) as f32 / (1u64 << 24) as f32);
+        }
+        points.retain(|x| (0.0..=1.0).contains(x));
+        for (i, &x) in points.iter().enumerate() {
+            let uv = Vec2::new(x, points[(i * 7 + 3) % points.len()]);
+            let deepest = deepest_cell(uv);
+            let mut cell = Cell::ROOT;
+            while cell.depth < MAX_DEPTH {
+                let child = cell.child_of(uv);
+                assert_eq!(
+                    cell.child_toward(deepest),
+                    child,
+                    "{uv} at depth {}",
+                    cell.depth
+                );
+                cell = cell.child(child);
+            }
+            assert!(cell.contains(uv));
+        }
     }
 }

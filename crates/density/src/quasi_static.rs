@@ -416,36 +416,46 @@ impl QuasiStatic {
         let t0 = Instant::now();
         let before = self.world.mobile_bounds();
         self.world.move_mobile(&self.scene);
-        // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2).
+        self.points.move_mobile(&self.scene);
+        // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2); those
+        // and the paths through the mobile discs' box (section 2.5.2's gather) are listed once for both passes.
         let moved = before.union(self.world.mobile_bounds());
+        let near_box = self
+            .mobile_disc_region()
+            .map_or(moved, |(min, max)| moved.union(Aabb { min, max }));
         if self.paths_focused
             && self
                 .paths
                 .as_ref()
-                .is_some_and(|p| !p.covers(moved.min, moved.max))
+                .is_some_and(|p| !p.covers(near_box.min, near_box.max))
         {
             // Moved off their paths' reach: cells over the whole scene from now on (every path when even those do
             // not cover a move).
             self.paths = Some(PathCells::new(self.scene.bounds(), self.slack, &self.rays));
             self.paths_focused = false;
         }
-        let update = match paths_near(self.paths.as_ref(), moved.min, moved.max, &self.rays) {
+        let mut near = paths_near(self.paths.as_ref(), near_box.min, near_box.max, &self.rays);
+        let listed = self.rays.rays.len();
+        let update = match &near {
             Some(near) => update_ray_set_paths(
                 &self.scene,
                 &self.world,
                 &mut self.rays,
                 &self.options.rays,
-                &near,
+                near,
             )?,
             None => update_ray_set(&self.scene, &self.world, &mut self.rays, &self.options.rays)?,
         };
         if let Some(paths) = &mut self.paths {
             paths.refresh(&self.rays, &update.primaries);
         }
+        // Paths the update added, if any, have no mask yet: the gather visits them too.
+        if let Some(near) = &mut near {
+            near.extend(listed..self.rays.rays.len());
+        }
         let photosimulation = t0.elapsed();
         let t1 = Instant::now();
-        self.points.move_mobile(&self.scene);
-        self.update_state(&update)?;
+        self.update_state(&update, near.as_deref())?;
         if let State::PhotonMaps { .. } = self.state {
             self.impact_map = Some(ImpactMap::build(&self.rays));
         }
@@ -582,7 +592,27 @@ impl QuasiStatic {
     }
 
     /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps).
-    fn update_state(&mut self, update: &RayUpdate) -> Result<()> {
+    /// The DETP discs of the mobile points (section 2.5.2), when the state keeps disc sets.
+    fn mobile_discs(&self) -> Option<Vec<Disc>> {
+        let (State::Detp { radius, .. }, Some(_)) = (&self.state, &self.disc_sets) else {
+            return None;
+        };
+        let points = &self.points.points[self.points.first_mobile..];
+        Some(points.iter().map(|p| point_disc(p, *radius)).collect())
+    }
+
+    /// The box round the mobile discs that a ray can cross ([`Disc::bounds`] with the crossing slack), `None` without any: only the segments through it can cross one.
+    fn mobile_disc_region(&self) -> Option<(Vec3, Vec3)> {
+        let discs = self.mobile_discs()?;
+        discs
+            .iter()
+            .filter(|d| d.radius > 0.0)
+            .map(|d| d.bounds(self.slack))
+            .reduce(|(a, b), (lo, hi)| (a.min(lo), b.max(hi)))
+    }
+
+    /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps). `near` lists the paths that may meet the mobile discs' box ([`QuasiStatic::mobile_disc_region`]), every path when `None`.
+    fn update_state(&mut self, update: &RayUpdate, near: Option<&[usize]>) -> Result<()> {
         let first_mobile = self.points.first_mobile;
         let mobile_areas = match &self.state {
             State::Detp { radius, .. } if self.options.artifact.is_some() => {
@@ -590,19 +620,8 @@ impl QuasiStatic {
             }
             _ => None,
         };
-        let count = self.points.points.len();
-        // The box round the mobile discs: only the segments through it can cross one.
-        let mut region: Option<(Vec3, Vec3)> = None;
-        if let (State::Detp { radius, .. }, Some((_, moving))) = (&self.state, &mut self.disc_sets)
-        {
-            let discs = self.points.points[first_mobile..count]
-                .iter()
-                .map(|p| point_disc(p, *radius))
-                .collect::<Vec<_>>();
-            for d in discs.iter().filter(|d| d.radius > 0.0) {
-                let (lo, hi) = d.bounds(self.slack);
-                region = Some(region.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))));
-            }
+        let region = self.mobile_disc_region();
+        if let (Some(discs), Some((_, moving))) = (self.mobile_discs(), &mut self.disc_sets) {
             moving.update_discs(&discs)?;
         }
         // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds
@@ -621,13 +640,14 @@ impl QuasiStatic {
                         .filter(move |s| segment_meets_box(s, slack, lo, hi))
                         .copied()
                 }
-                let near = |r| meeting(r, slack, lo, hi);
-                match paths_near(self.paths.as_ref(), lo, hi, &self.rays) {
+                let meets = |r| meeting(r, slack, lo, hi);
+                match near {
                     Some(list) => list
                         .par_iter()
-                        .flat_map_iter(|&i| near(&self.rays.rays[i]))
+                        .filter_map(|&i| self.rays.rays.get(i))
+                        .flat_map_iter(meets)
                         .collect(),
-                    None => self.rays.rays.par_iter().flat_map_iter(near).collect(),
+                    None => self.rays.rays.par_iter().flat_map_iter(meets).collect(),
                 }
             }
             _ => Vec::new(),
