@@ -38,7 +38,8 @@
 //! bit for bit (for consistent updates, whose Old Rays are all held). Exact
 //! stores only (a list or a QuadTree without summarising). A vertex defers at
 //! most a quarter as many rays as it holds, plus 64 ([`MAX_DEFERRED_SHARE`]):
-//! the lists' memory grows by less than a tenth at worst (24 bytes a deferred ray against
+//! the lists' memory grows by less than a tenth at worst (at most 28 bytes a deferred ray, kept once
+//! with its net multiplicity, against
 //! about [`BYTES_PER_STORED_RAY`] a stored one), and beyond it the net change
 //! is applied.
 //!
@@ -297,55 +298,86 @@ impl std::ops::AddAssign for UpdateStats {
 /// A vertex defers at most `1 / MAX_DEFERRED_SHARE` as many rays as it holds, plus 64 (module docs).
 pub const MAX_DEFERRED_SHARE: usize = 4;
 
-/// The net change of the frames a vertex deferred: rays to remove and rays to insert, each sorted by [`IncidentRay::key`], no ray in both.
+/// Rays with a multiplicity (negative: removals).
+type SignedRays = Vec<(IncidentRay, i32)>;
+
+thread_local! {
+    /// Per thread, the frame's signed rays and the merged change of [`Deferred::add`], reused from vertex to vertex.
+    static SCRATCH: std::cell::RefCell<(SignedRays, SignedRays)> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+}
+
+/// The net change of the frames a vertex deferred: each distinct ray once with its net multiplicity (negative: to remove, positive: to insert), sorted by [`IncidentRay::key`], none zero.
 #[derive(Debug, Clone, Default, PartialEq)]
 struct Deferred {
-    old: Vec<IncidentRay>,
-    new: Vec<IncidentRay>,
+    rays: SignedRays,
+    /// Rays held, `Σ |multiplicity|`.
+    len: usize,
 }
 
 impl Deferred {
-    /// Adds a frame's Old and New Rays (removals first, as the store applies them): each cancels one equal ray of the other kind ([`sorted_difference`]).
-    fn add(&mut self, mut old: Vec<IncidentRay>, mut new: Vec<IncidentRay>) {
-        old.sort_by(key_order);
-        new.sort_by(key_order);
-        let (old, inserted) = sorted_difference(&old, &self.new);
-        self.old = merge(std::mem::take(&mut self.old), old);
-        let (new, removed) = sorted_difference(&new, &self.old);
-        self.old = removed;
-        self.new = merge(inserted, new);
+    /// Adds a frame's Old Rays (multiplicity −1 each) and New Rays (+1): the multiplicities of equal rays add, so each ray cancels one equal ray of the other kind, of this frame or an earlier one. One sort of the frame's rays and one merge with those held.
+    fn add(
+        &mut self,
+        old: impl Iterator<Item = IncidentRay>,
+        new: impl Iterator<Item = IncidentRay>,
+    ) {
+        SCRATCH.with_borrow_mut(|(frame, merged)| {
+            frame.clear();
+            frame.extend(old.map(|r| (r, -1)).chain(new.map(|r| (r, 1))));
+            // Equal keys are equal rays, so their order among themselves does not matter.
+            frame.sort_unstable_by(|a, b| key_order(&a.0, &b.0));
+            merged.clear();
+            let (mut a, mut b) = (self.rays.iter().peekable(), frame.iter().peekable());
+            loop {
+                let next = match (a.peek(), b.peek()) {
+                    (Some(x), Some(y)) if key_order(&y.0, &x.0) == Ordering::Less => b.next(),
+                    (Some(_), _) => a.next(),
+                    (None, Some(_)) => b.next(),
+                    (None, None) => break,
+                };
+                let Some(&(ray, k)) = next else {
+                    break;
+                };
+                match merged.last_mut() {
+                    Some((last, n)) if key_order(last, &ray) == Ordering::Equal => {
+                        *n += k;
+                        if *n == 0 {
+                            merged.pop();
+                        }
+                    }
+                    _ => merged.push((ray, k)),
+                }
+            }
+            self.rays.clear();
+            self.rays.extend_from_slice(merged);
+        });
+        self.len = self
+            .rays
+            .iter()
+            .map(|(_, k)| k.unsigned_abs() as usize)
+            .sum();
     }
 
     /// Number of rays held.
     fn len(&self) -> usize {
-        self.old.len() + self.new.len()
+        self.len
     }
 
     /// Whether no ray is held.
     fn is_empty(&self) -> bool {
-        self.old.is_empty() && self.new.is_empty()
+        self.rays.is_empty()
     }
-}
 
-/// The key-sorted union of two key-sorted multisets.
-fn merge(a: Vec<IncidentRay>, b: Vec<IncidentRay>) -> Vec<IncidentRay> {
-    if a.is_empty() {
-        return b;
-    }
-    let mut out = Vec::with_capacity(a.len() + b.len());
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        if key_order(&b[j], &a[i]) == Ordering::Less {
-            out.push(b[j]);
-            j += 1;
-        } else {
-            out.push(a[i]);
-            i += 1;
+    /// The rays to remove and the rays to insert, each sorted by key; leaves the change empty.
+    fn take(&mut self) -> (Vec<IncidentRay>, Vec<IncidentRay>) {
+        let (mut old, mut new) = (Vec::new(), Vec::new());
+        for (ray, k) in std::mem::take(self).rays {
+            let side = if k < 0 { &mut old } else { &mut new };
+            side.extend(std::iter::repeat_n(ray, k.unsigned_abs() as usize));
         }
+        (old, new)
     }
-    out.extend_from_slice(&a[i..]);
-    out.extend_from_slice(&b[j..]);
-    out
 }
 
 /// A glossy vertex (section 2.10): its DETP disc, its shading frame, the area that divides the flux, and the rays crossing the disc.
@@ -506,12 +538,9 @@ impl GlossyVertex {
         new: impl Iterator<Item = &'a RaySegment>,
         eye: Option<Vec3>,
     ) -> Result<Option<UpdateStats>> {
-        let old: Vec<IncidentRay> = old
-            .map(|s| IncidentRay::from_segment(&self.frame, s))
-            .collect();
-        let new: Vec<IncidentRay> = new
-            .map(|s| IncidentRay::from_segment(&self.frame, s))
-            .collect();
+        let frame = self.frame;
+        let old = old.map(|s| IncidentRay::from_segment(&frame, s));
+        let new = new.map(|s| IncidentRay::from_segment(&frame, s));
         let exact = !matches!(self.store, Store::Summary(_));
         if exact && eye.is_some_and(|eye| self.faces_away_from(eye)) {
             self.deferred.add(old, new);
@@ -521,7 +550,7 @@ impl GlossyVertex {
             return self.catch_up().map(Some);
         }
         let mut stats = self.catch_up()?;
-        stats += self.apply(old, new)?;
+        stats += self.apply(old.collect(), new.collect())?;
         Ok(Some(stats))
     }
 
@@ -541,7 +570,7 @@ impl GlossyVertex {
         if self.deferred.is_empty() {
             return Ok(UpdateStats::default());
         }
-        let Deferred { old, new } = std::mem::take(&mut self.deferred);
+        let (old, new) = self.deferred.take();
         self.apply(old, new)
     }
 
@@ -1017,4 +1046,62 @@ fn lobe_towards(vertex: &GlossyVertex, brdf: &dyn Brdf, eye: Vec3, diffuse: Rgb)
     vertex
         .lobe_estimate(brdf, eye - vertex.disc().centre, diffuse)
         .value
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    /// Frames of Old and New Rays drawn from a few distinct rays (so that rays repeat within a frame and across
+    /// frames, and cancel both ways): the deferred change equals the net multiplicities counted one ray at a
+    /// time, and gives them back as sorted removals and insertions.
+    #[test]
+    fn deferred_change_is_the_net_multiset() {
+        let ray = |i: u32| IncidentRay {
+            wi: Vec3::new(i as f32 * 0.1, 0.3, 0.9).normalize(),
+            power: Rgb::splat(1.0 + (i % 3) as f32),
+        };
+        let mut state = 99u64;
+        let mut next = |n: u64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % n
+        };
+        let mut deferred = Deferred::default();
+        let mut counts: BTreeMap<RayKey, (IncidentRay, i64)> = BTreeMap::new();
+        for _ in 0..200 {
+            let old: Vec<IncidentRay> = (0..next(6)).map(|_| ray(next(7) as u32)).collect();
+            let new: Vec<IncidentRay> = (0..next(6)).map(|_| ray(next(7) as u32)).collect();
+            for (rays, sign) in [(&old, -1), (&new, 1)] {
+                for r in rays {
+                    counts.entry(r.key()).or_insert((*r, 0)).1 += sign;
+                }
+            }
+            deferred.add(old.into_iter(), new.into_iter());
+            let expected: Vec<(IncidentRay, i32)> = counts
+                .values()
+                .filter(|(_, n)| *n != 0)
+                .map(|&(r, n)| (r, n as i32))
+                .collect();
+            assert_eq!(deferred.rays, expected);
+            let held: i64 = counts.values().map(|(_, n)| n.abs()).sum();
+            assert_eq!(deferred.len(), held as usize);
+            assert_eq!(deferred.is_empty(), held == 0);
+        }
+        let (old, new) = deferred.clone().take();
+        let expand = |negative: bool| -> Vec<IncidentRay> {
+            counts
+                .values()
+                .filter(|(_, n)| (*n < 0) == negative && *n != 0)
+                .flat_map(|&(r, n)| std::iter::repeat_n(r, n.unsigned_abs() as usize))
+                .collect()
+        };
+        assert_eq!((old, new), (expand(true), expand(false)));
+        // Taking the change leaves none.
+        deferred.take();
+        assert!(deferred.is_empty());
+        assert_eq!(deferred.len(), 0);
+    }
 }
