@@ -874,13 +874,15 @@ impl GlossyVertices {
                     .map(move |(i, vd)| ((m as MeshId, i as u32), vd))
             })
             .filter_map(|(id, (v, d))| {
-                let (v, &Some(d)) = (v.as_mut()?, d) else {
+                // The crossings first: a vertex no ray crossed is not read.
+                let &Some(d) = d else {
                     return None;
                 };
                 let (old_in, new_in) = (&old_crossing[d as usize], &new_crossing[d as usize]);
                 if old_in.is_empty() && new_in.is_empty() {
                     return None;
                 }
+                let v = v.as_mut()?;
                 v.update_crossing(
                     old_in.iter().map(|&i| &old[i as usize]),
                     new_in.iter().map(|&i| &new[i as usize]),
