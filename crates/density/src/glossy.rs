@@ -38,10 +38,10 @@
 //! bit for bit (for consistent updates, whose Old Rays are all held). Exact
 //! stores only (a list or a QuadTree without summarising). A vertex defers at
 //! most a quarter as many rays as it holds, plus 64 ([`MAX_DEFERRED_SHARE`]):
-//! the lists' memory grows by less than a tenth at worst (at most 28 bytes a deferred ray, kept once
-//! with its net multiplicity, against
-//! about [`BYTES_PER_STORED_RAY`] a stored one), and beyond it the net change
-//! is applied.
+//! the lists' memory grows by less than a tenth at worst (at most 28 bytes a
+//! deferred ray, each distinct one kept once with its net multiplicity,
+//! against about [`BYTES_PER_STORED_RAY`] a stored one), and beyond it the
+//! net change is applied.
 //!
 //! Beyond the paper, an Old Ray and a New Ray of one frame with the same
 //! origin, direction and power ([`crate::twin_segments`]: a re-traced path's

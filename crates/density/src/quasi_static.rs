@@ -591,7 +591,6 @@ impl QuasiStatic {
         }
     }
 
-    /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps).
     /// The DETP discs of the mobile points (section 2.5.2), when the state keeps disc sets.
     fn mobile_discs(&self) -> Option<Vec<Disc>> {
         let (State::Detp { radius, .. }, Some(_)) = (&self.state, &self.disc_sets) else {
