@@ -193,6 +193,15 @@ fn cancel_twins(
     (net(a, a_twin, b), net(b, b_twin, a))
 }
 
+/// A disc's sink fed with its crossing segments `ids` (indices into `segments`), in the order given.
+fn sink_of<S: Sink>(ids: &[u32], segments: &[RaySegment]) -> S {
+    let mut sink = S::default();
+    for &j in ids {
+        sink.add(j, &segments[j as usize]);
+    }
+    sink
+}
+
 /// Fails when segment indices would not fit in `u32`.
 fn check_segment_count(segments: &[RaySegment]) -> Result<()> {
     if u32::try_from(segments.len()).is_err() {
@@ -510,16 +519,9 @@ impl DiscSet {
     ) -> Result<()> {
         self.check_out(out.len())?;
         let (a, b) = self.net_crossings(old, new)?;
-        let sum = |ids: &[u32], segments: &[RaySegment]| {
-            let mut sink = DVec3::default();
-            for &j in ids {
-                sink.add(j, &segments[j as usize]);
-            }
-            sink
-        };
         out.par_iter_mut().enumerate().for_each(|(i, o)| {
-            *o += -1.0 * sum(&a[i], old);
-            *o += 1.0 * sum(&b[i], new);
+            *o += -1.0 * sink_of::<DVec3>(&a[i], old);
+            *o += 1.0 * sink_of::<DVec3>(&b[i], new);
         });
         Ok(())
     }
@@ -698,27 +700,36 @@ impl DiscSet {
         let crossings = self.indexed_crossings(index, segments);
         (0..self.discs.len())
             .into_par_iter()
-            .map(|i| {
-                let mut sink = S::default();
-                for &j in &crossings[i] {
-                    sink.add(j, &segments[j as usize]);
-                }
-                sink
-            })
+            .map(|i| sink_of(&crossings[i], segments))
             .collect()
     }
 
     /// Disc indexing (section 2.7): each segment through the index in parallel, then the pairs bucketed by disc in segment order.
     fn indexed_crossings(&self, index: &DiscIndex, segments: &[RaySegment]) -> Crossings {
         let envelopes = self.segment_envelopes(segments);
-        let pairs: Vec<Vec<(u32, u32)>> = envelopes
+        let pairs = self.indexed_pairs(index, segments, &envelopes, |_| true);
+        Crossings::from_pairs(self.discs.len(), &pairs)
+    }
+
+    /// Disc indexing (section 2.7): the `(disc, segment)` pairs of the segments `keep` accepts (by index) and
+    /// the discs they cross, each segment through the index in parallel, chunk by chunk in segment order.
+    fn indexed_pairs(
+        &self,
+        index: &DiscIndex,
+        segments: &[RaySegment],
+        envelopes: &[Option<SegmentEnvelope>],
+        keep: impl Fn(usize) -> bool + Sync,
+    ) -> Vec<Vec<(u32, u32)>> {
+        envelopes
             .par_chunks(SEGMENT_CHUNK)
             .enumerate()
             .map(|(c, chunk)| {
                 let mut pairs = Vec::new();
                 for (k, e) in chunk.iter().enumerate() {
-                    let Some(e) = e else { continue };
                     let j = c * SEGMENT_CHUNK + k;
+                    let Some(e) = e.as_ref().filter(|_| keep(j)) else {
+                        continue;
+                    };
                     let s = &segments[j];
                     if let Some(packed) = &self.packed {
                         let lanes = SegmentLanes::new(s, self.options.slack);
@@ -737,8 +748,7 @@ impl DiscSet {
                 }
                 pairs
             })
-            .collect();
-        Crossings::from_pairs(self.discs.len(), &pairs)
+            .collect()
     }
 
     /// [`DiscSet::net_crossings`] by disc indexing: every Old Ray in parallel, a twin pair's two ends tested
@@ -801,24 +811,7 @@ impl DiscSet {
                 (a, b)
             })
             .collect();
-        let from_new: Vec<Vec<(u32, u32)>> = new_env
-            .par_chunks(SEGMENT_CHUNK)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let mut b = Vec::new();
-                for (n, e) in chunk.iter().enumerate() {
-                    let k = c * SEGMENT_CHUNK + n;
-                    let Some(e) = e.as_ref().filter(|_| !paired[k]) else {
-                        continue;
-                    };
-                    let lanes = SegmentLanes::new(&new[k], slack);
-                    index.for_each_leaf(e, |first, count| {
-                        packed.for_each_crossed(first, count, &lanes, |i| b.push((i, k as u32)));
-                    });
-                }
-                b
-            })
-            .collect();
+        let from_new = self.indexed_pairs(index, new, &new_env, |k| !paired[k]);
         let (old_pairs, mut new_pairs): (Vec<_>, Vec<_>) = from_old.into_iter().unzip();
         new_pairs.extend(from_new);
         let mut b = Crossings::from_pairs(self.discs.len(), &new_pairs);
