@@ -311,8 +311,6 @@ thread_local! {
 #[derive(Debug, Clone, Default, PartialEq)]
 struct Deferred {
     rays: SignedRays,
-    /// Rays held, `Σ |multiplicity|`.
-    len: usize,
 }
 
 impl Deferred {
@@ -333,8 +331,7 @@ impl Deferred {
                 let next = match (a.peek(), b.peek()) {
                     (Some(x), Some(y)) if key_order(&y.0, &x.0) == Ordering::Less => b.next(),
                     (Some(_), _) => a.next(),
-                    (None, Some(_)) => b.next(),
-                    (None, None) => break,
+                    (None, _) => b.next(),
                 };
                 let Some(&(ray, k)) = next else {
                     break;
@@ -352,16 +349,14 @@ impl Deferred {
             self.rays.clear();
             self.rays.extend_from_slice(merged);
         });
-        self.len = self
-            .rays
-            .iter()
-            .map(|(_, k)| k.unsigned_abs() as usize)
-            .sum();
     }
 
-    /// Number of rays held.
+    /// Number of rays held, `Σ |multiplicity|`.
     fn len(&self) -> usize {
-        self.len
+        self.rays
+            .iter()
+            .map(|(_, k)| k.unsigned_abs() as usize)
+            .sum()
     }
 
     /// Whether no ray is held.
