@@ -420,9 +420,9 @@ impl QuasiStatic {
         // Only paths through the mobile objects' boxes, before and after the move, can change (figure 2.2); those
         // and the paths through the mobile discs' box (section 2.5.2's gather) are listed once for both passes.
         let moved = before.union(self.world.mobile_bounds());
-        let near_box = self
-            .mobile_disc_region()
-            .map_or(moved, |(min, max)| moved.union(Aabb { min, max }));
+        let discs = self.mobile_discs();
+        let region = discs.as_deref().and_then(|d| disc_region(d, self.slack));
+        let near_box = region.map_or(moved, |(min, max)| moved.union(Aabb { min, max }));
         if self.paths_focused
             && self
                 .paths
@@ -455,7 +455,7 @@ impl QuasiStatic {
         }
         let photosimulation = t0.elapsed();
         let t1 = Instant::now();
-        self.update_state(&update, near.as_deref())?;
+        self.update_state(&update, discs.as_deref(), region, near.as_deref())?;
         if let State::PhotonMaps { .. } = self.state {
             self.impact_map = Some(ImpactMap::build(&self.rays));
         }
@@ -600,18 +600,14 @@ impl QuasiStatic {
         Some(points.iter().map(|p| point_disc(p, *radius)).collect())
     }
 
-    /// The box round the mobile discs that a ray can cross ([`Disc::bounds`] with the crossing slack), `None` without any: only the segments through it can cross one.
-    fn mobile_disc_region(&self) -> Option<(Vec3, Vec3)> {
-        let discs = self.mobile_discs()?;
-        discs
-            .iter()
-            .filter(|d| d.radius > 0.0)
-            .map(|d| d.bounds(self.slack))
-            .reduce(|(a, b), (lo, hi)| (a.min(lo), b.max(hi)))
-    }
-
-    /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps). `near` lists the paths that may meet the mobile discs' box ([`QuasiStatic::mobile_disc_region`]), every path when `None`.
-    fn update_state(&mut self, update: &RayUpdate, near: Option<&[usize]>) -> Result<()> {
+    /// Equation 2.4 on static points and a full estimate on mobile ones (DETP); figure 2.4 (Impact Count); a full estimate (Photon Maps). `discs`: the mobile discs when there are disc sets ([`QuasiStatic::mobile_discs`]); `region`: the box round them ([`disc_region`]); `near` lists the paths that may meet that box, every path when `None`.
+    fn update_state(
+        &mut self,
+        update: &RayUpdate,
+        discs: Option<&[Disc]>,
+        region: Option<(Vec3, Vec3)>,
+        near: Option<&[usize]>,
+    ) -> Result<()> {
         let first_mobile = self.points.first_mobile;
         let mobile_areas = match &self.state {
             State::Detp { radius, .. } if self.options.artifact.is_some() => {
@@ -619,9 +615,8 @@ impl QuasiStatic {
             }
             _ => None,
         };
-        let region = self.mobile_disc_region();
-        if let (Some(discs), Some((_, moving))) = (self.mobile_discs(), &mut self.disc_sets) {
-            moving.update_discs(&discs)?;
+        if let (Some(discs), Some((_, moving))) = (discs, &mut self.disc_sets) {
+            moving.update_discs(discs)?;
         }
         // Every segment in order, less those that miss the mobile discs' box (equal sums: a skipped segment adds
         // nothing), from the paths whose cells meet the box; gathered in parallel, in order.
@@ -978,6 +973,15 @@ fn reach_of_paths(scene: &Scene, mobile: &[ObjectId], margin: f32) -> Option<Aab
 /// `paths`; `None` (every path) when there are no masks.
 fn paths_near(paths: Option<&PathCells>, lo: Vec3, hi: Vec3, rays: &RaySet) -> Option<Vec<usize>> {
     paths.map(|p| p.paths_meeting(&p.region(lo, hi), rays.rays.len()))
+}
+
+/// The box round `discs` that a ray can cross ([`Disc::bounds`] with the crossing `slack`), `None` when no disc can be crossed: only the segments through it can cross one.
+fn disc_region(discs: &[Disc], slack: f32) -> Option<(Vec3, Vec3)> {
+    discs
+        .iter()
+        .filter(|d| d.radius > 0.0)
+        .map(|d| d.bounds(slack))
+        .reduce(|(a, b), (lo, hi)| (a.min(lo), b.max(hi)))
 }
 
 /// The DETP disc of an estimation point (section 1.2); a degenerate point gets a zero radius, which no ray crosses.
