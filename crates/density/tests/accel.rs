@@ -340,7 +340,7 @@ fn random_scene(
 
 /// [`DiscSet::net_crossings`] and [`DiscSet::accumulate_net`] with every acceleration × pre-test against
 /// brute force on a random scene whose New Rays are twins of Old Rays (ending shorter, farther, on another
-/// mesh or with another extension) and random segments, with one Old Ray repeated (no twin); the number of
+/// mesh or with another extension, NaN included) and random segments, with one Old Ray repeated (no twin); the number of
 /// (disc, twin pair) crossings that cancelled.
 fn check_net(
     seed: u64,
@@ -361,7 +361,7 @@ fn check_net(
             let distance = length * [0.3, 0.999_999, 1.000_001, 1.7][rng.below(4) as usize];
             twin.hit = (!rng.chance(0.1))
                 .then(|| hit(s.origin, s.direction, distance, rng.below(3) as u32));
-            twin.extension = [0.0, 0.01, 0.2][rng.below(3) as usize] * scale;
+            twin.extension = [0.0, 0.01, 0.2, f32::NAN][rng.below(4) as usize] * scale;
             new.push(twin);
         }
     }

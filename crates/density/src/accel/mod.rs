@@ -491,8 +491,9 @@ impl DiscSet {
     /// [`DiscSet::crossings`] of a frame's Old and New Rays, less the twins ([`twin_segments`]) at each disc
     /// they both cross, where their two contributions cancel (beyond the paper: section 2.4.2's
     /// `est(NewRays) − est(OldRays)` without the terms that cancel). With disc indexing each twin pair is
-    /// traversed once, its two ends tested together, and the segments of either kind that cross a disc
-    /// their twin does not are exactly those `is_crossed_by` accepts.
+    /// traversed once, only beyond the nearer of its two ends (a disc one of them crosses and the other
+    /// does not lies there), its two ends tested together, and the segments of either kind that cross a
+    /// disc their twin does not are exactly those `is_crossed_by` accepts.
     pub fn net_crossings(
         &self,
         old: &[RaySegment],
@@ -752,7 +753,7 @@ impl DiscSet {
     }
 
     /// [`DiscSet::net_crossings`] by disc indexing: every Old Ray in parallel, a twin pair's two ends tested
-    /// together, then the New Rays without a twin.
+    /// together on the part of the pair beyond the nearer end, then the New Rays without a twin.
     fn indexed_net_crossings(
         &self,
         index: &DiscIndex,
@@ -787,11 +788,17 @@ impl DiscSet {
                     match joint[j] {
                         Some(k) => {
                             let twin = SegmentLanes::new(&new[k as usize], slack);
-                            let far = match &new_env[k as usize] {
-                                Some(f) if f.t_hi > e.t_hi => f,
-                                _ => e,
+                            let mut far = match &new_env[k as usize] {
+                                Some(f) if f.t_hi > e.t_hi => *f,
+                                _ => *e,
                             };
-                            index.for_each_leaf(far, |first, count| {
+                            // A disc only one of them crosses lies beyond the nearer end: only
+                            // that part of the segment is traversed.
+                            let ends = (lanes.nearest_limit(), twin.nearest_limit());
+                            if !(ends.0.is_nan() || ends.1.is_nan()) {
+                                far.t_lo = far.t_lo.max(f64::from(ends.0.min(ends.1)));
+                            }
+                            index.for_each_leaf(&far, |first, count| {
                                 packed.for_each_crossed_by_one(
                                     first,
                                     count,

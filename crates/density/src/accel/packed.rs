@@ -163,6 +163,20 @@ pub(crate) struct SegmentLanes {
 }
 
 impl SegmentLanes {
+    /// The nearest of the ends `t ≤ limit` this segment's test puts on a disc (NaN when one of them is NaN):
+    /// a disc that one of two twins crosses and the other does not is met beyond the nearer of their two.
+    pub(crate) fn nearest_limit(&self) -> f32 {
+        let same = match self.hit_mesh {
+            Some(_) => self.limit_same,
+            None => self.limit_other,
+        };
+        if same.is_nan() || self.limit_other.is_nan() {
+            f32::NAN
+        } else {
+            same.min(self.limit_other)
+        }
+    }
+
     /// The lanes' view of `segment` for discs tested with `slack`.
     pub(crate) fn new(segment: &RaySegment, slack: f32) -> Self {
         let length = segment.length();
