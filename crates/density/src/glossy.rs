@@ -44,7 +44,7 @@
 //! net change is applied.
 //!
 //! Beyond the paper, an Old Ray and a New Ray of one frame with the same
-//! origin, direction and power ([`crate::twin_segments`]: a re-traced path's
+//! origin, direction and power ([`crate::Twins`]: a re-traced path's
 //! first changed segment keeps them and only ends elsewhere) are the same
 //! incident ray at every disc both cross, so there they cancel before the
 //! store sees them ([`DiscSet::net_crossings`], which also traverses such a
@@ -66,6 +66,7 @@ use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::quadtree::{QuadTree, QuadTreeOptions, SummaryTree};
 use crate::ray_set::{RaySegment, RaySet};
+use crate::update::Twins;
 
 /// One ray of a glossy vertex's list (section 2.10, "the actual set of rays which affected the point"): its incoming direction in the vertex's shading frame and its power.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -840,14 +841,15 @@ impl GlossyVertices {
         old: &[RaySegment],
         new: &[RaySegment],
     ) -> Result<(UpdateStats, Vec<(MeshId, u32)>)> {
-        self.update_towards(old, new, None)
+        self.update_towards(old, new, &Twins::by_bits(old, new), None)
     }
 
-    /// [`GlossyVertices::update_listing`] that defers the rays of the vertices facing away from `eye` (see the module docs): they are not listed, since their radiance towards `eye` stays zero, and their stats are those of the net change, counted when it is applied. The listed vertices had their earlier deferred rays applied first.
+    /// [`GlossyVertices::update_listing`] that defers the rays of the vertices facing away from `eye` (see the module docs): they are not listed, since their radiance towards `eye` stays zero, and their stats are those of the net change, counted when it is applied. The listed vertices had their earlier deferred rays applied first. `twins` are those of `old` and `new` ([`Twins`]; an exact store leaves out what cancels). Fails as [`GlossyVertices::update`] does, or when `twins` are not those of `old` and `new`.
     pub fn update_towards(
         &mut self,
         old: &[RaySegment],
         new: &[RaySegment],
+        twins: &Twins,
         eye: Option<Vec3>,
     ) -> Result<(UpdateStats, Vec<(MeshId, u32)>)> {
         // The rays crossing each disc, by disc indexing (section 2.7): what each vertex's own test would accept,
@@ -855,7 +857,7 @@ impl GlossyVertices {
         let (old_crossing, new_crossing) = if self.summarised {
             (self.discs.crossings(old)?, self.discs.crossings(new)?)
         } else {
-            self.discs.net_crossings(old, new)?
+            self.discs.net_crossings(old, new, twins)?
         };
         let per_vertex: Vec<(UpdateStats, (MeshId, u32))> = self
             .meshes

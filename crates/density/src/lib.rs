@@ -105,7 +105,7 @@ pub use radiance::{
 pub use ray_set::{
     PrimaryRay, RaySegment, RaySet, RaySetOptions, SegmentHit, trace_ray_set, trace_ray_set_in,
 };
-pub use update::{RayUpdate, twin_segments, update_ray_set, update_ray_set_paths};
+pub use update::{RayUpdate, Twins, twin_segments, update_ray_set, update_ray_set_paths};
 pub use vertex_lit::vertex_lit_scene;
 pub use world::{World, WorldHit};
 

@@ -471,7 +471,7 @@ impl QuasiStatic {
             if let Some((fixed, mobile)) = &mut self.glossy {
                 match fixed
                     .get_mut()
-                    .update_towards(&update.old, &update.new, eye)
+                    .update_towards(&update.old, &update.new, &update.twins, eye)
                 {
                     Ok((_, changed)) => self.lobe_cache.mark_stale(&changed),
                     Err(error) => {
@@ -661,7 +661,7 @@ impl QuasiStatic {
                 };
                 let (fixed, moving) = sums.split_at_mut(first_mobile);
                 // E(x, t) = E(x, t-1) + E(x; N^t) - E(x; O^t) (equation 2.4), without the twins' terms that cancel.
-                fixed_set.accumulate_net(&update.old, &update.new, fixed)?;
+                fixed_set.accumulate_net(&update.old, &update.new, &update.twins, fixed)?;
                 // Mobile vertices: the initial algorithm over every ray (section 2.5.2).
                 moving.fill(DVec3::ZERO);
                 moving_set.accumulate(&all, 1.0, moving)?;

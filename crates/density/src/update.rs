@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use lustre_geometry::{Ray, Scene};
 use rayon::prelude::*;
 
-use crate::error::Result;
+use crate::error::{DensityError, Result};
 use crate::ray_set::{PrimaryRay, RaySegment, RaySet, RaySetOptions, Tracer};
 use crate::world::World;
 
@@ -18,6 +18,78 @@ pub struct RayUpdate {
     pub new: Vec<RaySegment>,
     /// The primary rays with a recalculated path, by index into `RaySet::rays`, ascending.
     pub primaries: Vec<usize>,
+    /// The twins of each recalculated path: its re-traced segment before and after (same origin, direction
+    /// and power, another end), and any later segments at the same place in both paths with the same
+    /// origin, direction and power (a path that bounces where it did, e.g. off a face the motion kept in
+    /// its plane, continues as it did).
+    pub twins: Twins,
+}
+
+/// A frame's twins (beyond the paper): for each Old Ray its twin among the New Rays and for each New Ray its
+/// twin among the Old Rays, or `None`; twins have the same origin, direction and power bits and are paired
+/// one to one. At every disc both cross they are the same incident ray, so there their two contributions
+/// cancel ([`crate::DiscSet::net_crossings`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Twins {
+    /// Per Old Ray, the index of its twin among the New Rays.
+    pub old: Vec<Option<u32>>,
+    /// Per New Ray, the index of its twin among the Old Rays.
+    pub new: Vec<Option<u32>>,
+}
+
+impl Twins {
+    /// The twins found by their bits alone ([`twin_segments`]), for Old and New Rays that do not come from
+    /// [`update_ray_set`] (which pairs them as it re-traces).
+    pub fn by_bits(old: &[RaySegment], new: &[RaySegment]) -> Self {
+        let (old, new) = twin_segments(old, new);
+        Self { old, new }
+    }
+
+    /// Fails unless the twins are those of `old` and `new`: one entry per ray, each twin naming the other
+    /// back, with the same origin, direction and power bits.
+    pub fn check(&self, old: &[RaySegment], new: &[RaySegment]) -> Result<()> {
+        let fail = |message: String| {
+            Err(DensityError::InvalidOption {
+                option: "twins",
+                message,
+            })
+        };
+        if self.old.len() != old.len() || self.new.len() != new.len() {
+            return fail(format!(
+                "{} and {} entries for {} Old and {} New Rays",
+                self.old.len(),
+                self.new.len(),
+                old.len(),
+                new.len()
+            ));
+        }
+        for (j, &twin) in self.old.iter().enumerate() {
+            let Some(k) = twin else { continue };
+            match new.get(k as usize) {
+                Some(n) if self.new[k as usize] == Some(j as u32) && same_ray(&old[j], n) => {}
+                _ => return fail(format!("Old Ray {j} and New Ray {k} are not twins")),
+            }
+        }
+        for (k, &twin) in self.new.iter().enumerate() {
+            if twin.is_some_and(|j| self.old.get(j as usize) != Some(&Some(k as u32))) {
+                return fail(format!(
+                    "New Ray {k} names an Old Ray that does not name it"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether two segments have the same origin, direction and power bits.
+fn same_ray(a: &RaySegment, b: &RaySegment) -> bool {
+    ray_bits(a) == ray_bits(b)
+}
+
+/// The bits of a segment's origin, direction and power.
+fn ray_bits(s: &RaySegment) -> [u32; 9] {
+    let (o, d, p) = (s.origin, s.direction, s.power);
+    [o.x, o.y, o.z, d.x, d.y, d.z, p.x, p.y, p.z].map(f32::to_bits)
 }
 
 /// Updates a ray set traced with [`crate::trace_ray_set_in`] after the world's mobile objects moved (figure 2.2). `world` must already hold the new pose ([`World::move_mobile`]) and `options` must be those of the first trace, so that the result equals a full trace of the new pose.
@@ -86,10 +158,26 @@ fn update_paths(
         })
         .collect();
     let mut update = RayUpdate::default();
+    let mut pairs = Vec::new();
     for (i, old, new) in changed.into_iter().flatten() {
         update.primaries.push(i);
+        // The re-traced segment keeps its origin, direction and power; so does every later one while the
+        // path bounces where it did (its random numbers are its own).
+        for (n, (a, b)) in old.iter().zip(&new).enumerate() {
+            if same_ray(a, b) {
+                pairs.push((update.old.len() + n, update.new.len() + n));
+            }
+        }
         update.old.extend(old);
         update.new.extend(new);
+    }
+    update.twins = Twins {
+        old: vec![None; update.old.len()],
+        new: vec![None; update.new.len()],
+    };
+    for (j, k) in pairs {
+        update.twins.old[j] = Some(k as u32);
+        update.twins.new[k] = Some(j as u32);
     }
     Ok(update)
 }
@@ -130,10 +218,7 @@ pub fn twin_segments(
     old: &[RaySegment],
     new: &[RaySegment],
 ) -> (Vec<Option<u32>>, Vec<Option<u32>>) {
-    let key = |s: &RaySegment| {
-        let (o, d, p) = (s.origin, s.direction, s.power);
-        [o.x, o.y, o.z, d.x, d.y, d.z, p.x, p.y, p.z].map(f32::to_bits)
-    };
+    let key = ray_bits;
     // Per key: how many Old and New Rays carry it, and the last of each.
     let mut seen: HashMap<[u32; 9], [(u32, u32); 2]> =
         HashMap::with_capacity(old.len() + new.len());

@@ -15,7 +15,7 @@ use lustre_density::quadtree::{
     summary_degradation,
 };
 use lustre_density::{
-    DensityError, Disc, PrimaryRay, RaySegment, RaySet, RaySetOptions, diffuse_radiance,
+    DensityError, Disc, PrimaryRay, RaySegment, RaySet, RaySetOptions, Twins, diffuse_radiance,
     trace_ray_set, twin_segments,
 };
 use lustre_geometry::sampling::{Frame, Pcg32, sample_uniform_hemisphere};
@@ -815,7 +815,9 @@ fn frame(
     new: &[RaySegment],
 ) -> (usize, usize, usize) {
     let (_, all) = eager.update_listing(old, new).unwrap();
-    let (_, listed) = lazy.update_towards(old, new, Some(eye)).unwrap();
+    let (_, listed) = lazy
+        .update_towards(old, new, &Twins::by_bits(old, new), Some(eye))
+        .unwrap();
     let behind_eye = |&(m, v): &(u32, u32)| {
         lazy.vertices(m)[v as usize]
             .as_ref()

@@ -6,8 +6,9 @@ use lustre_density::artifact::ArtifactOptions;
 use lustre_density::glossy::GlossyMode;
 use lustre_density::quadtree::QuadTreeOptions;
 use lustre_density::{
-    Estimator, QuasiStatic, QuasiStaticOptions, RaySetOptions, World, photon_maps,
-    photon_maps_radiance, trace_ray_set_in,
+    DensityError, Disc, DiscSet, DiscSetOptions, Estimator, QuasiStatic, QuasiStaticOptions,
+    RaySegment, RaySetOptions, SegmentHit, Twins, World, photon_maps, photon_maps_radiance,
+    trace_ray_set_in, update_ray_set,
 };
 use lustre_geometry::animation::{Keyframe, ObjectPath, PathEnd};
 use lustre_geometry::meshing::subdivide;
@@ -661,5 +662,107 @@ fn frames_along_a_path_and_off_it_match_full_traces() {
             difference < 1e-9,
             "frame {frame}: incremental irradiance off by {difference}"
         );
+    }
+}
+
+/// A frame's [`lustre_density::RayUpdate::twins`], paired as the update re-traces each path, against the
+/// twins found by their bits alone (the same here: no two re-traced segments share their bits).
+#[test]
+fn an_update_pairs_each_retraced_path_with_its_twin() {
+    let scene = cornell(0.25);
+    let small = scene.object_by_name("small-box").expect("object");
+    let mut options = sim_rays(&options(Estimator::Detp { radius: 0.15 }));
+    options.photons = 20_000;
+    let mut world = World::new(&scene, &[small]).expect("world");
+    let mut rays = trace_ray_set_in(&scene, &world, &options).expect("trace");
+    let mut moved = scene.clone();
+    let rest = scene.objects()[small as usize].transform;
+    moved
+        .set_object_transform(small, motion(rest, 0.2, -0.1, 25.0))
+        .expect("pose");
+    world.move_mobile(&moved);
+    let update = update_ray_set(&moved, &world, &mut rays, &options).expect("update");
+    assert_eq!(
+        update.twins,
+        Twins::by_bits(&update.old, &update.new),
+        "the update's twins differ from those their bits give"
+    );
+    update.twins.check(&update.old, &update.new).expect("twins");
+    let paired = update.twins.old.iter().flatten().count();
+    // At least each path's re-traced segment, and here more (tails that bounce where they did).
+    assert!(
+        paired > update.primaries.len() && update.primaries.len() > 100,
+        "{paired} twins for {} re-traced paths",
+        update.primaries.len()
+    );
+}
+
+/// Twins that are not those of the Old and New Rays are refused with an error, not a panic: wrong lengths, an
+/// index past the rays, a pair that does not name itself back, a pair whose bits differ.
+#[test]
+fn net_crossings_refuse_twins_of_other_rays() {
+    let ray = |x: f32, length: f32| {
+        let origin = Vec3::new(x, 0.5, 0.0);
+        let direction = Vec3::NEG_Y;
+        RaySegment::new(
+            origin,
+            direction,
+            Some(SegmentHit {
+                triangle: 0,
+                mesh: 0,
+                mobile: false,
+                position: origin + length * direction,
+                normal: Vec3::Y,
+                distance: length,
+            }),
+            Rgb::ONE,
+        )
+    };
+    let old = [ray(0.0, 0.5), ray(1.0, 0.5)];
+    let new = [ray(0.0, 0.2), ray(1.0, 0.7)];
+    let discs = vec![Disc {
+        centre: Vec3::ZERO,
+        normal: Vec3::Y,
+        radius: 0.1,
+        mesh: Some(0),
+    }];
+    let set = DiscSet::new(discs, DiscSetOptions::default()).expect("discs");
+    let good = Twins::by_bits(&old, &new);
+    assert_eq!(good.old, vec![Some(0), Some(1)]);
+    let (a, b) = set.net_crossings(&old, &new, &good).expect("good twins");
+    // The disc at the origin: the Old Ray reaching it has a twin ending short of it.
+    assert_eq!((&a[0], &b[0]), (&[0u32][..], &[][..]));
+    let bad = [
+        Twins {
+            old: vec![Some(0)],
+            new: good.new.clone(),
+        },
+        Twins {
+            old: vec![Some(0), Some(7)],
+            new: vec![Some(0), Some(1)],
+        },
+        Twins {
+            old: vec![Some(0), None],
+            new: vec![Some(0), Some(1)],
+        },
+        Twins {
+            old: vec![Some(1), Some(0)],
+            new: vec![Some(1), Some(0)],
+        },
+    ];
+    for twins in &bad {
+        assert!(
+            matches!(
+                set.net_crossings(&old, &new, twins),
+                Err(DensityError::InvalidOption {
+                    option: "twins",
+                    ..
+                })
+            ),
+            "{twins:?} accepted"
+        );
+        let mut out = vec![DVec3::ZERO];
+        assert!(set.accumulate_net(&old, &new, twins, &mut out).is_err());
+        assert_eq!(out, vec![DVec3::ZERO], "a refused update changed the sums");
     }
 }

@@ -49,7 +49,7 @@ use pretest::PreTests;
 use crate::detp::Disc;
 use crate::error::{DensityError, Result};
 use crate::ray_set::RaySegment;
-use crate::update::twin_segments;
+use crate::update::Twins;
 
 /// An invariant of an acceleration structure that does not hold (what the `validate` methods report).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -168,14 +168,8 @@ pub fn mean_edge(scene: &Scene, meshes: impl IntoIterator<Item = MeshId>) -> f32
     if n == 0 { 1.0 } else { (sum / n as f64) as f32 }
 }
 
-/// The crossings `a` and `b` of a frame's Old and New Rays less, at each disc, the twins (`a_twin`,
-/// `b_twin`: [`twin_segments`]) that both cross it.
-fn cancel_twins(
-    a: &Crossings,
-    b: &Crossings,
-    a_twin: &[Option<u32>],
-    b_twin: &[Option<u32>],
-) -> (Crossings, Crossings) {
+/// The crossings `a` and `b` of a frame's Old and New Rays less, at each disc, the twins that both cross it.
+fn cancel_twins(a: &Crossings, b: &Crossings, twins: &Twins) -> (Crossings, Crossings) {
     let keep = |ids: &[u32], twins: &[Option<u32>], other: &[u32]| -> Vec<u32> {
         ids.iter()
             .copied()
@@ -190,7 +184,7 @@ fn cancel_twins(
                 .collect(),
         )
     };
-    (net(a, a_twin, b), net(b, b_twin, a))
+    (net(a, &twins.old, b), net(b, &twins.new, a))
 }
 
 /// A disc's sink fed with its crossing segments `ids` (indices into `segments`), in the order given.
@@ -488,38 +482,41 @@ impl DiscSet {
         self.gather(segments).map(Crossings::from_lists)
     }
 
-    /// [`DiscSet::crossings`] of a frame's Old and New Rays, less the twins ([`twin_segments`]) at each disc
-    /// they both cross, where their two contributions cancel (beyond the paper: section 2.4.2's
+    /// [`DiscSet::crossings`] of a frame's Old and New Rays, less the `twins` at each disc they both cross,
+    /// where their two contributions cancel (beyond the paper: section 2.4.2's
     /// `est(NewRays) − est(OldRays)` without the terms that cancel). With disc indexing each twin pair is
     /// traversed once, only beyond the nearer of its two ends (a disc one of them crosses and the other
     /// does not lies there), its two ends tested together, and the segments of either kind that cross a
-    /// disc their twin does not are exactly those `is_crossed_by` accepts.
+    /// disc their twin does not are exactly those `is_crossed_by` accepts. Fails when `twins` are not those
+    /// of `old` and `new` ([`Twins::check`]).
     pub fn net_crossings(
         &self,
         old: &[RaySegment],
         new: &[RaySegment],
+        twins: &Twins,
     ) -> Result<(Crossings, Crossings)> {
         check_segment_count(old)?;
         check_segment_count(new)?;
-        let (old_twin, new_twin) = twin_segments(old, new);
+        twins.check(old, new)?;
         if let (Acceleration::DiscIndex { .. }, Some(index), Some(packed)) =
             (self.options.acceleration, &self.index, &self.packed)
         {
-            return Ok(self.indexed_net_crossings(index, packed, old, new, &old_twin));
+            return Ok(self.indexed_net_crossings(index, packed, old, new, &twins.old));
         }
         let (a, b) = (self.crossings(old)?, self.crossings(new)?);
-        Ok(cancel_twins(&a, &b, &old_twin, &new_twin))
+        Ok(cancel_twins(&a, &b, twins))
     }
 
-    /// `out[i] += sign · Σ φ_j` over [`DiscSet::net_crossings`]: the Old Rays' sum with `sign = −1`, then the New Rays' with `+1`, each in ascending segment index from zero in `f64` (section 2.4.2, equation 2.4, `E(x, t) = E(x, t−1) + E(x; N^t) − E(x; O^t)`, without the twins' terms that cancel). Fails when `out` does not have one entry per disc.
+    /// `out[i] += sign · Σ φ_j` over [`DiscSet::net_crossings`]: the Old Rays' sum with `sign = −1`, then the New Rays' with `+1`, each in ascending segment index from zero in `f64` (section 2.4.2, equation 2.4, `E(x, t) = E(x, t−1) + E(x; N^t) − E(x; O^t)`, without the twins' terms that cancel). Fails when `out` does not have one entry per disc, or as [`DiscSet::net_crossings`] does.
     pub fn accumulate_net(
         &self,
         old: &[RaySegment],
         new: &[RaySegment],
+        twins: &Twins,
         out: &mut [DVec3],
     ) -> Result<()> {
         self.check_out(out.len())?;
-        let (a, b) = self.net_crossings(old, new)?;
+        let (a, b) = self.net_crossings(old, new, twins)?;
         out.par_iter_mut().enumerate().for_each(|(i, o)| {
             *o += -1.0 * sink_of::<DVec3>(&a[i], old);
             *o += 1.0 * sink_of::<DVec3>(&b[i], new);

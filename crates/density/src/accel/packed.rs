@@ -106,7 +106,7 @@ impl PackedLeaves {
     }
 
     /// For two segments with the same origin and direction (a re-traced path's first segment before and
-    /// after, [`crate::update::twin_segments`]), calls `only_a` with every disc of the leaf that `a` crosses and
+    /// after, [`crate::Twins`]), calls `only_a` with every disc of the leaf that `a` crosses and
     /// `b` does not, and `only_b` with every one that `b` crosses and `a` does not; each test as
     /// [`PackedLeaves::for_each_crossed`] makes it, the part that does not depend on the segment's end once.
     #[inline]
