@@ -11,7 +11,7 @@
 //! |---|---|
 //! | 2.2.2: a static scene and mobile objects (several allowed) | [`World`] |
 //! | 2.3, figure 2.1: primary rays from the lights, each owning its reflections | [`RaySet`], [`PrimaryRay`], [`RaySegment`], [`trace_ray_set`], [`trace_ray_set_in`] |
-//! | 2.3, figure 2.2: PHOTOSIMULATION RECALCULUS, OldRays and NewRays | [`update_ray_set`], [`RayUpdate`] |
+//! | 2.3, figure 2.2: PHOTOSIMULATION RECALCULUS, OldRays and NewRays | [`update_ray_set`], [`RayUpdate`] (beyond the paper: its [`Twins`], re-traced segments that kept their origin, direction and power) |
 //! | beyond the paper, for figure 2.2 and 2.5.2: per path, the cells of a coarse grid it passes, so that a frame visits only the paths near the mobile objects | [`path_cells::PathCells`], [`update_ray_set_paths`] |
 //! | 2.4.2, equations 2.4–2.15: `E_t = E_{t-1} + E(N^t) − E(O^t)` on static vertices | [`QuasiStatic::set_pose`] |
 //! | 2.5.1, figure 2.4: Impact Count's per-triangle `Add`/`Substract` | [`Estimator::ImpactCount`] |
