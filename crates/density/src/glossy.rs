@@ -48,10 +48,11 @@
 //! first changed segment keeps them and only ends elsewhere) are the same
 //! incident ray at every disc both cross, so there they cancel before the
 //! store sees them ([`DiscSet::net_crossings`], which also traverses such a
-//! pair once, beyond the nearer of its ends only): an exact store gets the same multiset, bit for bit, with about
-//! a quarter fewer insertions and removals on a dense glossy model, and a
-//! vertex whose rays all cancel keeps its radiance. Summarised stores get
-//! every ray, as the formula of section 2.10.1 asks.
+//! pair once, beyond the nearer of its ends only): an exact store gets the
+//! same multiset, bit for bit, with about a quarter fewer insertions and
+//! removals on a dense glossy model, and a vertex whose rays all cancel
+//! keeps its radiance. Summarised stores get every ray, as the formula of
+//! section 2.10.1 asks.
 
 use std::cmp::Ordering;
 
