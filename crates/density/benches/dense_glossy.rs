@@ -13,7 +13,9 @@
 //! the first loop of the ball's path, the same 32 frames whatever number of
 //! frames criterion runs), the vertex counts and the memory go to
 //! `target/criterion/dense_glossy/<config>.json`.
-//! `LUSTRE_BENCH_DENSE_PHOTONS` sets the photon count (default 1,000,000).
+//! `LUSTRE_BENCH_DENSE_PHOTONS` sets the photon count (default 1,000,000),
+//! `LUSTRE_BENCH_DENSE_GLOSSY_FACTOR` the glossy radius over the disc radius
+//! (default 3, `lustre render`'s; 1 is the paper's one disc for both).
 
 // criterion_group! generates an undocumented function.
 #![allow(missing_docs)]
@@ -127,6 +129,11 @@ fn bench(c: &mut Criterion) {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(1_000_000);
+    let glossy_factor: f32 = std::env::var("LUSTRE_BENCH_DENSE_GLOSSY_FACTOR")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|f: &f32| *f >= 1.0 && f.is_finite())
+        .unwrap_or(3.0);
     let dir = std::env::temp_dir().join(format!("lustre-dense-glossy-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch directory");
     let (obj, mtl) = model();
@@ -151,7 +158,7 @@ fn bench(c: &mut Criterion) {
         options: QuadTreeOptions::default(),
         tolerance: 0.01,
     });
-    options.glossy_radius = Some(3.0 * radius);
+    options.glossy_radius = Some(glossy_factor * radius);
 
     let out = common::results_dir("dense_glossy");
 
@@ -213,7 +220,7 @@ fn bench(c: &mut Criterion) {
         "segments": sim.rays().segments().count(),
         "model_size": size,
         "radius": radius,
-        "glossy_radius": 3.0 * radius,
+        "glossy_radius": glossy_factor * radius,
         "mesh_edge": edge,
         "first_frame_photosimulation_ms": median(firsts.iter().map(|(s, _)| ms(s.photosimulation)).collect()),
         "first_frame_radiosity_ms": median(firsts.iter().map(|(s, _)| ms(s.radiosity)).collect()),

@@ -681,7 +681,7 @@ impl PartialEq for GlossyVertices {
     }
 }
 
-/// About how many bytes a ray costs in a glossy vertex's list while the lists are built: the 32-byte entry of the QuadTree, its share of leaf vectors and nodes, and the crossing's index. Measured: `lustre render --technique detp` of `dense_glossy`'s blob peaks 2.1 GB higher with the QuadTree estimate than without, for 31.7 M rays, 66 bytes a ray; rounded up.
+/// About how many bytes a ray costs in a glossy vertex's list while the lists are built: the 32-byte entry of the QuadTree, its share of the nodes, and the crossing's index. Measured when each leaf had a vector of its own and each inner node boxed children: `lustre render --technique detp` of `dense_glossy`'s blob peaked 2.1 GB higher with the QuadTree estimate than without, for 31.7 M rays, 66 bytes a ray; rounded up. The tree's two arrays hold less (the `dense_glossy` bench's peak fell by 0.43 GB, 14 %), so this is now a looser bound.
 pub const BYTES_PER_STORED_RAY: usize = 80;
 
 impl GlossyVertices {
